@@ -1,0 +1,17 @@
+//! `nephele-runtime`: what a renderer links to evaluate nephele's artefacts.
+//!
+//! This crate is `no_std` unless the default `std` feature is on, has no required
+//! dependencies and is f32-first. It will own every evaluator of the project (phase
+//! models, table lookups, collector search) so that the generators in `nephele` and the
+//! renderers that ship its tables run the very same code.
+//!
+//! Conventions: scattering angle θ between incident and scattered propagation
+//! directions, μ = cos θ (μ = 1 is forward); phase functions are normalised so that
+//! ∮ p dΩ = 1 (unit sr⁻¹).
+#![cfg_attr(not(feature = "std"), no_std)]
+
+/// The crate version, for the JSON sidecars of artefacts built with it.
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
+
+/// 1 / (4π): the isotropic phase function, in sr⁻¹.
+pub const INV_FOUR_PI: f64 = 0.079_577_471_545_947_67;

@@ -1,0 +1,38 @@
+//! Command-line definitions. Without a subcommand, `nephele` runs the main job: the
+//! paper-preset Mie tables for d = 5, 10, 20 and 50 µm into outputs/.
+
+mod mie;
+
+use anyhow::Result;
+use clap::{Parser, Subcommand};
+
+/// nephele — light scattering by water droplets, from Mie theory to renderer-ready tables.
+#[derive(Parser, Debug)]
+#[command(version, about, long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+    /// Worker threads (default: all cores). Results do not depend on it.
+    #[arg(long, global = true)]
+    threads: Option<usize>,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Polydisperse, spectral Mie phase functions of water droplets (phase.npz + phase.json).
+    Mie(mie::MieArgs),
+}
+
+/// Runs the parsed command.
+pub fn run(cli: Cli) -> Result<()> {
+    if let Some(n) = cli.threads {
+        anyhow::ensure!(n >= 1, "--threads must be at least 1");
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()?;
+    }
+    match cli.command {
+        Some(Command::Mie(args)) => mie::run(args),
+        None => mie::run_main_job(),
+    }
+}

@@ -1,0 +1,10 @@
+//! Outputs: every file is written to a temporary name beside its target and renamed into
+//! place, so a failed or interrupted run never leaves a partial file behind.
+
+pub mod atomic;
+pub mod npz;
+pub mod phase;
+pub mod plot;
+
+pub use atomic::{write_atomic, AtomicFiles};
+pub use npz::Npz;

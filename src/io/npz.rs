@@ -1,0 +1,51 @@
+//! NumPy `.npz` archives of float64 arrays (readable by `numpy.load`).
+
+use anyhow::Result;
+use npyz::WriterBuilder;
+use std::io::{Seek, Write};
+
+/// Named float64 arrays with their shapes, written in insertion order.
+#[derive(Default)]
+pub struct Npz {
+    arrays: Vec<(String, Vec<u64>, Vec<f64>)>,
+}
+
+impl Npz {
+    /// Starts an empty archive.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Adds an array of the given shape (row-major; the product of `shape` = `data.len()`).
+    pub fn add(&mut self, name: &str, shape: &[usize], data: &[f64]) -> &mut Self {
+        assert_eq!(
+            shape.iter().product::<usize>(),
+            data.len(),
+            "shape of array '{name}'"
+        );
+        self.arrays.push((
+            name.into(),
+            shape.iter().map(|&s| s as u64).collect(),
+            data.to_vec(),
+        ));
+        self
+    }
+
+    /// Writes the archive (uncompressed, like `numpy.savez`).
+    pub fn write_to<W: Write + Seek>(&self, w: W) -> Result<()> {
+        let mut npz = npyz::npz::NpzWriter::new(w);
+        let opts =
+            zip::write::FileOptions::default().compression_method(zip::CompressionMethod::Stored);
+        for (name, shape, data) in &self.arrays {
+            let mut arr = npz
+                .array::<f64>(name, opts)?
+                .default_dtype()
+                .shape(shape)
+                .begin_nd()?;
+            arr.extend(data.iter().copied())?;
+            arr.finish()?;
+        }
+        npz.zip_writer().finish()?;
+        Ok(())
+    }
+}

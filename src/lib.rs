@@ -1,0 +1,10 @@
+//! nephele: light scattering by water droplets, from Mie theory to renderer-ready artefacts.
+//!
+//! Stages are modules with one job each: [`mie`] (phase-function tables), [`io`] (atomic
+//! NumPy/JSON/CSV/PNG outputs). The evaluators renderers need live in `nephele-runtime`.
+
+pub mod io;
+pub mod mie;
+
+/// Tool version written into every JSON sidecar.
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");

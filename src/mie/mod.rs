@@ -1,0 +1,20 @@
+//! Stage 1: Lorenz–Mie scattering by water droplets (spec 10).
+//!
+//! - [`sphere`]: one sphere — a_n, b_n, efficiencies, S1/S2;
+//! - [`angular`]: π_n, τ_n and the tabulated angle basis;
+//! - [`batch`]: intensities of many spheres as matrix products;
+//! - [`distribution`], [`index`], [`colour`], [`grid`]: the ingredients of a polydisperse job;
+//! - [`polydisperse`]: the job itself, producing [`polydisperse::PhaseTable`]s.
+
+pub mod angular;
+pub mod batch;
+pub mod colour;
+pub mod distribution;
+pub mod grid;
+pub mod index;
+pub mod polydisperse;
+pub mod sphere;
+pub mod water;
+
+pub use polydisperse::{MieJob, PhaseTable, SizeRule};
+pub use sphere::{Efficiencies, MieCoefficients};

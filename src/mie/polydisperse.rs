@@ -1,0 +1,440 @@
+//! Polydisperse, spectrally averaged phase functions (spec 10).
+//!
+//! For a number distribution with weights w_i at wavelength λ, the phase function is
+//!   p_λ(θ) = Σ_i w_i (|S1|² + |S2|²)_i / 2 / k²  ÷  Σ_i w_i C_sca,i,
+//! normalised by the analytic cross-sections (C_sca = Q_sca π x²/k², so k² cancels), and the
+//! mean phase function is the equal-weight mean of p_λ over the wavelength grid.
+//!
+//! Two size rules:
+//! - **product rule** (`SizeRule::Product`): the spec's explicit N-size rule at every
+//!   wavelength, for digit-level comparisons with other codes;
+//! - **converged** (`SizeRule::Converged`): uniform in ln d with step h over ±z_max σ. With a
+//!   constant index, p_λ depends on λ only through the distribution of x = π d/λ, so one table
+//!   on a uniform ln-x grid (step h) serves every wavelength and every diameter whose x-range
+//!   it covers; each (diameter, λ) is one row of weights over that table. A dispersive index
+//!   needs its own sizes at every wavelength (same step h in ln d).
+
+use super::batch::{weighted_intensity, Particle, Work};
+use super::colour::{srgb_weights, Illuminant, RGB_WAVELENGTHS_NM};
+use super::distribution::SizeDistribution;
+use super::grid;
+use super::index::RefractiveIndex;
+use super::sphere::{n_terms, MieCoefficients};
+use anyhow::{bail, Result};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+
+/// How the size (and, with a constant index, wavelength) integral is discretised.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum SizeRule {
+    /// The explicit product rule of spec 10 with `sizes` sizes.
+    Product {
+        /// Number of sizes N_s.
+        sizes: usize,
+    },
+    /// Uniform in ln x (constant index) or ln d (dispersive) with step `ln_step`, over ±`z_max`
+    /// standard deviations of the log-normal (the equivalent tail level for the gamma).
+    Converged {
+        /// Grid step in ln x / ln d.
+        ln_step: f64,
+        /// Half-width of the size support in σ.
+        z_max: f64,
+    },
+}
+
+/// The converged default, chosen by the convergence study in docs/mie.md (and the test
+/// `converged_default_is_within_5e-3_of_a_finer_rule`).
+pub const CONVERGED_DEFAULT: SizeRule = SizeRule::Converged {
+    ln_step: 2.5e-4,
+    z_max: 5.0,
+};
+
+/// Number of wavelengths of the converged default over 400–700 nm.
+pub const DEFAULT_WAVELENGTHS: usize = 61;
+
+/// Everything a Mie phase-function job needs; one table is produced per distribution.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MieJob {
+    /// One size distribution per output table.
+    pub distributions: Vec<SizeDistribution>,
+    /// Vacuum wavelengths, nm (uniform grid, inclusive ends).
+    pub wavelengths_nm: Vec<f64>,
+    /// Size quadrature.
+    pub rule: SizeRule,
+    /// Droplet refractive index.
+    pub index: RefractiveIndex,
+    /// Real refractive index of the medium (1 for air).
+    pub medium_index: f64,
+    /// Scattering angles, degrees.
+    pub angles_deg: Vec<f64>,
+    /// Illuminant of the sRGB channels.
+    pub illuminant: Illuminant,
+    /// Highest Legendre moment to write.
+    pub legendre: usize,
+}
+
+/// One polydisperse phase-function table and its integral quantities.
+#[derive(Clone, Debug)]
+pub struct PhaseTable {
+    /// The distribution it was computed for.
+    pub distribution: SizeDistribution,
+    /// Angles, degrees.
+    pub theta_deg: Vec<f64>,
+    /// cos θ.
+    pub mu: Vec<f64>,
+    /// Mean over wavelengths, sr⁻¹.
+    pub phase: Vec<f64>,
+    /// Linear-sRGB channels, n_θ × 3 row-major, sr⁻¹.
+    pub phase_rgb: Vec<f64>,
+    /// Monochromatic 650/510/440 nm channels, n_θ × 3 row-major, sr⁻¹.
+    pub phase_rgb_3wl: Vec<f64>,
+    /// Wavelengths, nm.
+    pub wavelength_nm: Vec<f64>,
+    /// p_λ for each wavelength, n_λ × n_θ row-major, sr⁻¹.
+    pub phase_spectral: Vec<f64>,
+    /// Inverse-CDF table in θ of the mean phase function (ends at 1).
+    pub cdf: Vec<f64>,
+    /// Legendre moments χ_0..χ_K of the mean phase function.
+    pub legendre: Vec<f64>,
+    /// Asymmetry parameter of the mean phase function (from the Mie series).
+    pub g: f64,
+    /// g of each sRGB channel.
+    pub g_rgb: [f64; 3],
+    /// g at each wavelength.
+    pub g_spectral: Vec<f64>,
+    /// Mean scattering cross-section per droplet ⟨C_sca⟩, µm², at each wavelength.
+    pub c_sca_spectral_um2: Vec<f64>,
+    /// Mean over wavelengths of ⟨C_sca⟩, µm².
+    pub c_sca_um2: f64,
+    /// Area-weighted scattering efficiency ⟨C_sca⟩ / ⟨π r²⟩, wavelength mean.
+    pub q_sca: f64,
+    /// Effective diameter 2⟨r³⟩/⟨r²⟩, µm.
+    pub effective_diameter_um: f64,
+}
+
+/// Work statistics of a job.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct JobStats {
+    /// Spheres evaluated (size × wavelength pairs or ln-x table entries).
+    pub spheres: usize,
+    /// Largest number of Mie terms.
+    pub max_terms: usize,
+    /// Floating-point operations in the matrix products.
+    pub flops: f64,
+}
+
+/// One weight row: a (distribution, wavelength) pair and its number weights on particles.
+struct Row {
+    lambda_nm: f64,
+    particles: std::ops::Range<usize>,
+    weights: Vec<f64>,
+}
+
+impl MieJob {
+    /// Checks the job; errors name the offending input.
+    pub fn validate(&self) -> Result<()> {
+        if self.distributions.is_empty() {
+            bail!("no diameters given");
+        }
+        for d in &self.distributions {
+            d.validate()?;
+        }
+        if self.wavelengths_nm.is_empty() {
+            bail!("the wavelength grid is empty");
+        }
+        if self
+            .wavelengths_nm
+            .iter()
+            .any(|l| !(l.is_finite() && *l > 0.0))
+        {
+            bail!("wavelengths must be positive");
+        }
+        if !(self.medium_index.is_finite() && self.medium_index > 0.0) {
+            bail!("medium index must be positive, got {}", self.medium_index);
+        }
+        match self.rule {
+            SizeRule::Product { sizes } if sizes == 0 => bail!("--sizes must be at least 1"),
+            SizeRule::Converged { ln_step, z_max }
+                if !(ln_step > 0.0 && ln_step < 0.1 && z_max > 0.0 && z_max <= 10.0) =>
+            {
+                bail!("converged rule needs 0 < ln_step < 0.1 and 0 < z_max ≤ 10")
+            }
+            _ => {}
+        }
+        self.index.validate()?;
+        for &l in self.wavelengths_nm.iter().chain(&RGB_WAVELENGTHS_NM) {
+            self.index.at(l)?;
+        }
+        srgb_weights(&self.wavelengths_nm, self.illuminant)?;
+        grid::validate_angles(&self.angles_deg)
+    }
+
+    /// All output wavelengths: the grid, then the three LUT wavelengths.
+    fn row_wavelengths(&self) -> Vec<f64> {
+        self.wavelengths_nm
+            .iter()
+            .chain(&RGB_WAVELENGTHS_NM)
+            .copied()
+            .collect()
+    }
+
+    /// Builds the particle list and one row of number weights per (distribution, λ).
+    fn discretise(&self) -> Result<(Vec<Particle>, Vec<Row>)> {
+        let shared = self.index.is_constant()
+            && matches!(self.rule, SizeRule::Converged { .. })
+            && self
+                .distributions
+                .iter()
+                .all(|d| !matches!(d, SizeDistribution::Mono { .. }));
+        if shared {
+            self.discretise_shared_ln_x()
+        } else {
+            self.discretise_per_wavelength()
+        }
+    }
+
+    /// Constant index: one uniform ln-x grid shared by every row.
+    fn discretise_shared_ln_x(&self) -> Result<(Vec<Particle>, Vec<Row>)> {
+        let SizeRule::Converged { ln_step: h, z_max } = self.rule else {
+            unreachable!()
+        };
+        let m = self.index.at(self.wavelengths_nm[0])? / self.medium_index;
+        let lams = self.row_wavelengths();
+        let shift = |lam: f64| (PI * self.medium_index / (lam * 1e-3)).ln(); // ln x = ln d + shift
+        let mut lo = f64::INFINITY;
+        let mut hi = f64::NEG_INFINITY;
+        for d in &self.distributions {
+            let (a, b) = d.support_ln_d(z_max);
+            for &l in &lams {
+                lo = lo.min(a + shift(l));
+                hi = hi.max(b + shift(l));
+            }
+        }
+        let n = ((hi - lo) / h).ceil() as usize + 1;
+        let ln_x: Vec<f64> = (0..n).map(|k| lo + k as f64 * h).collect();
+        let particles = ln_x.iter().map(|&u| Particle { x: u.exp(), m }).collect();
+        let mut rows = Vec::new();
+        for d in &self.distributions {
+            let (a, b) = d.support_ln_d(z_max);
+            for &l in &lams {
+                let s = shift(l);
+                let w = ln_x
+                    .iter()
+                    .map(|&u| {
+                        if (a..=b).contains(&(u - s)) {
+                            d.density_ln_d(u - s)
+                        } else {
+                            0.0
+                        }
+                    })
+                    .collect();
+                rows.push(Row {
+                    lambda_nm: l,
+                    particles: 0..n,
+                    weights: w,
+                });
+            }
+        }
+        Ok((particles, rows))
+    }
+
+    /// Product rule, monodisperse or dispersive index: own sizes at every wavelength.
+    fn discretise_per_wavelength(&self) -> Result<(Vec<Particle>, Vec<Row>)> {
+        let mut particles = Vec::new();
+        let mut rows = Vec::new();
+        for d in &self.distributions {
+            let (d_um, weights) = self.size_nodes(d);
+            for l in self.row_wavelengths() {
+                let m = self.index.at(l)? / self.medium_index;
+                let start = particles.len();
+                let k = PI * self.medium_index / (l * 1e-3);
+                particles.extend(d_um.iter().map(|&di| Particle { x: k * di, m }));
+                rows.push(Row {
+                    lambda_nm: l,
+                    particles: start..particles.len(),
+                    weights: weights.clone(),
+                });
+            }
+        }
+        Ok((particles, rows))
+    }
+
+    /// Diameters (µm) and number weights of one distribution under the job's size rule.
+    fn size_nodes(&self, d: &SizeDistribution) -> (Vec<f64>, Vec<f64>) {
+        match self.rule {
+            SizeRule::Product { sizes } => {
+                let nodes = d.product_rule(sizes);
+                (nodes.d_um, nodes.weight)
+            }
+            SizeRule::Converged { ln_step, z_max } => {
+                let (a, b) = d.support_ln_d(z_max);
+                let n = ((b - a) / ln_step).ceil() as usize + 1;
+                let ln_d: Vec<f64> = (0..n).map(|k| a + k as f64 * ln_step).collect();
+                let w = if n == 1 {
+                    vec![1.0]
+                } else {
+                    ln_d.iter().map(|&u| d.density_ln_d(u)).collect()
+                };
+                (ln_d.iter().map(|u| u.exp()).collect(), w)
+            }
+        }
+    }
+
+    /// Runs the job; `progress(done, total)` reports spheres finished.
+    pub fn compute(
+        &self,
+        progress: &(dyn Fn(usize, usize) + Sync),
+    ) -> Result<(Vec<PhaseTable>, JobStats)> {
+        self.validate()?;
+        let (particles, rows) = self.discretise()?;
+        let eff: Vec<(f64, f64)> = particles
+            .par_iter()
+            .map(|p| {
+                let e = MieCoefficients::new(p.m, p.x).efficiencies();
+                (e.q_sca, e.g)
+            })
+            .collect();
+        let n_p = particles.len();
+        let mut weights = vec![0.0; rows.len() * n_p];
+        for (r, row) in rows.iter().enumerate() {
+            let idx = row.particles.clone();
+            let norm: f64 = idx
+                .clone()
+                .zip(&row.weights)
+                .map(|(i, w)| w * PI * particles[i].x.powi(2) * eff[i].0)
+                .sum();
+            for (i, w) in idx.zip(&row.weights) {
+                weights[r * n_p + i] = w / norm;
+            }
+        }
+        let mu: Vec<f64> = self
+            .angles_deg
+            .iter()
+            .map(|d| d.to_radians().cos())
+            .collect();
+        let max_terms = particles.iter().map(|p| n_terms(p.x)).max().unwrap_or(1);
+        let basis = super::angular::AngleBasis::new(&mu, max_terms);
+        let (out, work): (Vec<f64>, Work) =
+            weighted_intensity(&particles, &weights, rows.len(), &basis, &|done| {
+                progress(done, n_p)
+            });
+        let per_dist = self.wavelengths_nm.len() + RGB_WAVELENGTHS_NM.len();
+        let n_ang = mu.len();
+        let tables = self
+            .distributions
+            .iter()
+            .enumerate()
+            .map(|(q, d)| {
+                let rs = q * per_dist..(q + 1) * per_dist;
+                let integrals: Vec<RowIntegrals> = rows[rs.clone()]
+                    .iter()
+                    .map(|r| RowIntegrals::new(r, &particles, &eff, self.medium_index))
+                    .collect();
+                self.assemble(*d, &out[rs.start * n_ang..rs.end * n_ang], &integrals, &mu)
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Ok((
+            tables,
+            JobStats {
+                spheres: work.spheres,
+                max_terms,
+                flops: work.flops,
+            },
+        ))
+    }
+
+    /// Mean, colour channels, CDF and moments of one distribution's rows.
+    fn assemble(
+        &self,
+        d: SizeDistribution,
+        rows: &[f64],
+        ints: &[RowIntegrals],
+        mu: &[f64],
+    ) -> Result<PhaseTable> {
+        let n_ang = mu.len();
+        let n_l = self.wavelengths_nm.len();
+        let spectral = &rows[..n_l * n_ang];
+        let row = |j: usize| &rows[j * n_ang..(j + 1) * n_ang];
+        let mean_w = vec![1.0 / n_l as f64; n_l];
+        let combine = |w: &[f64]| -> Vec<f64> {
+            (0..n_ang)
+                .map(|i| {
+                    w.iter()
+                        .enumerate()
+                        .map(|(j, wj)| wj * spectral[j * n_ang + i])
+                        .sum()
+                })
+                .collect()
+        };
+        let phase = combine(&mean_w);
+        let rgb_w = srgb_weights(&self.wavelengths_nm, self.illuminant)?;
+        let channels: Vec<Vec<f64>> = rgb_w.iter().map(|w| combine(w)).collect();
+        let interleave = |c: [&[f64]; 3]| {
+            (0..n_ang)
+                .flat_map(|i| c.map(|ch| ch[i]))
+                .collect::<Vec<f64>>()
+        };
+        let g_spectral: Vec<f64> = ints[..n_l].iter().map(|r| r.g).collect();
+        let dot = |w: &[f64], v: &[f64]| w.iter().zip(v).map(|(a, b)| a * b).sum::<f64>();
+        let c_sca: Vec<f64> = ints[..n_l].iter().map(|r| r.c_sca_um2).collect();
+        Ok(PhaseTable {
+            distribution: d,
+            theta_deg: self.angles_deg.clone(),
+            mu: mu.to_vec(),
+            cdf: grid::cdf(&self.angles_deg, &phase),
+            legendre: grid::legendre_moments(&self.angles_deg, &phase, self.legendre),
+            phase_rgb: interleave([&channels[0], &channels[1], &channels[2]]),
+            phase_rgb_3wl: interleave([row(n_l), row(n_l + 1), row(n_l + 2)]),
+            wavelength_nm: self.wavelengths_nm.clone(),
+            phase_spectral: spectral.to_vec(),
+            g: dot(&mean_w, &g_spectral),
+            g_rgb: [0, 1, 2].map(|c| dot(&rgb_w[c], &g_spectral)),
+            c_sca_um2: dot(&mean_w, &c_sca),
+            q_sca: dot(
+                &mean_w,
+                &ints[..n_l].iter().map(|r| r.q_sca).collect::<Vec<_>>(),
+            ),
+            effective_diameter_um: dot(
+                &mean_w,
+                &ints[..n_l].iter().map(|r| r.d_eff_um).collect::<Vec<_>>(),
+            ),
+            c_sca_spectral_um2: c_sca,
+            g_spectral,
+            phase,
+        })
+    }
+}
+
+/// Integral quantities of one weight row, from the Mie series (no angular quadrature).
+struct RowIntegrals {
+    g: f64,
+    c_sca_um2: f64,
+    q_sca: f64,
+    d_eff_um: f64,
+}
+
+impl RowIntegrals {
+    fn new(row: &Row, particles: &[Particle], eff: &[(f64, f64)], n_med: f64) -> Self {
+        let total: f64 = row.weights.iter().sum();
+        let (mut area, mut vol, mut sca, mut gsca) = (0.0, 0.0, 0.0, 0.0);
+        let to_r_um = row.lambda_nm * 1e-3 / (2.0 * PI * n_med); // r = x λ / (2π n_med)
+        for (i, w) in row.particles.clone().zip(&row.weights) {
+            let w = w / total;
+            let r = particles[i].x * to_r_um;
+            let (q, g) = eff[i];
+            area += w * PI * r * r;
+            vol += w * r * r * r;
+            sca += w * q * PI * r * r;
+            gsca += w * q * PI * r * r * g;
+        }
+        Self {
+            g: gsca / sca,
+            c_sca_um2: sca,
+            q_sca: sca / area,
+            d_eff_um: 2.0 * vol * PI / area,
+        }
+    }
+}
