@@ -199,3 +199,30 @@ fn matrix_product_equals_direct_summation() {
         }
     }
 }
+
+#[test]
+fn continuous_through_the_zeros_of_psi() {
+    // x = kπ makes ψ_0(x) = sin x vanish (and ψ_n vanish at the zeros of j_n); a ratio-based
+    // ψ_n breaks there. The series must be continuous in x through these points.
+    for k in [1.0, 5.0, 17.0, 1000.0] {
+        let x = k * std::f64::consts::PI;
+        for m in [Complex64::new(1.333, 0.0), Complex64::new(1.5, 0.01)] {
+            let at = |x: f64| {
+                let c = MieCoefficients::with_terms(m, x, n_terms(k * std::f64::consts::PI));
+                (c.efficiencies(), c.amplitudes(1.0).0)
+            };
+            let (e0, s0) = at(x);
+            let (e1, s1) = at(x * (1.0 + 1e-12));
+            assert!(
+                (e0.q_sca / e1.q_sca - 1.0).abs() < 1e-8,
+                "x = {k}π, m = {m}: {} vs {}",
+                e0.q_sca,
+                e1.q_sca
+            );
+            assert!(
+                (s0 - s1).norm() < 1e-8 * s1.norm(),
+                "x = {k}π, m = {m}: S(0)"
+            );
+        }
+    }
+}

@@ -168,8 +168,22 @@ impl MieJob {
         for &l in self.wavelengths_nm.iter().chain(&RGB_WAVELENGTHS_NM) {
             self.index.at(l)?;
         }
-        srgb_weights(&self.wavelengths_nm, self.illuminant)?;
         grid::validate_angles(&self.angles_deg)
+    }
+
+    /// Quadrature weights of the wavelength mean (sum 1). The product rule uses spec 10's
+    /// equal weights, so that its tables can be compared digit for digit; the converged rule
+    /// uses the trapezoid rule, whose error falls as 1/N_λ² instead of 1/N_λ (with equal
+    /// weights the end points are over-weighted by half a step: 2e-3 at 61 wavelengths).
+    pub fn wavelength_weights(&self) -> Vec<f64> {
+        let n = self.wavelengths_nm.len();
+        if n == 1 || matches!(self.rule, SizeRule::Product { .. }) {
+            return vec![1.0 / n as f64; n];
+        }
+        let mut w = vec![1.0 / (n - 1) as f64; n];
+        w[0] *= 0.5;
+        w[n - 1] *= 0.5;
+        w
     }
 
     /// All output wavelengths: the grid, then the three LUT wavelengths.
@@ -358,7 +372,7 @@ impl MieJob {
         let n_l = self.wavelengths_nm.len();
         let spectral = &rows[..n_l * n_ang];
         let row = |j: usize| &rows[j * n_ang..(j + 1) * n_ang];
-        let mean_w = vec![1.0 / n_l as f64; n_l];
+        let mean_w = self.wavelength_weights();
         let combine = |w: &[f64]| -> Vec<f64> {
             (0..n_ang)
                 .map(|i| {
@@ -370,7 +384,7 @@ impl MieJob {
                 .collect()
         };
         let phase = combine(&mean_w);
-        let rgb_w = srgb_weights(&self.wavelengths_nm, self.illuminant)?;
+        let rgb_w = srgb_weights(&self.wavelengths_nm, &mean_w, self.illuminant);
         let channels: Vec<Vec<f64>> = rgb_w.iter().map(|w| combine(w)).collect();
         let interleave = |c: [&[f64]; 3]| {
             (0..n_ang)

@@ -9,8 +9,9 @@
 //!   cross-section of unpolarised light is `(|S1|² + |S2|²) / (2 k²)`.
 //!
 //! Numerics: logarithmic derivatives D_n(z) = ψ_n'(z)/ψ_n(z) by downward recurrence, for the
-//! sphere (z = m x) and for the medium (z = x); ψ_n(x) from ψ_0 = sin x and the stable ratio
-//! ψ_{n−1}/ψ_n = D_n(x) + n/x, which keeps full relative precision for tiny x and for n > x;
+//! sphere (z = m x) and for the medium (z = x); ψ_n(x) by Miller's downward recurrence,
+//! normalised to the exact ψ_0 or ψ_1, which keeps full relative precision for tiny x, for
+//! n > x and at the zeros of ψ_n (x = kπ makes ψ_0 vanish: ratio methods fail there);
 //! the growing Riccati–Bessel η_n = x y_n(x) by upward recurrence. The numerators of a_n, b_n
 //! are written as ψ_n (D_n(mx)/m − D_n(x)) and ψ_n (m D_n(mx) − D_n(x)), which removes the
 //! cancellation of the textbook form at small x.
@@ -80,6 +81,37 @@ fn start_order(n_max: usize, z_abs: f64) -> usize {
     n_max.max(z_abs.ceil() as usize) + 16 + (10.0 * width).ceil() as usize
 }
 
+/// Riccati–Bessel ψ_n(x) = x j_n(x) for n = 0..=n_max by Miller's algorithm: the downward
+/// recurrence ψ_{n−1} = ((2n + 1)/x) ψ_n − ψ_{n+1} from an arbitrary start far above
+/// max(n_max, x), rescaled on the way to stay in range, then normalised by whichever of the
+/// exact ψ_0 = sin x and ψ_1 = sin x / x − cos x is larger in magnitude (both never vanish
+/// together, and ψ_0 is the larger one for small x, where ψ_1 would lose digits).
+fn riccati_psi(x: f64, n_max: usize) -> Vec<f64> {
+    let start = start_order(n_max, x);
+    let mut psi = vec![0.0; n_max + 1];
+    let (mut above, mut here) = (0.0, 1e-200);
+    for n in (1..=start).rev() {
+        let below = (2 * n + 1) as f64 / x * here - above;
+        (above, here) = (here, below);
+        if here.abs() > 1e200 {
+            (above, here) = (above * 1e-200, here * 1e-200);
+            psi.iter_mut().for_each(|p| *p *= 1e-200);
+        }
+        if n - 1 <= n_max {
+            psi[n - 1] = here;
+        }
+    }
+    let (s, c) = x.sin_cos();
+    let psi1 = s / x - c;
+    let scale = if s.abs() >= psi1.abs() {
+        s / psi[0]
+    } else {
+        psi1 / psi[1]
+    };
+    psi.iter_mut().for_each(|p| *p *= scale);
+    psi
+}
+
 /// Real-argument version of [`log_derivative`] (for the medium side, z = x).
 fn log_derivative_real(x: f64, n_max: usize) -> Vec<f64> {
     let start = start_order(n_max, x);
@@ -107,14 +139,15 @@ impl MieCoefficients {
         let dx = log_derivative_real(x, n);
         let (sin_x, cos_x) = x.sin_cos();
         // ψ_{n−1}, ψ_n and η = x y: η_{−1}... start at n = 0: η_0 = −cos x, η_1 = −cos x / x − sin x.
-        let mut psi_prev = sin_x;
+        let psi = riccati_psi(x, n);
+        let mut psi_prev = psi[0];
         let mut eta_prev = -cos_x;
         let mut eta = -cos_x / x - sin_x;
         let mut a = Vec::with_capacity(n);
         let mut b = Vec::with_capacity(n);
         for k in 1..=n {
             let nx = k as f64 / x;
-            let psi = psi_prev / (dx[k] + nx);
+            let psi = psi[k];
             let xi = Complex64::new(psi, eta);
             let xi_prev = Complex64::new(psi_prev, eta_prev);
             let da = dm[k] / m;

@@ -1,0 +1,135 @@
+//! Convergence study of the Mie size/wavelength quadrature (docs/mie.md).
+//!
+//! For each median diameter, compares a candidate rule with a reference rule (finer ln-x step,
+//! wider size support, more wavelengths) and prints the worst relative difference of p(θ) over
+//! all angles, and where it occurs.
+//!
+//!     cargo run --release --example mie_convergence [-- D1,D2,…]
+
+use nephele::mie::colour::Illuminant;
+use nephele::mie::distribution::SizeDistribution;
+use nephele::mie::grid::reference_angles_deg;
+use nephele::mie::index::RefractiveIndex;
+use nephele::mie::{MieJob, SizeRule};
+
+fn job(d: f64, rule: SizeRule, n_lambda: usize) -> MieJob {
+    MieJob {
+        distributions: vec![SizeDistribution::LogNormal {
+            d_median_um: d,
+            sigma: 0.25,
+        }],
+        wavelengths_nm: (0..n_lambda)
+            .map(|i| 400.0 + 300.0 * i as f64 / (n_lambda - 1) as f64)
+            .collect(),
+        rule,
+        index: RefractiveIndex::Constant { n: 1.333, k: 0.0 },
+        medium_index: 1.0,
+        angles_deg: reference_angles_deg(),
+        illuminant: Illuminant::D65,
+        legendre: 8,
+    }
+}
+
+fn worst(a: &[f64], b: &[f64], theta: &[f64]) -> (f64, f64) {
+    a.iter()
+        .zip(b)
+        .zip(theta)
+        .map(|((x, y), t)| ((x / y - 1.0).abs(), *t))
+        .fold((0.0, 0.0), |m, v| if v.0 > m.0 { v } else { m })
+}
+
+fn main() {
+    let ds: Vec<f64> = std::env::args()
+        .nth(1)
+        .map_or(vec![5.0, 8.0, 20.0, 50.0], |s| {
+            s.split(',').map(|v| v.parse().unwrap()).collect()
+        });
+    let reference = (
+        SizeRule::Converged {
+            ln_step: 6.25e-5,
+            z_max: 6.0,
+        },
+        241,
+    );
+    let candidates = [
+        ("product 41x31", SizeRule::Product { sizes: 41 }, 31),
+        ("product 161x61", SizeRule::Product { sizes: 161 }, 61),
+        (
+            "h=1e-3 z=5 L=61",
+            SizeRule::Converged {
+                ln_step: 1e-3,
+                z_max: 5.0,
+            },
+            61,
+        ),
+        (
+            "h=5e-4 z=5 L=61",
+            SizeRule::Converged {
+                ln_step: 5e-4,
+                z_max: 5.0,
+            },
+            61,
+        ),
+        (
+            "h=2.5e-4 z=5 L=31",
+            SizeRule::Converged {
+                ln_step: 2.5e-4,
+                z_max: 5.0,
+            },
+            31,
+        ),
+        (
+            "h=2.5e-4 z=5 L=16",
+            SizeRule::Converged {
+                ln_step: 2.5e-4,
+                z_max: 5.0,
+            },
+            16,
+        ),
+        (
+            "h=2.5e-4 z=4 L=61",
+            SizeRule::Converged {
+                ln_step: 2.5e-4,
+                z_max: 4.0,
+            },
+            61,
+        ),
+        (
+            "h=2.5e-4 z=5 L=61 (default)",
+            SizeRule::Converged {
+                ln_step: 2.5e-4,
+                z_max: 5.0,
+            },
+            61,
+        ),
+        (
+            "h=1.25e-4 z=5 L=121",
+            SizeRule::Converged {
+                ln_step: 1.25e-4,
+                z_max: 5.0,
+            },
+            121,
+        ),
+    ];
+    println!(
+        "| d (µm) | rule | max rel. diff of p(θ) | at θ (°) | max rel. diff, θ < 30° | seconds |"
+    );
+    println!("|---|---|---|---|---|---|");
+    for d in ds {
+        let t0 = std::time::Instant::now();
+        let (r, _) = job(d, reference.0, reference.1)
+            .compute(&|_, _| {})
+            .unwrap();
+        eprintln!("reference d = {d}: {:.1} s", t0.elapsed().as_secs_f64());
+        let theta = &r[0].theta_deg;
+        for (name, rule, nl) in candidates {
+            let t0 = std::time::Instant::now();
+            let (c, _) = job(d, rule, nl).compute(&|_, _| {}).unwrap();
+            let s = t0.elapsed().as_secs_f64();
+            let (w, at) = worst(&c[0].phase, &r[0].phase, theta);
+            let n30 = theta.iter().position(|&t| t >= 30.0).unwrap();
+            let (wf, _) = worst(&c[0].phase[..n30], &r[0].phase[..n30], &theta[..n30]);
+            println!("| {d} | {name} | {w:.2e} | {at:.2} | {wf:.2e} | {s:.2} |");
+        }
+    }
+}
