@@ -4,7 +4,7 @@
 //! wider size support, more wavelengths) and prints the worst relative difference of p(θ) over
 //! all angles, and where it occurs.
 //!
-//!     cargo run --release --example mie_convergence [-- D1,D2,…]
+//!     cargo run --release --example mie_convergence [-- D1,D2,… [REFINE]]
 
 use nephele::mie::colour::Illuminant;
 use nephele::mie::distribution::SizeDistribution;
@@ -38,79 +38,45 @@ fn worst(a: &[f64], b: &[f64], theta: &[f64]) -> (f64, f64) {
         .fold((0.0, 0.0), |m, v| if v.0 > m.0 { v } else { m })
 }
 
+fn conv(ln_step: f64, x_step: f64, z_max: f64) -> SizeRule {
+    SizeRule::Converged {
+        ln_step,
+        x_step,
+        z_max,
+    }
+}
+
 fn main() {
-    let ds: Vec<f64> = std::env::args()
-        .nth(1)
-        .map_or(vec![5.0, 8.0, 20.0, 50.0], |s| {
-            s.split(',').map(|v| v.parse().unwrap()).collect()
-        });
-    let reference = (
-        SizeRule::Converged {
-            ln_step: 6.25e-5,
-            z_max: 6.0,
-        },
-        241,
-    );
+    let mut args = std::env::args().skip(1);
+    let ds: Vec<f64> = args.next().map_or(vec![5.0, 8.0, 20.0], |s| {
+        s.split(',').map(|v| v.parse().unwrap()).collect()
+    });
+    // Reference: steps divided by `refine`, one more σ of support, 4× the wavelengths.
+    let refine: f64 = args.next().map_or(4.0, |s| s.parse().unwrap());
+    let reference = (conv(2.5e-4 / refine, 0.01 / refine, 6.0), 241);
     let candidates = [
-        ("product 41x31", SizeRule::Product { sizes: 41 }, 31),
-        ("product 161x61", SizeRule::Product { sizes: 161 }, 61),
+        ("product 41×31", SizeRule::Product { sizes: 41 }, 31),
+        ("product 161×61", SizeRule::Product { sizes: 161 }, 61),
         (
-            "h=1e-3 z=5 L=61",
-            SizeRule::Converged {
-                ln_step: 1e-3,
-                z_max: 5.0,
-            },
+            "h=2.5e-4, Δx=∞, L=61 (ln x only)",
+            conv(2.5e-4, 1e9, 5.0),
             61,
         ),
+        ("h=5e-4, Δx=0.02, L=61", conv(5e-4, 0.02, 5.0), 61),
+        ("h=2.5e-4, Δx=0.01, L=31", conv(2.5e-4, 0.01, 5.0), 31),
+        ("h=2.5e-4, Δx=0.01, L=61, z=4", conv(2.5e-4, 0.01, 4.0), 61),
         (
-            "h=5e-4 z=5 L=61",
-            SizeRule::Converged {
-                ln_step: 5e-4,
-                z_max: 5.0,
-            },
+            "**h=2.5e-4, Δx=0.01, L=61 (default)**",
+            conv(2.5e-4, 0.01, 5.0),
             61,
         ),
-        (
-            "h=2.5e-4 z=5 L=31",
-            SizeRule::Converged {
-                ln_step: 2.5e-4,
-                z_max: 5.0,
-            },
-            31,
-        ),
-        (
-            "h=2.5e-4 z=5 L=16",
-            SizeRule::Converged {
-                ln_step: 2.5e-4,
-                z_max: 5.0,
-            },
-            16,
-        ),
-        (
-            "h=2.5e-4 z=4 L=61",
-            SizeRule::Converged {
-                ln_step: 2.5e-4,
-                z_max: 4.0,
-            },
-            61,
-        ),
-        (
-            "h=2.5e-4 z=5 L=61 (default)",
-            SizeRule::Converged {
-                ln_step: 2.5e-4,
-                z_max: 5.0,
-            },
-            61,
-        ),
-        (
-            "h=1.25e-4 z=5 L=121",
-            SizeRule::Converged {
-                ln_step: 1.25e-4,
-                z_max: 5.0,
-            },
-            121,
-        ),
+        ("h=1.25e-4, Δx=0.005, L=121", conv(1.25e-4, 0.005, 5.0), 121),
     ];
+    println!(
+        "Reference: h = {:.3e}, Δx = {:.4}, z = 6, L = 241\n",
+        2.5e-4 / refine,
+        0.01 / refine
+    );
     println!(
         "| d (µm) | rule | max rel. diff of p(θ) | at θ (°) | max rel. diff, θ < 30° | seconds |"
     );

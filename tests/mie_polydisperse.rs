@@ -215,12 +215,18 @@ fn shared_ln_x_table_agrees_with_per_wavelength_sizes() {
 fn converged_default_is_within_5e_3_of_a_finer_rule() {
     // d = 8 µm is where spec 10 reports the product rule off by 2 % at 180°.
     let lams = grid(400.0, 700.0, 61);
-    let SizeRule::Converged { ln_step, z_max } = CONVERGED_DEFAULT else {
+    let SizeRule::Converged {
+        ln_step,
+        x_step,
+        z_max,
+    } = CONVERGED_DEFAULT
+    else {
         unreachable!()
     };
     let default = run(&job(lognormal(8.0), CONVERGED_DEFAULT, &lams));
     let finer = SizeRule::Converged {
         ln_step: ln_step / 4.0,
+        x_step: x_step / 4.0,
         z_max: z_max + 1.0,
     };
     let reference = run(&job(lognormal(8.0), finer, &grid(400.0, 700.0, 121)));
@@ -273,6 +279,7 @@ fn spectral_water_and_gamma_distribution() {
         lognormal(3.0),
         SizeRule::Converged {
             ln_step: 1e-3,
+            x_step: 0.05,
             z_max: 4.0,
         },
         &lams,

@@ -4,7 +4,7 @@ mod common;
 
 use common::{gauss_legendre, half_ulp_of_print, reference};
 use nephele::mie::angular::AngleBasis;
-use nephele::mie::batch::{weighted_intensity, Particle};
+use nephele::mie::batch::{weighted_intensity, Particle, WeightRow};
 use nephele::mie::sphere::n_terms;
 use nephele::mie::MieCoefficients;
 use num_complex::Complex64;
@@ -181,9 +181,13 @@ fn matrix_product_equals_direct_summation() {
     let basis = AngleBasis::new(&mu, n_terms(241.5));
     let n = particles.len();
     // Identity weights: one output row per sphere.
-    let mut w = vec![0.0; n * n];
-    (0..n).for_each(|i| w[i * n + i] = 1.0);
-    let (out, _) = weighted_intensity(&particles, &w, n, &basis, &|_| {});
+    let rows: Vec<WeightRow> = (0..n)
+        .map(|i| WeightRow {
+            start: i,
+            weights: vec![1.0],
+        })
+        .collect();
+    let (out, _) = weighted_intensity(&particles, &rows, &basis, &|_| {});
     for (p, part) in particles.iter().enumerate() {
         let coef = MieCoefficients::new(part.m, part.x);
         for (j, &m) in mu.iter().enumerate() {

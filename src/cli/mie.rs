@@ -58,9 +58,12 @@ pub struct MieArgs {
     /// Number of Legendre moments beyond χ_0 to write. [default: 64]
     #[arg(long, value_name = "K")]
     legendre: Option<usize>,
-    /// Step in ln x (ln d for a dispersive index) of the converged rule. [default: 2.5e-4]
+    /// Largest step in ln x of the converged size grid (small droplets). [default: 2.5e-4]
     #[arg(long, value_name = "H")]
     ln_step: Option<f64>,
+    /// Largest step in x = πd/λ of the converged size grid (large droplets). [default: 0.01]
+    #[arg(long, value_name = "DX")]
+    x_step: Option<f64>,
     /// Half-width of the size support of the converged rule, in σ. [default: 5]
     #[arg(long, value_name = "Z")]
     z_max: Option<f64>,
@@ -114,6 +117,7 @@ impl MieArgs {
             illuminant: self.illuminant.or(file.illuminant),
             legendre: self.legendre.or(file.legendre),
             ln_step: self.ln_step.or(file.ln_step),
+            x_step: self.x_step.or(file.x_step),
             z_max: self.z_max.or(file.z_max),
             out: self.out.or(file.out),
             csv: self.csv || file.csv,
@@ -142,8 +146,16 @@ impl MieArgs {
         )?;
         let rule = match (self.sizes, CONVERGED_DEFAULT) {
             (Some(sizes), _) => SizeRule::Product { sizes },
-            (None, SizeRule::Converged { ln_step, z_max }) => SizeRule::Converged {
+            (
+                None,
+                SizeRule::Converged {
+                    ln_step,
+                    x_step,
+                    z_max,
+                },
+            ) => SizeRule::Converged {
                 ln_step: self.ln_step.unwrap_or(ln_step),
+                x_step: self.x_step.unwrap_or(x_step),
                 z_max: self.z_max.unwrap_or(z_max),
             },
             (None, rule) => rule,

@@ -5,8 +5,9 @@
 //!   [Re, Im] (S1 − S2) = C⁻ (2b × K) · V (K × n_θ),   C⁻_pn = c_n (a_n − b_n),
 //! (U, V from [`AngleBasis`]; coefficients past a sphere's own N are zero), and
 //!   i(θ) = (|S1|² + |S2|²)/2 = (|S1 + S2|² + |S1 − S2|²)/4.
-//! The requested outputs are weighted sums over spheres, `out = W · I`, accumulated chunk by
-//! chunk with one more matrix product. The chunking does not depend on the thread count and
+//! The requested outputs are weighted sums over spheres, `out = W · I` (W sparse: each row
+//! weighs a contiguous run of spheres), accumulated chunk by chunk with one more matrix
+//! product. The chunking does not depend on the thread count and
 //! every sum runs in a fixed order, so results are bit-identical for any number of threads.
 
 use super::angular::AngleBasis;
@@ -39,43 +40,53 @@ pub struct Work {
     pub spheres: usize,
 }
 
-/// `out (n_out × n_θ) = W (n_out × n_p) · I (n_p × n_θ)` with I the intensities
-/// (|S1|² + |S2|²)/2 of `particles` at the angles of `basis`; `weights` is row-major.
-/// `progress` is called with the number of spheres finished so far.
+/// One output row: weights on the contiguous particles `start..start + weights.len()`.
+#[derive(Clone, Debug)]
+pub struct WeightRow {
+    /// First particle the row weighs.
+    pub start: usize,
+    /// Weights of particles start, start + 1, ….
+    pub weights: Vec<f64>,
+}
+
+impl WeightRow {
+    fn end(&self) -> usize {
+        self.start + self.weights.len()
+    }
+}
+
+/// `out (n_rows × n_θ) = W · I` with I the intensities (|S1|² + |S2|²)/2 of `particles` at
+/// the angles of `basis` and W the sparse `rows`. Particles are processed in the order given,
+/// in blocks of [`BLOCK`]: consecutive particles should have similar x (each block pays for
+/// its largest). `progress` is called with the number of spheres finished so far.
 pub fn weighted_intensity(
     particles: &[Particle],
-    weights: &[f64],
-    n_out: usize,
+    rows: &[WeightRow],
     basis: &AngleBasis,
     progress: &(dyn Fn(usize) + Sync),
 ) -> (Vec<f64>, Work) {
     let n_p = particles.len();
     let n_ang = basis.n_angles();
-    assert_eq!(
-        weights.len(),
-        n_out * n_p,
-        "weights must be n_out × n_particles"
+    assert!(
+        rows.iter().all(|r| r.end() <= n_p),
+        "weight rows must lie within the particles"
     );
-    let mut order: Vec<usize> = (0..n_p).collect();
-    order.sort_by(|&i, &j| particles[i].x.total_cmp(&particles[j].x));
-    let mut out = vec![0.0; n_out * n_ang];
+    let mut out = vec![0.0; rows.len() * n_ang];
     let mut work = Work {
         flops: 0.0,
         spheres: n_p,
     };
     let mut intensity = vec![0.0; CHUNK * n_ang];
-    for (c, idx) in order.chunks(CHUNK).enumerate() {
-        let rows = &mut intensity[..idx.len() * n_ang];
-        work.flops += rows
+    for c0 in (0..n_p).step_by(CHUNK) {
+        let chunk = &particles[c0..(c0 + CHUNK).min(n_p)];
+        let block_rows = &mut intensity[..chunk.len() * n_ang];
+        work.flops += block_rows
             .par_chunks_mut(BLOCK * n_ang)
-            .zip(idx.par_chunks(BLOCK))
-            .map(|(block_rows, block_idx)| {
-                let block: Vec<Particle> = block_idx.iter().map(|&i| particles[i]).collect();
-                block_intensity(&block, basis, block_rows)
-            })
+            .zip(chunk.par_chunks(BLOCK))
+            .map(|(dst, block)| block_intensity(block, basis, dst))
             .sum::<f64>();
-        work.flops += accumulate(&mut out, weights, n_p, idx, rows, n_ang);
-        progress(((c + 1) * CHUNK).min(n_p));
+        work.flops += accumulate(&mut out, rows, c0, block_rows, n_ang);
+        progress(c0 + chunk.len());
     }
     (out, work)
 }
@@ -119,27 +130,22 @@ fn block_intensity(block: &[Particle], basis: &AngleBasis, rows: &mut [f64]) -> 
     2.0 * 2.0 * (2 * b * k * n_ang) as f64
 }
 
-/// `out[r] += Σ_p W[r, idx[p]] · rows[p]` for the rows r with a non-zero weight in the chunk,
+/// `out[r] += Σ_p W[r, c0 + p] · chunk[p]` for the rows that weigh particles of this chunk,
 /// as one matrix product split into column panels; returns the flops.
-fn accumulate(
-    out: &mut [f64],
-    weights: &[f64],
-    n_p: usize,
-    idx: &[usize],
-    rows: &[f64],
-    n_ang: usize,
-) -> f64 {
-    let n_out = out.len() / n_ang;
-    let active: Vec<usize> = (0..n_out)
-        .filter(|&r| idx.iter().any(|&p| weights[r * n_p + p] != 0.0))
-        .collect();
-    let kc = idx.len();
-    let w: Vec<f64> = active
-        .iter()
-        .flat_map(|&r| idx.iter().map(move |&p| weights[r * n_p + p]))
+fn accumulate(out: &mut [f64], rows: &[WeightRow], c0: usize, chunk: &[f64], n_ang: usize) -> f64 {
+    let kc = chunk.len() / n_ang;
+    let c1 = c0 + kc;
+    let active: Vec<usize> = (0..rows.len())
+        .filter(|&r| rows[r].start < c1 && rows[r].end() > c0)
         .collect();
     let na = active.len();
-    let mut sum = vec![0.0; na * n_ang];
+    let mut w = vec![0.0; na * kc];
+    for (a, &r) in active.iter().enumerate() {
+        let row = &rows[r];
+        for p in row.start.max(c0)..row.end().min(c1) {
+            w[a * kc + p - c0] = row.weights[p - row.start];
+        }
+    }
     // Panels: each is a product over the same K in the same order, so splitting the columns
     // does not change a single bit of the result.
     let panels: Vec<(usize, Vec<f64>)> = (0..n_ang.div_ceil(PANEL))
@@ -147,21 +153,17 @@ fn accumulate(
         .map(|q| {
             let (j0, j1) = (q * PANEL, ((q + 1) * PANEL).min(n_ang));
             let mut c = vec![0.0; na * (j1 - j0)];
-            gemm_strided(na, kc, j1 - j0, &w, &rows[j0..], n_ang, &mut c);
+            gemm_strided(na, kc, j1 - j0, &w, &chunk[j0..], n_ang, &mut c);
             (j0, c)
         })
         .collect();
     for (j0, c) in panels {
         let width = c.len() / na.max(1);
-        for r in 0..na {
-            sum[r * n_ang + j0..r * n_ang + j0 + width]
-                .copy_from_slice(&c[r * width..(r + 1) * width]);
-        }
-    }
-    for (r, &row) in active.iter().enumerate() {
-        let dst = &mut out[row * n_ang..(row + 1) * n_ang];
-        for (d, s) in dst.iter_mut().zip(&sum[r * n_ang..(r + 1) * n_ang]) {
-            *d += s;
+        for (a, &r) in active.iter().enumerate() {
+            let dst = &mut out[r * n_ang + j0..r * n_ang + j0 + width];
+            for (d, s) in dst.iter_mut().zip(&c[a * width..(a + 1) * width]) {
+                *d += s;
+            }
         }
     }
     2.0 * (na * kc * n_ang) as f64

@@ -14,7 +14,7 @@
 //!   it covers; each (diameter, λ) is one row of weights over that table. A dispersive index
 //!   needs its own sizes at every wavelength (same step h in ln d).
 
-use super::batch::{weighted_intensity, Particle, Work};
+use super::batch::{weighted_intensity, Particle, WeightRow, Work};
 use super::colour::{srgb_weights, Illuminant, RGB_WAVELENGTHS_NM};
 use super::distribution::SizeDistribution;
 use super::grid;
@@ -34,20 +34,25 @@ pub enum SizeRule {
         /// Number of sizes N_s.
         sizes: usize,
     },
-    /// Uniform in ln x (constant index) or ln d (dispersive) with step `ln_step`, over ±`z_max`
-    /// standard deviations of the log-normal (the equivalent tail level for the gamma).
+    /// A fine grid in size parameter over ±`z_max` standard deviations of the log-normal (the
+    /// equivalent tail level for the gamma): uniform in u(x) = ln x / `ln_step` + x / `x_step`,
+    /// i.e. a step of `ln_step` in ln x for small x and of `x_step` in x for large x, where
+    /// the resonances that must be sampled have a roughly constant spacing and width in x.
     Converged {
-        /// Grid step in ln x / ln d.
+        /// Largest step in ln x.
         ln_step: f64,
+        /// Largest step in x.
+        x_step: f64,
         /// Half-width of the size support in σ.
         z_max: f64,
     },
 }
 
 /// The converged default, chosen by the convergence study in docs/mie.md (and the test
-/// `converged_default_is_within_5e-3_of_a_finer_rule`).
+/// `converged_default_is_within_5e_3_of_a_finer_rule`).
 pub const CONVERGED_DEFAULT: SizeRule = SizeRule::Converged {
     ln_step: 2.5e-4,
+    x_step: 0.01,
     z_max: 5.0,
 };
 
@@ -126,11 +131,43 @@ pub struct JobStats {
     pub flops: f64,
 }
 
-/// One weight row: a (distribution, wavelength) pair and its number weights on particles.
+/// One weight row: a (distribution, wavelength) pair and its number weights on the
+/// contiguous particles `start..start + weights.len()`.
 struct Row {
     lambda_nm: f64,
-    particles: std::ops::Range<usize>,
+    start: usize,
     weights: Vec<f64>,
+}
+
+impl Row {
+    fn particles(&self) -> std::ops::Range<usize> {
+        self.start..self.start + self.weights.len()
+    }
+}
+
+/// Nodes x_k of the converged grid on [x_lo, x_hi], uniform in u(x) = ln x / h + x / Δx with
+/// unit step, and the Jacobian d ln x / du = 1 / (1/h + x/Δx) that turns a density per ln x
+/// into trapezoid weights (the end nodes' half weights are below the 5σ tail and dropped).
+fn converged_nodes(x_lo: f64, x_hi: f64, h: f64, dx: f64) -> (Vec<f64>, Vec<f64>) {
+    let u = |x: f64| x.ln() / h + x / dx;
+    let (u_lo, u_hi) = (u(x_lo), u(x_hi));
+    let n = (u_hi - u_lo).ceil() as usize + 1;
+    let mut xs = Vec::with_capacity(n);
+    let mut x = x_lo;
+    for k in 0..n {
+        let target = u_lo + k as f64;
+        for _ in 0..50 {
+            // Newton on u(x) = target; u is increasing and concave in ln x, so this converges.
+            let step = (u(x) - target) / (1.0 / (x * h) + 1.0 / dx);
+            x -= step;
+            if step.abs() <= 1e-15 * x {
+                break;
+            }
+        }
+        xs.push(x);
+    }
+    let jac = xs.iter().map(|&x| 1.0 / (1.0 / h + x / dx)).collect();
+    (xs, jac)
 }
 
 impl MieJob {
@@ -157,10 +194,17 @@ impl MieJob {
         }
         match self.rule {
             SizeRule::Product { sizes } if sizes == 0 => bail!("--sizes must be at least 1"),
-            SizeRule::Converged { ln_step, z_max }
-                if !(ln_step > 0.0 && ln_step < 0.1 && z_max > 0.0 && z_max <= 10.0) =>
+            SizeRule::Converged {
+                ln_step,
+                x_step,
+                z_max,
+            } if !(ln_step > 0.0
+                && ln_step < 0.1
+                && x_step > 0.0
+                && z_max > 0.0
+                && z_max <= 10.0) =>
             {
-                bail!("converged rule needs 0 < ln_step < 0.1 and 0 < z_max ≤ 10")
+                bail!("converged rule needs 0 < ln_step < 0.1, x_step > 0 and 0 < z_max ≤ 10")
             }
             _ => {}
         }
@@ -210,45 +254,42 @@ impl MieJob {
         }
     }
 
-    /// Constant index: one uniform ln-x grid shared by every row.
+    /// Constant index: one size-parameter grid shared by every row.
     fn discretise_shared_ln_x(&self) -> Result<(Vec<Particle>, Vec<Row>)> {
-        let SizeRule::Converged { ln_step: h, z_max } = self.rule else {
+        let SizeRule::Converged {
+            ln_step,
+            x_step,
+            z_max,
+        } = self.rule
+        else {
             unreachable!()
         };
         let m = self.index.at(self.wavelengths_nm[0])? / self.medium_index;
         let lams = self.row_wavelengths();
         let shift = |lam: f64| (PI * self.medium_index / (lam * 1e-3)).ln(); // ln x = ln d + shift
-        let mut lo = f64::INFINITY;
-        let mut hi = f64::NEG_INFINITY;
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
         for d in &self.distributions {
             let (a, b) = d.support_ln_d(z_max);
             for &l in &lams {
-                lo = lo.min(a + shift(l));
-                hi = hi.max(b + shift(l));
+                (lo, hi) = (lo.min(a + shift(l)), hi.max(b + shift(l)));
             }
         }
-        let n = ((hi - lo) / h).ceil() as usize + 1;
-        let ln_x: Vec<f64> = (0..n).map(|k| lo + k as f64 * h).collect();
-        let particles = ln_x.iter().map(|&u| Particle { x: u.exp(), m }).collect();
+        let (xs, jac) = converged_nodes(lo.exp(), hi.exp(), ln_step, x_step);
+        let particles = xs.iter().map(|&x| Particle { x, m }).collect();
         let mut rows = Vec::new();
         for d in &self.distributions {
             let (a, b) = d.support_ln_d(z_max);
             for &l in &lams {
                 let s = shift(l);
-                let w = ln_x
-                    .iter()
-                    .map(|&u| {
-                        if (a..=b).contains(&(u - s)) {
-                            d.density_ln_d(u - s)
-                        } else {
-                            0.0
-                        }
-                    })
+                let first = xs.partition_point(|x| x.ln() - s < a);
+                let end = xs.partition_point(|x| x.ln() - s <= b);
+                let weights = (first..end)
+                    .map(|k| d.density_ln_d(xs[k].ln() - s) * jac[k])
                     .collect();
                 rows.push(Row {
                     lambda_nm: l,
-                    particles: 0..n,
-                    weights: w,
+                    start: first,
+                    weights,
                 });
             }
         }
@@ -260,39 +301,47 @@ impl MieJob {
         let mut particles = Vec::new();
         let mut rows = Vec::new();
         for d in &self.distributions {
-            let (d_um, weights) = self.size_nodes(d);
             for l in self.row_wavelengths() {
                 let m = self.index.at(l)? / self.medium_index;
+                let k = PI * self.medium_index / (l * 1e-3); // x = k d
+                let (d_um, weights) = self.size_nodes(d, k);
                 let start = particles.len();
-                let k = PI * self.medium_index / (l * 1e-3);
                 particles.extend(d_um.iter().map(|&di| Particle { x: k * di, m }));
                 rows.push(Row {
                     lambda_nm: l,
-                    particles: start..particles.len(),
-                    weights: weights.clone(),
+                    start,
+                    weights,
                 });
             }
         }
         Ok((particles, rows))
     }
 
-    /// Diameters (µm) and number weights of one distribution under the job's size rule.
-    fn size_nodes(&self, d: &SizeDistribution) -> (Vec<f64>, Vec<f64>) {
+    /// Diameters (µm, ascending) and number weights of one distribution under the job's size
+    /// rule, at a wavelength where x = k d.
+    fn size_nodes(&self, d: &SizeDistribution, k: f64) -> (Vec<f64>, Vec<f64>) {
         match self.rule {
             SizeRule::Product { sizes } => {
                 let nodes = d.product_rule(sizes);
                 (nodes.d_um, nodes.weight)
             }
-            SizeRule::Converged { ln_step, z_max } => {
+            SizeRule::Converged { .. } if matches!(d, SizeDistribution::Mono { .. }) => {
+                (vec![d.nominal_diameter_um()], vec![1.0])
+            }
+            SizeRule::Converged {
+                ln_step,
+                x_step,
+                z_max,
+            } => {
                 let (a, b) = d.support_ln_d(z_max);
-                let n = ((b - a) / ln_step).ceil() as usize + 1;
-                let ln_d: Vec<f64> = (0..n).map(|k| a + k as f64 * ln_step).collect();
-                let w = if n == 1 {
-                    vec![1.0]
-                } else {
-                    ln_d.iter().map(|&u| d.density_ln_d(u)).collect()
-                };
-                (ln_d.iter().map(|u| u.exp()).collect(), w)
+                let (xs, jac) = converged_nodes(k * a.exp(), k * b.exp(), ln_step, x_step);
+                let d_um: Vec<f64> = xs.iter().map(|x| x / k).collect();
+                let w = d_um
+                    .iter()
+                    .zip(&jac)
+                    .map(|(di, j)| d.density_ln_d(di.ln()) * j)
+                    .collect();
+                (d_um, w)
             }
         }
     }
@@ -312,18 +361,20 @@ impl MieJob {
             })
             .collect();
         let n_p = particles.len();
-        let mut weights = vec![0.0; rows.len() * n_p];
-        for (r, row) in rows.iter().enumerate() {
-            let idx = row.particles.clone();
-            let norm: f64 = idx
-                .clone()
-                .zip(&row.weights)
-                .map(|(i, w)| w * PI * particles[i].x.powi(2) * eff[i].0)
-                .sum();
-            for (i, w) in idx.zip(&row.weights) {
-                weights[r * n_p + i] = w / norm;
-            }
-        }
+        let weight_rows: Vec<WeightRow> = rows
+            .iter()
+            .map(|row| {
+                let norm: f64 = row
+                    .particles()
+                    .zip(&row.weights)
+                    .map(|(i, w)| w * PI * particles[i].x.powi(2) * eff[i].0)
+                    .sum();
+                WeightRow {
+                    start: row.start,
+                    weights: row.weights.iter().map(|w| w / norm).collect(),
+                }
+            })
+            .collect();
         let mu: Vec<f64> = self
             .angles_deg
             .iter()
@@ -332,7 +383,7 @@ impl MieJob {
         let max_terms = particles.iter().map(|p| n_terms(p.x)).max().unwrap_or(1);
         let basis = super::angular::AngleBasis::new(&mu, max_terms);
         let (out, work): (Vec<f64>, Work) =
-            weighted_intensity(&particles, &weights, rows.len(), &basis, &|done| {
+            weighted_intensity(&particles, &weight_rows, &basis, &|done| {
                 progress(done, n_p)
             });
         let per_dist = self.wavelengths_nm.len() + RGB_WAVELENGTHS_NM.len();
@@ -435,7 +486,7 @@ impl RowIntegrals {
         let total: f64 = row.weights.iter().sum();
         let (mut area, mut vol, mut sca, mut gsca) = (0.0, 0.0, 0.0, 0.0);
         let to_r_um = row.lambda_nm * 1e-3 / (2.0 * PI * n_med); // r = x λ / (2π n_med)
-        for (i, w) in row.particles.clone().zip(&row.weights) {
+        for (i, w) in row.particles().zip(&row.weights) {
             let w = w / total;
             let r = particles[i].x * to_r_um;
             let (q, g) = eff[i];
