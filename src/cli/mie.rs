@@ -25,17 +25,17 @@ pub struct MieArgs {
     config: Option<PathBuf>,
     /// Median diameter in µm (mode diameter for gamma, the size for mono); a list "5,10,20"
     /// or a range "5:50:46" computes several tables sharing one ln-x table. [default: 10]
-    #[arg(long, value_name = "UM")]
+    #[arg(long, value_name = "UM", allow_hyphen_values = true)]
     #[serde(default, deserialize_with = "str_or_num")]
     diameter: Option<String>,
     /// σ of ln d of the log-normal distribution.
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", allow_hyphen_values = true)]
     sigma: Option<f64>,
     /// Size distribution: lognormal, mono, or gamma:ALPHA:GAMMA (n(d) ∝ d^α e^{−(α/γ)(d/d_mode)^γ}).
     #[arg(long, value_name = "KIND")]
     distribution: Option<String>,
     /// Vacuum wavelengths MIN:MAX:N in nm, uniform and inclusive. [default: 400:700:61]
-    #[arg(long, value_name = "MIN:MAX:N")]
+    #[arg(long, value_name = "MIN:MAX:N", allow_hyphen_values = true)]
     wavelengths: Option<String>,
     /// Use the explicit product rule of spec 10 with N sizes (z uniform in [−4, 4]) instead of
     /// the converged default.
@@ -43,7 +43,7 @@ pub struct MieArgs {
     sizes: Option<usize>,
     /// Droplet index: a number (1.333), complex (1.33+1e-5i), water[:TEMP_C] (IAPWS R9-97) or a
     /// CSV file of wavelength_nm,n,k. [default: 1.333]
-    #[arg(long, value_name = "M")]
+    #[arg(long, value_name = "M", allow_hyphen_values = true)]
     #[serde(default, deserialize_with = "str_or_num")]
     index: Option<String>,
     /// Refractive index of the medium. [default: 1]

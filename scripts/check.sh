@@ -1,0 +1,93 @@
+#!/usr/bin/env bash
+# Independent cross-checks of nephele against reference implementations.
+#
+# Usage: scripts/check.sh [--no-build] [--quick]
+#   --no-build  use the existing target/release/nephele instead of running cargo
+#   --quick     pass --quick to every check script
+#
+# Creates .venv at the repository root if missing, installs scripts/requirements.txt into it
+# (skipped when the requirements file is unchanged since the last install, or when pip freeze
+# already satisfies every pin), builds the release binary, then runs every check script listed
+# in CHECKS. Exits non-zero if any check fails.
+set -euo pipefail
+
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+ROOT=$(pwd)
+
+# Check scripts, run in this order; add new ones here (e.g. check_mitsuba.py).
+CHECKS=(
+    check_mie.py
+)
+
+BUILD=1
+ARGS=()
+for arg in "$@"; do
+    case "$arg" in
+        --no-build) BUILD=0 ;;
+        --quick) ARGS+=(--quick) ;;
+        -h|--help) sed -n '2,11p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+        *) echo "check.sh: unknown option '$arg'" >&2; exit 2 ;;
+    esac
+done
+
+VENV="$ROOT/.venv"
+PY="$VENV/bin/python"
+REQ="$ROOT/scripts/requirements.txt"
+STAMP="$VENV/.req-hash"
+
+if [[ ! -x "$PY" ]]; then
+    echo "== creating $VENV"
+    python3 -m venv "$VENV"
+fi
+
+req_hash=$(sha256sum "$REQ" | cut -d' ' -f1)
+
+# True if every 'name==version' pin of requirements.txt appears in pip freeze.
+freeze_satisfies() {
+    local frozen
+    frozen=$("$PY" -m pip freeze 2>/dev/null | tr '[:upper:]_' '[:lower:]-')
+    local pin
+    while read -r pin; do
+        pin=${pin%%#*}
+        pin=$(echo "$pin" | tr -d '[:space:]' | tr '[:upper:]_' '[:lower:]-')
+        [[ -z "$pin" ]] && continue
+        grep -qxF "$pin" <<<"$frozen" || return 1
+    done <"$REQ"
+}
+
+if [[ -f "$STAMP" && "$(cat "$STAMP")" == "$req_hash" ]]; then
+    echo "== python requirements unchanged (hash in $STAMP)"
+elif freeze_satisfies; then
+    echo "== python requirements already satisfied"
+    echo "$req_hash" >"$STAMP"
+else
+    echo "== installing python requirements"
+    "$PY" -m pip install --quiet --disable-pip-version-check -r "$REQ"
+    echo "$req_hash" >"$STAMP"
+fi
+
+if [[ $BUILD == 1 ]]; then
+    echo "== cargo build --release --locked"
+    cargo build --release --locked
+fi
+BIN="$ROOT/target/release/nephele"
+if [[ ! -x "$BIN" ]]; then
+    echo "check.sh: $BIN not found (run without --no-build)" >&2
+    exit 2
+fi
+
+failed=()
+for check in "${CHECKS[@]}"; do
+    echo
+    echo "== scripts/$check"
+    if ! "$PY" "$ROOT/scripts/$check" --bin "$BIN" ${ARGS[@]+"${ARGS[@]}"}; then
+        failed+=("$check")
+    fi
+done
+
+echo
+if (( ${#failed[@]} )); then
+    echo "check.sh: FAILED: ${failed[*]}"
+    exit 1
+fi
+echo "check.sh: all ${#CHECKS[@]} check(s) passed"

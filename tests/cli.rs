@@ -1,0 +1,165 @@
+//! The `nephele` binary: outputs on success, one clear error line and no files on bad input.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn nephele(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_nephele"))
+        .args(args)
+        .output()
+        .expect("run nephele")
+}
+
+fn files_in(dir: &Path) -> Vec<String> {
+    match std::fs::read_dir(dir) {
+        Ok(rd) => rd
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect(),
+        Err(_) => vec![],
+    }
+}
+
+#[test]
+fn mie_writes_npz_json_csv_and_plot() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("t");
+    let o = nephele(&[
+        "mie",
+        "--diameter",
+        "3",
+        "--sizes",
+        "9",
+        "--wavelengths",
+        "400:700:4",
+        "--csv",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut files = files_in(&out);
+    files.sort();
+    assert_eq!(files, ["phase.csv", "phase.json", "phase.npz", "phase.png"]);
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("phase.json")).unwrap()).unwrap();
+    for key in [
+        "g",
+        "c_sca_um2",
+        "q_sca",
+        "effective_diameter_um",
+        "config",
+        "version",
+        "timings",
+    ] {
+        assert!(!json[key].is_null(), "phase.json lacks {key}");
+    }
+    let npz = npyz::npz::NpzArchive::open(out.join("phase.npz")).unwrap();
+    let mut names: Vec<String> = npz.array_names().map(String::from).collect();
+    names.sort();
+    for key in [
+        "theta_deg",
+        "mu",
+        "phase",
+        "phase_rgb",
+        "wavelength_nm",
+        "phase_spectral",
+        "cdf",
+        "legendre",
+    ] {
+        assert!(
+            names.iter().any(|n| n == key),
+            "phase.npz lacks {key}: {names:?}"
+        );
+    }
+    let mut npz = npz;
+    let phase = npz.by_name("phase_spectral").unwrap().unwrap();
+    assert_eq!(phase.shape(), &[4, 2251]);
+}
+
+#[test]
+fn bad_input_is_one_error_line_and_no_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad_csv = dir.path().join("bad.csv");
+    std::fs::write(&bad_csv, "wavelength_nm,n,k\n400,1.33,0\n500,oops,0\n").unwrap();
+    let cfg = dir.path().join("cfg.json");
+    std::fs::write(&cfg, r#"{"diameter": 10, "sigmaa": 0.3}"#).unwrap();
+    let cases: Vec<Vec<String>> = vec![
+        vec!["--diameter".into(), "nan".into()],
+        vec!["--diameter".into(), "-5".into()],
+        vec!["--sigma".into(), "0".into()],
+        vec!["--sigma".into(), "-0.1".into()],
+        vec!["--wavelengths".into(), "700:400:31".into()],
+        vec!["--wavelengths".into(), "400:700:0".into()],
+        vec!["--wavelengths".into(), "400:700".into()],
+        vec![
+            "--index".into(),
+            dir.path().join("missing.csv").to_string_lossy().into(),
+        ],
+        vec!["--index".into(), bad_csv.to_string_lossy().into()],
+        vec![
+            "--angles".into(),
+            dir.path().join("none.txt").to_string_lossy().into(),
+        ],
+        vec!["--distribution".into(), "weibull".into()],
+        vec!["--config".into(), cfg.to_string_lossy().into()],
+    ];
+    for (i, case) in cases.iter().enumerate() {
+        let out = dir.path().join(format!("out{i}"));
+        let mut args: Vec<&str> = vec!["mie", "--out", out.to_str().unwrap()];
+        args.extend(case.iter().map(String::as_str));
+        let o = nephele(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{case:?} should fail");
+        assert!(
+            err.trim().lines().count() == 1 && err.starts_with("error: "),
+            "{case:?}: {err}"
+        );
+        assert!(
+            files_in(&out).is_empty(),
+            "{case:?} left files: {:?}",
+            files_in(&out)
+        );
+    }
+}
+
+#[test]
+fn config_file_and_flags_combine() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("cfg.json");
+    std::fs::write(
+        &cfg,
+        r#"{"diameter": 2, "sizes": 5, "wavelengths": "450:650:3", "index": 1.34}"#,
+    )
+    .unwrap();
+    let out = dir.path().join("o");
+    let o = nephele(&[
+        "mie",
+        "--config",
+        cfg.to_str().unwrap(),
+        "--sigma",
+        "0.3",
+        "--no-plot",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("phase.json")).unwrap()).unwrap();
+    let job = &json["config"]["job"];
+    assert_eq!(job["distributions"][0]["sigma"], 0.3);
+    assert_eq!(job["distributions"][0]["d_median_um"], 2.0);
+    assert_eq!(job["rule"]["sizes"], 5);
+    assert_eq!(job["index"]["n"], 1.34);
+}
+
+#[test]
+fn sphere_prints_json() {
+    let o = nephele(&[
+        "sphere", "--index", "1.5+0.1i", "--x", "10", "--angles", "0,140",
+    ]);
+    assert!(o.status.success());
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!((v["qext"].as_f64().unwrap() - 2.459791).abs() < 5e-7);
+    assert!(!nephele(&["sphere", "--index", "1.5", "--x", "-1"])
+        .status
+        .success());
+}
