@@ -21,7 +21,10 @@ fn coefficients(c: &mut Criterion) {
 
 fn product_rule_job(c: &mut Criterion) {
     let job = MieJob {
-        distributions: vec![SizeDistribution::LogNormal { d_median_um: 5.0, sigma: 0.25 }],
+        distributions: vec![SizeDistribution::LogNormal {
+            d_median_um: 5.0,
+            sigma: 0.25,
+        }],
         wavelengths_nm: (0..31).map(|i| 400.0 + 10.0 * i as f64).collect(),
         rule: SizeRule::Product { sizes: 41 },
         index: RefractiveIndex::Constant { n: 1.333, k: 0.0 },
@@ -32,7 +35,9 @@ fn product_rule_job(c: &mut Criterion) {
     };
     let mut group = c.benchmark_group("polydisperse");
     group.sample_size(10);
-    group.bench_function("d=5 product 41x31, 2251 angles", |b| b.iter(|| job.compute(&|_, _| {}).unwrap()));
+    group.bench_function("d=5 product 41x31, 2251 angles", |b| {
+        b.iter(|| job.compute(&|_, _| {}).unwrap())
+    });
     group.finish();
 }
 

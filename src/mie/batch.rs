@@ -15,8 +15,8 @@ use super::sphere::{n_terms, MieCoefficients};
 use num_complex::Complex64;
 use rayon::prelude::*;
 
-/// Spheres per block of the first product (2 rows each per matrix, so M = 128).
-const BLOCK: usize = 64;
+/// Spheres per block of the first product (2 rows each per matrix, so M = 64).
+const BLOCK: usize = 32;
 /// Spheres per chunk of the accumulating product.
 const CHUNK: usize = 512;
 /// Columns per parallel panel of the accumulating product (a multiple of the kernel width).
@@ -56,9 +56,9 @@ impl WeightRow {
 }
 
 /// `out (n_rows × n_θ) = W · I` with I the intensities (|S1|² + |S2|²)/2 of `particles` at
-/// the angles of `basis` and W the sparse `rows`. Particles are processed in the order given,
-/// in blocks of [`BLOCK`]: consecutive particles should have similar x (each block pays for
-/// its largest). `progress` is called with the number of spheres finished so far.
+/// the angles of `basis` and W the sparse `rows`. Spheres are evaluated in order of size
+/// parameter, in blocks of [`BLOCK`] (each block pays for its largest term count, so sorting
+/// keeps the padding small). `progress` is called with the number of spheres finished so far.
 pub fn weighted_intensity(
     particles: &[Particle],
     rows: &[WeightRow],
@@ -71,22 +71,26 @@ pub fn weighted_intensity(
         rows.iter().all(|r| r.end() <= n_p),
         "weight rows must lie within the particles"
     );
+    let mut order: Vec<usize> = (0..n_p).collect();
+    order.sort_by(|&i, &j| particles[i].x.total_cmp(&particles[j].x));
     let mut out = vec![0.0; rows.len() * n_ang];
     let mut work = Work {
         flops: 0.0,
         spheres: n_p,
     };
     let mut intensity = vec![0.0; CHUNK * n_ang];
-    for c0 in (0..n_p).step_by(CHUNK) {
-        let chunk = &particles[c0..(c0 + CHUNK).min(n_p)];
-        let block_rows = &mut intensity[..chunk.len() * n_ang];
+    for (c, idx) in order.chunks(CHUNK).enumerate() {
+        let block_rows = &mut intensity[..idx.len() * n_ang];
         work.flops += block_rows
             .par_chunks_mut(BLOCK * n_ang)
-            .zip(chunk.par_chunks(BLOCK))
-            .map(|(dst, block)| block_intensity(block, basis, dst))
+            .zip(idx.par_chunks(BLOCK))
+            .map(|(dst, block_idx)| {
+                let block: Vec<Particle> = block_idx.iter().map(|&i| particles[i]).collect();
+                block_intensity(&block, basis, dst)
+            })
             .sum::<f64>();
-        work.flops += accumulate(&mut out, rows, c0, block_rows, n_ang);
-        progress(c0 + chunk.len());
+        work.flops += accumulate(&mut out, rows, idx, block_rows, n_ang);
+        progress(c * CHUNK + idx.len());
     }
     (out, work)
 }
@@ -115,10 +119,24 @@ fn block_intensity(block: &[Particle], basis: &AngleBasis, rows: &mut [f64]) -> 
             cm[(2 * p + 1) * k + i] = sm.im;
         }
     }
-    let mut sp = vec![0.0; 2 * b * n_ang];
-    let mut sm = vec![0.0; 2 * b * n_ang];
-    gemm(2 * b, k, n_ang, &cp, &basis.u[..k * n_ang], &mut sp, 0.0);
-    gemm(2 * b, k, n_ang, &cm, &basis.v[..k * n_ang], &mut sm, 0.0);
+    SCRATCH.with_borrow_mut(|(sp, sm)| {
+        // Reused per thread: fresh multi-megabyte buffers cost more in page faults than the
+        // products themselves for small droplets. beta = 0 overwrites them completely.
+        sp.resize(2 * b * n_ang, 0.0);
+        sm.resize(2 * b * n_ang, 0.0);
+        gemm(2 * b, k, n_ang, &cp, &basis.u[..k * n_ang], sp, 0.0);
+        gemm(2 * b, k, n_ang, &cm, &basis.v[..k * n_ang], sm, 0.0);
+        squared_sum(b, n_ang, sp, sm, rows);
+    });
+    2.0 * 2.0 * (2 * b * k * n_ang) as f64
+}
+
+thread_local! {
+    static SCRATCH: std::cell::RefCell<(Vec<f64>, Vec<f64>)> = const { std::cell::RefCell::new((Vec::new(), Vec::new())) };
+}
+
+/// rows[p] = (|S1 + S2|² + |S1 − S2|²)/4 from the [Re; Im] rows of both products.
+fn squared_sum(b: usize, n_ang: usize, sp: &[f64], sm: &[f64], rows: &mut [f64]) {
     for p in 0..b {
         let row = &mut rows[p * n_ang..(p + 1) * n_ang];
         let (pr, pi) = (&sp[2 * p * n_ang..], &sp[(2 * p + 1) * n_ang..]);
@@ -127,25 +145,42 @@ fn block_intensity(block: &[Particle], basis: &AngleBasis, rows: &mut [f64]) -> 
             row[j] = 0.25 * (pr[j] * pr[j] + pi[j] * pi[j] + mr[j] * mr[j] + mi[j] * mi[j]);
         }
     }
-    2.0 * 2.0 * (2 * b * k * n_ang) as f64
 }
 
-/// `out[r] += Σ_p W[r, c0 + p] · chunk[p]` for the rows that weigh particles of this chunk,
-/// as one matrix product split into column panels; returns the flops.
-fn accumulate(out: &mut [f64], rows: &[WeightRow], c0: usize, chunk: &[f64], n_ang: usize) -> f64 {
-    let kc = chunk.len() / n_ang;
-    let c1 = c0 + kc;
-    let active: Vec<usize> = (0..rows.len())
-        .filter(|&r| rows[r].start < c1 && rows[r].end() > c0)
-        .collect();
-    let na = active.len();
-    let mut w = vec![0.0; na * kc];
-    for (a, &r) in active.iter().enumerate() {
+/// `out[r] += Σ_p W[r, idx[p]] · chunk[p]` for the rows that weigh spheres of this chunk, as
+/// one matrix product split into column panels; returns the flops.
+fn accumulate(
+    out: &mut [f64],
+    rows: &[WeightRow],
+    idx: &[usize],
+    chunk: &[f64],
+    n_ang: usize,
+) -> f64 {
+    let kc = idx.len();
+    let (lo, hi) = idx
+        .iter()
+        .fold((usize::MAX, 0), |(a, b), &i| (a.min(i), b.max(i + 1)));
+    let candidates = (0..rows.len()).filter(|&r| rows[r].start < hi && rows[r].end() > lo);
+    let mut active = Vec::new();
+    let mut w = Vec::new();
+    for r in candidates {
         let row = &rows[r];
-        for p in row.start.max(c0)..row.end().min(c1) {
-            w[a * kc + p - c0] = row.weights[p - row.start];
+        let weights = idx.iter().map(|&i| {
+            if (row.start..row.end()).contains(&i) {
+                row.weights[i - row.start]
+            } else {
+                0.0
+            }
+        });
+        let len = w.len();
+        w.extend(weights);
+        if w[len..].iter().all(|&v| v == 0.0) {
+            w.truncate(len);
+        } else {
+            active.push(r);
         }
     }
+    let na = active.len();
     // Panels: each is a product over the same K in the same order, so splitting the columns
     // does not change a single bit of the result.
     let panels: Vec<(usize, Vec<f64>)> = (0..n_ang.div_ceil(PANEL))
