@@ -456,7 +456,9 @@ def check_polydisperse(mp, nep: Nephele, tmp: Path, diameters) -> tuple[list[Row
             where = labels(i) if labels else ""
             rows.append(Row(tag, what, float(r.max()), tol, where))
 
-        at = lambda i: f"theta={theta[i[-1]]:g}" + (f" lambda={lam[i[0]]:g}" if len(i) == 2 else "")
+        def at(i):
+            return f"theta={theta[i[-1]]:g}" + (f" lambda={lam[i[0]]:g}" if len(i) == 2 else "")
+
         rows.append(Row(tag, "theta grid vs 0-5/0.01, 5-180/0.1 (abs deg)",
                         float(np.abs(theta - expected_angles()).max()) if theta.shape == (2251,) else math.inf,
                         1e-9))
