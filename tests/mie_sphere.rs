@@ -187,9 +187,10 @@ fn matrix_product_equals_direct_summation() {
             weights: vec![1.0],
         })
         .collect();
-    let (out, _) = weighted_intensity(&particles, &rows, &basis, &|_| {});
+    let (out, eff, _) = weighted_intensity(&particles, &rows, &basis, &|_| {});
     for (p, part) in particles.iter().enumerate() {
         let coef = MieCoefficients::new(part.m, part.x);
+        assert_eq!(eff[p], coef.efficiencies());
         for (j, &m) in mu.iter().enumerate() {
             let (s1, s2) = coef.amplitudes(m);
             let direct = 0.5 * (s1.norm_sqr() + s2.norm_sqr());

@@ -305,8 +305,10 @@ fn write_outputs(
             "threads": rayon::current_num_threads(),
             "spheres": stats.spheres,
             "max_terms": stats.max_terms,
-            "gflop": stats.flops * 1e-9,
-            "gflop_per_s": stats.flops * 1e-9 / compute_s,
+            "gflop": stats.useful_flops * 1e-9,
+            "gflop_per_s": stats.useful_flops * 1e-9 / compute_s,
+            "gflop_with_padding": stats.flops * 1e-9,
+            "flops_note": "matrix-product flops without the zero padding of short series (8 N n_theta per sphere + accumulation), over the whole compute time",
             "note": "one computation for all tables of this run"
         }
     });
@@ -374,7 +376,7 @@ fn report(tables: &[PhaseTable], stats: &JobStats, compute_s: f64, write_s: f64,
         "{} spheres, {:.2} s compute ({:.1} GFLOP/s), {:.2} s writing → {}",
         stats.spheres,
         compute_s,
-        stats.flops * 1e-9 / compute_s,
+        stats.useful_flops * 1e-9 / compute_s,
         write_s,
         out.display()
     );

@@ -11,7 +11,7 @@
 //! every sum runs in a fixed order, so results are bit-identical for any number of threads.
 
 use super::angular::AngleBasis;
-use super::sphere::{n_terms, MieCoefficients};
+use super::sphere::{n_terms, Efficiencies, MieCoefficients};
 use num_complex::Complex64;
 use rayon::prelude::*;
 
@@ -34,8 +34,10 @@ pub struct Particle {
 /// Floating-point operations and sphere count of a [`weighted_intensity`] call.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Work {
-    /// Multiply–adds × 2 spent in the matrix products.
+    /// Multiply–adds × 2 spent in the matrix products, zero padding of short series included.
     pub flops: f64,
+    /// The same without the padding: 8 N n_θ per sphere plus the accumulation.
+    pub useful_flops: f64,
     /// Spheres evaluated.
     pub spheres: usize,
 }
@@ -49,54 +51,84 @@ pub struct WeightRow {
     pub weights: Vec<f64>,
 }
 
+impl AsRef<WeightRow> for WeightRow {
+    fn as_ref(&self) -> &WeightRow {
+        self
+    }
+}
+
 impl WeightRow {
     fn end(&self) -> usize {
         self.start + self.weights.len()
+    }
+
+    /// The particles this row weighs.
+    pub fn particles(&self) -> std::ops::Range<usize> {
+        self.start..self.end()
     }
 }
 
 /// `out (n_rows × n_θ) = W · I` with I the intensities (|S1|² + |S2|²)/2 of `particles` at
 /// the angles of `basis` and W the sparse `rows`. Spheres are evaluated in order of size
 /// parameter, in blocks of [`BLOCK`] (each block pays for its largest term count, so sorting
-/// keeps the padding small). `progress` is called with the number of spheres finished so far.
-pub fn weighted_intensity(
+/// keeps the padding small). Also returns every sphere's efficiencies, from the same
+/// coefficients. `progress` is called with the number of spheres finished so far.
+pub fn weighted_intensity<R: AsRef<WeightRow> + Sync>(
     particles: &[Particle],
-    rows: &[WeightRow],
+    rows: &[R],
     basis: &AngleBasis,
     progress: &(dyn Fn(usize) + Sync),
-) -> (Vec<f64>, Work) {
+) -> (Vec<f64>, Vec<Efficiencies>, Work) {
     let n_p = particles.len();
     let n_ang = basis.n_angles();
     assert!(
-        rows.iter().all(|r| r.end() <= n_p),
+        rows.iter().all(|r| r.as_ref().end() <= n_p),
         "weight rows must lie within the particles"
     );
     let mut order: Vec<usize> = (0..n_p).collect();
     order.sort_by(|&i, &j| particles[i].x.total_cmp(&particles[j].x));
     let mut out = vec![0.0; rows.len() * n_ang];
     let mut work = Work {
-        flops: 0.0,
         spheres: n_p,
+        ..Default::default()
     };
+    let mut eff = vec![Efficiencies::default(); n_p];
     let mut intensity = vec![0.0; CHUNK * n_ang];
     for (c, idx) in order.chunks(CHUNK).enumerate() {
         let block_rows = &mut intensity[..idx.len() * n_ang];
-        work.flops += block_rows
+        let blocks: Vec<(f64, Vec<Efficiencies>)> = block_rows
             .par_chunks_mut(BLOCK * n_ang)
             .zip(idx.par_chunks(BLOCK))
             .map(|(dst, block_idx)| {
                 let block: Vec<Particle> = block_idx.iter().map(|&i| particles[i]).collect();
                 block_intensity(&block, basis, dst)
             })
+            .collect();
+        for ((flops, e), block_idx) in blocks.into_iter().zip(idx.chunks(BLOCK)) {
+            work.flops += flops;
+            for (&i, e) in block_idx.iter().zip(e) {
+                eff[i] = e;
+            }
+        }
+        work.useful_flops += idx
+            .iter()
+            .map(|&i| 8.0 * (n_terms(particles[i].x) * n_ang) as f64)
             .sum::<f64>();
-        work.flops += accumulate(&mut out, rows, idx, block_rows, n_ang);
+        let acc = accumulate(&mut out, rows, idx, block_rows, n_ang);
+        work.flops += acc;
+        work.useful_flops += acc;
         progress(c * CHUNK + idx.len());
     }
-    (out, work)
+    (out, eff, work)
 }
 
-/// Writes the intensities of `block` (sorted by x) into `rows` (b × n_θ); returns the flops.
-fn block_intensity(block: &[Particle], basis: &AngleBasis, rows: &mut [f64]) -> f64 {
+/// Writes the intensities of `block` (sorted by x) into `rows` (b × n_θ); returns the flops
+/// and the spheres' efficiencies.
+fn block_intensity(
+    block: &[Particle],
+    basis: &AngleBasis,
+    rows: &mut [f64],
+) -> (f64, Vec<Efficiencies>) {
     let b = block.len();
     let n_ang = basis.n_angles();
     let k = block.iter().map(|p| n_terms(p.x)).max().unwrap_or(1);
@@ -107,8 +139,10 @@ fn block_intensity(block: &[Particle], basis: &AngleBasis, rows: &mut [f64]) -> 
     );
     let mut cp = vec![0.0; 2 * b * k];
     let mut cm = vec![0.0; 2 * b * k];
+    let mut eff = Vec::with_capacity(b);
     for (p, part) in block.iter().enumerate() {
         let coef = MieCoefficients::new(part.m, part.x);
+        eff.push(coef.efficiencies());
         for (i, (a, bn)) in coef.a.iter().zip(&coef.b).enumerate() {
             let n = (i + 1) as f64;
             let c = (2.0 * n + 1.0) / (n * (n + 1.0));
@@ -128,7 +162,7 @@ fn block_intensity(block: &[Particle], basis: &AngleBasis, rows: &mut [f64]) -> 
         gemm(2 * b, k, n_ang, &cm, &basis.v[..k * n_ang], sm, 0.0);
         squared_sum(b, n_ang, sp, sm, rows);
     });
-    2.0 * 2.0 * (2 * b * k * n_ang) as f64
+    (2.0 * 2.0 * (2 * b * k * n_ang) as f64, eff)
 }
 
 thread_local! {
@@ -149,9 +183,9 @@ fn squared_sum(b: usize, n_ang: usize, sp: &[f64], sm: &[f64], rows: &mut [f64])
 
 /// `out[r] += Σ_p W[r, idx[p]] · chunk[p]` for the rows that weigh spheres of this chunk, as
 /// one matrix product split into column panels; returns the flops.
-fn accumulate(
+fn accumulate<R: AsRef<WeightRow>>(
     out: &mut [f64],
-    rows: &[WeightRow],
+    rows: &[R],
     idx: &[usize],
     chunk: &[f64],
     n_ang: usize,
@@ -160,11 +194,12 @@ fn accumulate(
     let (lo, hi) = idx
         .iter()
         .fold((usize::MAX, 0), |(a, b), &i| (a.min(i), b.max(i + 1)));
-    let candidates = (0..rows.len()).filter(|&r| rows[r].start < hi && rows[r].end() > lo);
+    let candidates =
+        (0..rows.len()).filter(|&r| rows[r].as_ref().start < hi && rows[r].as_ref().end() > lo);
     let mut active = Vec::new();
     let mut w = Vec::new();
     for r in candidates {
-        let row = &rows[r];
+        let row = rows[r].as_ref();
         let weights = idx.iter().map(|&i| {
             if (row.start..row.end()).contains(&i) {
                 row.weights[i - row.start]

@@ -14,14 +14,13 @@
 //!   it covers; each (diameter, λ) is one row of weights over that table. A dispersive index
 //!   needs its own sizes at every wavelength (same step h in ln d).
 
-use super::batch::{weighted_intensity, Particle, WeightRow, Work};
+use super::batch::{weighted_intensity, Particle, WeightRow};
 use super::colour::{srgb_weights, Illuminant, RGB_WAVELENGTHS_NM};
 use super::distribution::SizeDistribution;
 use super::grid;
 use super::index::RefractiveIndex;
-use super::sphere::{n_terms, MieCoefficients};
+use super::sphere::n_terms;
 use anyhow::{bail, Result};
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
@@ -127,21 +126,22 @@ pub struct JobStats {
     pub spheres: usize,
     /// Largest number of Mie terms.
     pub max_terms: usize,
-    /// Floating-point operations in the matrix products.
+    /// Floating-point operations in the matrix products (zero padding included).
     pub flops: f64,
+    /// The same without the padding of short series.
+    pub useful_flops: f64,
 }
 
-/// One weight row: a (distribution, wavelength) pair and its number weights on the
-/// contiguous particles `start..start + weights.len()`.
+/// One output row: a (distribution, wavelength) pair, its wavelength and its (unnormalised)
+/// number weights on a contiguous run of particles.
 struct Row {
     lambda_nm: f64,
-    start: usize,
-    weights: Vec<f64>,
+    span: WeightRow,
 }
 
-impl Row {
-    fn particles(&self) -> std::ops::Range<usize> {
-        self.start..self.start + self.weights.len()
+impl AsRef<WeightRow> for Row {
+    fn as_ref(&self) -> &WeightRow {
+        &self.span
     }
 }
 
@@ -288,8 +288,10 @@ impl MieJob {
                     .collect();
                 rows.push(Row {
                     lambda_nm: l,
-                    start: first,
-                    weights,
+                    span: WeightRow {
+                        start: first,
+                        weights,
+                    },
                 });
             }
         }
@@ -309,8 +311,7 @@ impl MieJob {
                 particles.extend(d_um.iter().map(|&di| Particle { x: k * di, m }));
                 rows.push(Row {
                     lambda_nm: l,
-                    start,
-                    weights,
+                    span: WeightRow { start, weights },
                 });
             }
         }
@@ -353,28 +354,7 @@ impl MieJob {
     ) -> Result<(Vec<PhaseTable>, JobStats)> {
         self.validate()?;
         let (particles, rows) = self.discretise()?;
-        let eff: Vec<(f64, f64)> = particles
-            .par_iter()
-            .map(|p| {
-                let e = MieCoefficients::new(p.m, p.x).efficiencies();
-                (e.q_sca, e.g)
-            })
-            .collect();
         let n_p = particles.len();
-        let weight_rows: Vec<WeightRow> = rows
-            .iter()
-            .map(|row| {
-                let norm: f64 = row
-                    .particles()
-                    .zip(&row.weights)
-                    .map(|(i, w)| w * PI * particles[i].x.powi(2) * eff[i].0)
-                    .sum();
-                WeightRow {
-                    start: row.start,
-                    weights: row.weights.iter().map(|w| w / norm).collect(),
-                }
-            })
-            .collect();
         let mu: Vec<f64> = self
             .angles_deg
             .iter()
@@ -382,12 +362,23 @@ impl MieJob {
             .collect();
         let max_terms = particles.iter().map(|p| n_terms(p.x)).max().unwrap_or(1);
         let basis = super::angular::AngleBasis::new(&mu, max_terms);
-        let (out, work): (Vec<f64>, Work) =
-            weighted_intensity(&particles, &weight_rows, &basis, &|done| {
-                progress(done, n_p)
-            });
-        let per_dist = self.wavelengths_nm.len() + RGB_WAVELENGTHS_NM.len();
+        let (mut out, eff, work) =
+            weighted_intensity(&particles, &rows, &basis, &|done| progress(done, n_p));
+        let eff: Vec<(f64, f64)> = eff.iter().map(|e| (e.q_sca, e.g)).collect();
+        // Normalise each row by its analytic cross-section: Σ w π x² Q_sca (the k² cancels).
         let n_ang = mu.len();
+        for (r, row) in rows.iter().enumerate() {
+            let norm: f64 = row
+                .span
+                .particles()
+                .zip(&row.span.weights)
+                .map(|(i, w)| w * PI * particles[i].x.powi(2) * eff[i].0)
+                .sum();
+            out[r * n_ang..(r + 1) * n_ang]
+                .iter_mut()
+                .for_each(|v| *v /= norm);
+        }
+        let per_dist = self.wavelengths_nm.len() + RGB_WAVELENGTHS_NM.len();
         let tables = self
             .distributions
             .iter()
@@ -407,6 +398,7 @@ impl MieJob {
                 spheres: work.spheres,
                 max_terms,
                 flops: work.flops,
+                useful_flops: work.useful_flops,
             },
         ))
     }
@@ -483,10 +475,10 @@ struct RowIntegrals {
 
 impl RowIntegrals {
     fn new(row: &Row, particles: &[Particle], eff: &[(f64, f64)], n_med: f64) -> Self {
-        let total: f64 = row.weights.iter().sum();
+        let total: f64 = row.span.weights.iter().sum();
         let (mut area, mut vol, mut sca, mut gsca) = (0.0, 0.0, 0.0, 0.0);
         let to_r_um = row.lambda_nm * 1e-3 / (2.0 * PI * n_med); // r = x λ / (2π n_med)
-        for (i, w) in row.particles().zip(&row.weights) {
+        for (i, w) in row.span.particles().zip(&row.span.weights) {
             let w = w / total;
             let r = particles[i].x * to_r_um;
             let (q, g) = eff[i];

@@ -38,7 +38,7 @@ pub struct MieCoefficients {
 }
 
 /// Integral quantities of one sphere; efficiencies are cross-sections over π r².
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Efficiencies {
     /// Extinction efficiency Q_ext.
     pub q_ext: f64,
