@@ -2,6 +2,11 @@
 
 mod cli;
 
+/// mimalloc keeps freed pages: the matrix products allocate packing buffers on every call,
+/// and with the system allocator each of them costs fresh page faults.
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 use clap::Parser;
 use std::process::ExitCode;
 
