@@ -88,6 +88,7 @@ def run_nephele(binary: Path, threads: int, out: Path, *args: str) -> dict:
         json_path = sorted(out.glob("*/phase.json"))[0]
     t = json.loads(json_path.read_text())["timings"]
     return dict(wall_s=wall, compute_s=t["compute_s"], gflop=t["gflop"],
+                gflop_with_padding=t.get("gflop_with_padding", t["gflop"]),
                 gflop_per_s=t["gflop_per_s"], spheres=t["spheres"], threads=t["threads"])
 
 
@@ -227,13 +228,14 @@ def print_report(jobs: list[dict], gemm: float, conv: dict, rng: dict | None, re
         print(f"  d={j['d_med_um']:g} um: nephele 1 thread {j['nephele_1t']['gflop_per_s']:.1f} GFLOP/s "
               f"= {100 * frac:.0f}% of DGEMM (target >= {100 * TARGET_DGEMM_FRACTION:.0f}%: "
               f"{verdict(frac, TARGET_DGEMM_FRACTION)})")
-    print("  (nephele's GFLOP/s = its counted matrix-product flops, zero padding included, / its whole compute time)")
+    print("  (nephele's GFLOP/s = matrix-product flops on non-zero data, i.e. without the zero padding of short")
+    print("   series and without zero weights, divided by its whole compute time)")
     for j in jobs:
         one = j["nephele_1t"]
         useful = j["unpadded_gflop"] / one["compute_s"]
-        print(f"  d={j['d_med_um']:g} um: counted {one['gflop']:.2f} GFLOP, unpadded work {j['unpadded_gflop']:.2f} GFLOP "
-              f"({100 * (1 - j['unpadded_gflop'] / one['gflop']):.0f}% of the counted flops multiply padding); "
-              f"useful rate 1 thread {useful:.1f} GFLOP/s = {100 * useful / gemm:.0f}% of DGEMM")
+        print(f"  d={j['d_med_um']:g} um: nephele reports {one['gflop']:.3f} GFLOP of useful work (this script's independent "
+              f"count: {j['unpadded_gflop']:.3f}); it performed {one['gflop_with_padding']:.3f} GFLOP; "
+              f"useful rate by the independent count, 1 thread: {useful:.1f} GFLOP/s = {100 * useful / gemm:.0f}% of DGEMM")
 
     print("\nConverged default rule, 2 threads:")
     print(f"  nephele mie --diameter 20            wall {conv['wall_s']:7.2f} s  compute {conv['compute_s']:7.2f} s  "

@@ -36,7 +36,8 @@ pub struct Particle {
 pub struct Work {
     /// Multiply–adds × 2 spent in the matrix products, zero padding of short series included.
     pub flops: f64,
-    /// The same without the padding: 8 N n_θ per sphere plus the accumulation.
+    /// The same without the padding and the zero weights: 8 N n_θ per sphere plus 2 n_θ per
+    /// non-zero weight.
     pub useful_flops: f64,
     /// Spheres evaluated.
     pub spheres: usize,
@@ -114,9 +115,9 @@ pub fn weighted_intensity<R: AsRef<WeightRow> + Sync>(
             .iter()
             .map(|&i| 8.0 * (n_terms(particles[i].x) * n_ang) as f64)
             .sum::<f64>();
-        let acc = accumulate(&mut out, rows, idx, block_rows, n_ang);
-        work.flops += acc;
-        work.useful_flops += acc;
+        let (done, useful) = accumulate(&mut out, rows, idx, block_rows, n_ang);
+        work.flops += done;
+        work.useful_flops += useful;
         progress(c * CHUNK + idx.len());
     }
     (out, eff, work)
@@ -182,14 +183,15 @@ fn squared_sum(b: usize, n_ang: usize, sp: &[f64], sm: &[f64], rows: &mut [f64])
 }
 
 /// `out[r] += Σ_p W[r, idx[p]] · chunk[p]` for the rows that weigh spheres of this chunk, as
-/// one matrix product split into column panels; returns the flops.
+/// one matrix product (or sparse row updates) split into column panels; returns the flops
+/// done and the flops on non-zero weights.
 fn accumulate<R: AsRef<WeightRow>>(
     out: &mut [f64],
     rows: &[R],
     idx: &[usize],
     chunk: &[f64],
     n_ang: usize,
-) -> f64 {
+) -> (f64, f64) {
     let kc = idx.len();
     let (lo, hi) = idx
         .iter()
@@ -216,14 +218,33 @@ fn accumulate<R: AsRef<WeightRow>>(
         }
     }
     let na = active.len();
-    // Panels: each is a product over the same K in the same order, so splitting the columns
+    let nnz = w.iter().filter(|&&v| v != 0.0).count();
+    // A matrix product does ~4× more flops per second than row updates: below a quarter
+    // filled (the product rule puts each sphere in one wavelength row), add the non-zeros one
+    // by one. The choice depends on the data only, never on the thread count.
+    let sparse = 4 * nnz < na * kc;
+    // Panels: each is computed in the same order whatever the split, so splitting the columns
     // does not change a single bit of the result.
     let panels: Vec<(usize, Vec<f64>)> = (0..n_ang.div_ceil(PANEL))
         .into_par_iter()
         .map(|q| {
             let (j0, j1) = (q * PANEL, ((q + 1) * PANEL).min(n_ang));
-            let mut c = vec![0.0; na * (j1 - j0)];
-            gemm_strided(na, kc, j1 - j0, &w, &chunk[j0..], n_ang, &mut c);
+            let width = j1 - j0;
+            let mut c = vec![0.0; na * width];
+            if sparse {
+                for (a, c_row) in c.chunks_mut(width).enumerate() {
+                    for (p, &wp) in w[a * kc..(a + 1) * kc]
+                        .iter()
+                        .enumerate()
+                        .filter(|(_, v)| **v != 0.0)
+                    {
+                        let src = &chunk[p * n_ang + j0..p * n_ang + j1];
+                        c_row.iter_mut().zip(src).for_each(|(d, s)| *d += wp * s);
+                    }
+                }
+            } else {
+                gemm_strided(na, kc, width, &w, &chunk[j0..], n_ang, &mut c);
+            }
             (j0, c)
         })
         .collect();
@@ -236,7 +257,15 @@ fn accumulate<R: AsRef<WeightRow>>(
             }
         }
     }
-    2.0 * (na * kc * n_ang) as f64
+    let useful = 2.0 * (nnz * n_ang) as f64;
+    (
+        if sparse {
+            useful
+        } else {
+            2.0 * (na * kc * n_ang) as f64
+        },
+        useful,
+    )
 }
 
 /// C (m × n) = A (m × k) · B (k × n) + beta C, all row-major and contiguous.
