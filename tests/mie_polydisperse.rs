@@ -89,6 +89,8 @@ fn every_output_is_normalised_and_g_matches_its_legendre_moment() {
         chi[1] / chi[0],
         t.g
     );
+    assert!(t.legendre[0] == 1.0 && (t.legendre[1] - t.g).abs() < 1e-3);
+    assert!((t.quadrature_norm - 1.0).abs() < 2e-3);
     assert!((t.cdf[n - 1] - 1.0).abs() < 1e-15 && t.cdf.windows(2).all(|w| w[1] >= w[0]));
     // Log-normal: d_eff = 2⟨r³⟩/⟨r²⟩ = d_med exp(5σ²/2).
     // The support ends at 5σ: the r³-weighted distribution (shifted by 3σ in z) loses its tail

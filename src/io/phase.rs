@@ -38,7 +38,7 @@ pub fn table_json(t: &PhaseTable, extra: Value) -> Value {
         "c_sca_um2": t.c_sca_um2,
         "q_sca": t.q_sca,
         "effective_diameter_um": t.effective_diameter_um,
-        "normalisation_by_quadrature": t.legendre.first(),
+        "normalisation_by_quadrature": t.quadrature_norm,
         "n_angles": t.theta_deg.len(),
         "n_wavelengths": t.wavelength_nm.len(),
         "conventions": {
@@ -46,7 +46,7 @@ pub fn table_json(t: &PhaseTable, extra: Value) -> Value {
             "phase_rgb": "linear sRGB channels (CIE 1931 2 deg, illuminant in config), each normalised to 1",
             "phase_rgb_3wl": "monochromatic 650, 510, 440 nm",
             "cdf": "trapezoid in theta of 2 pi p sin(theta), divided by its last value",
-            "legendre": "chi_l = 2 pi int p P_l dmu (trapezoid in theta); p = sum (2l+1) chi_l P_l / (4 pi)",
+            "legendre": "chi_l = 2 pi int p P_l dmu (trapezoid in theta) / chi_0, so chi_0 = 1; p = sum (2l+1) chi_l P_l / (4 pi)",
             "index_sign": "m = n + ik, k >= 0 absorbs"
         }
     });

@@ -156,11 +156,11 @@ fn block_intensity(
     }
     SCRATCH.with_borrow_mut(|(sp, sm)| {
         // Reused per thread: fresh multi-megabyte buffers cost more in page faults than the
-        // products themselves for small droplets. beta = 0 overwrites them completely.
+        // products themselves for small droplets. The products overwrite them completely.
         sp.resize(2 * b * n_ang, 0.0);
         sm.resize(2 * b * n_ang, 0.0);
-        gemm(2 * b, k, n_ang, &cp, &basis.u[..k * n_ang], sp, 0.0);
-        gemm(2 * b, k, n_ang, &cm, &basis.v[..k * n_ang], sm, 0.0);
+        gemm_strided(2 * b, k, n_ang, &cp, &basis.u[..k * n_ang], n_ang, sp);
+        gemm_strided(2 * b, k, n_ang, &cm, &basis.v[..k * n_ang], n_ang, sm);
         squared_sum(b, n_ang, sp, sm, rows);
     });
     (2.0 * 2.0 * (2 * b * k * n_ang) as f64, eff)
@@ -268,31 +268,8 @@ fn accumulate<R: AsRef<WeightRow>>(
     )
 }
 
-/// C (m × n) = A (m × k) · B (k × n) + beta C, all row-major and contiguous.
-fn gemm(m: usize, k: usize, n: usize, a: &[f64], b: &[f64], c: &mut [f64], beta: f64) {
-    assert!(a.len() >= m * k && b.len() >= k * n && c.len() >= m * n);
-    // SAFETY: the slices hold m×k, k×n and m×n elements with the strides given.
-    unsafe {
-        matrixmultiply::dgemm(
-            m,
-            k,
-            n,
-            1.0,
-            a.as_ptr(),
-            k as isize,
-            1,
-            b.as_ptr(),
-            n as isize,
-            1,
-            beta,
-            c.as_mut_ptr(),
-            n as isize,
-            1,
-        );
-    }
-}
-
-/// C (m × n, contiguous) = A (m × k, contiguous) · B (k × n with row stride `ldb`).
+/// C (m × n, contiguous) = A (m × k, contiguous) · B (k × n with row stride `ldb`), through
+/// matrixmultiply's dgemm (its kernels are picked at run time: AVX-512, AVX2/FMA, SSE2).
 fn gemm_strided(m: usize, k: usize, n: usize, a: &[f64], b: &[f64], ldb: usize, c: &mut [f64]) {
     if m == 0 || n == 0 {
         return;

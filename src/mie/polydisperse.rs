@@ -101,7 +101,8 @@ pub struct PhaseTable {
     pub phase_spectral: Vec<f64>,
     /// Inverse-CDF table in θ of the mean phase function (ends at 1).
     pub cdf: Vec<f64>,
-    /// Legendre moments χ_0..χ_K of the mean phase function.
+    /// Legendre moments χ_0..χ_K of the mean phase function, divided by the quadrature's χ_0
+    /// so that χ_0 = 1 exactly (as the CDF ends at exactly 1).
     pub legendre: Vec<f64>,
     /// Asymmetry parameter of the mean phase function (from the Mie series).
     pub g: f64,
@@ -117,6 +118,9 @@ pub struct PhaseTable {
     pub q_sca: f64,
     /// Effective diameter 2⟨r³⟩/⟨r²⟩, µm.
     pub effective_diameter_um: f64,
+    /// ∮ p dΩ of the mean phase function by the trapezoid rule on the angle grid (the analytic
+    /// value is 1; this measures how well the grid resolves the table).
+    pub quadrature_norm: f64,
 }
 
 /// Work statistics of a job.
@@ -427,6 +431,7 @@ impl MieJob {
                 .collect()
         };
         let phase = combine(&mean_w);
+        let chi = grid::legendre_moments(&self.angles_deg, &phase, self.legendre);
         let rgb_w = srgb_weights(&self.wavelengths_nm, &mean_w, self.illuminant);
         let channels: Vec<Vec<f64>> = rgb_w.iter().map(|w| combine(w)).collect();
         let interleave = |c: [&[f64]; 3]| {
@@ -442,7 +447,8 @@ impl MieJob {
             theta_deg: self.angles_deg.clone(),
             mu: mu.to_vec(),
             cdf: grid::cdf(&self.angles_deg, &phase),
-            legendre: grid::legendre_moments(&self.angles_deg, &phase, self.legendre),
+            legendre: chi.iter().map(|c| c / chi[0]).collect(),
+            quadrature_norm: chi[0],
             phase_rgb: interleave([&channels[0], &channels[1], &channels[2]]),
             phase_rgb_3wl: interleave([row(n_l), row(n_l + 1), row(n_l + 2)]),
             wavelength_nm: self.wavelengths_nm.clone(),
