@@ -18,7 +18,7 @@ use rayon::prelude::*;
 /// Spheres per block of the first product (2 rows each per matrix, so M = 64).
 const BLOCK: usize = 32;
 /// Spheres per chunk of the accumulating product.
-const CHUNK: usize = 512;
+const CHUNK: usize = 256;
 /// Columns per parallel panel of the accumulating product (a multiple of the kernel width).
 const PANEL: usize = 256;
 
