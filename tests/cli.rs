@@ -82,6 +82,8 @@ fn bad_input_is_one_error_line_and_no_file() {
     std::fs::write(&bad_csv, "wavelength_nm,n,k\n400,1.33,0\n500,oops,0\n").unwrap();
     let cfg = dir.path().join("cfg.json");
     std::fs::write(&cfg, r#"{"diameter": 10, "sigmaa": 0.3}"#).unwrap();
+    let half = dir.path().join("half.txt");
+    std::fs::write(&half, "0\n45\n90\n").unwrap();
     let cases: Vec<Vec<String>> = vec![
         vec!["--diameter".into(), "nan".into()],
         vec!["--diameter".into(), "-5".into()],
@@ -100,6 +102,9 @@ fn bad_input_is_one_error_line_and_no_file() {
             dir.path().join("none.txt").to_string_lossy().into(),
         ],
         vec!["--distribution".into(), "weibull".into()],
+        vec!["--angles".into(), half.to_string_lossy().into()],
+        vec!["--diameter".into(), "5,abc".into()],
+        vec!["--index".into(), "water:150".into()],
         vec!["--config".into(), cfg.to_string_lossy().into()],
     ];
     for (i, case) in cases.iter().enumerate() {

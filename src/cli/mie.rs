@@ -49,7 +49,8 @@ pub struct MieArgs {
     /// Refractive index of the medium. [default: 1]
     #[arg(long, value_name = "N")]
     medium_index: Option<f64>,
-    /// Angle grid: "default" (0–5° by 0.01°, 5–180° by 0.1°) or a file of angles in degrees.
+    /// Angle grid: "default" (0–5° by 0.01°, 5–180° by 0.1°) or a file of angles in degrees,
+    /// one per line, increasing from 0 to 180.
     #[arg(long, value_name = "default|FILE")]
     angles: Option<String>,
     /// Illuminant of the sRGB channel phase functions.

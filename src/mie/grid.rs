@@ -36,13 +36,14 @@ pub fn angles_from_spec(spec: &str) -> Result<Vec<f64>> {
     Ok(out)
 }
 
-/// Angles must be strictly increasing within [0°, 180°], at least two of them.
+/// Angles must be strictly increasing from exactly 0° to exactly 180°: the CDF, the Legendre
+/// moments and the quadrature normalisation integrate over the whole grid.
 pub fn validate_angles(deg: &[f64]) -> Result<()> {
     if deg.len() < 2 {
         bail!("need at least two angles, got {}", deg.len());
     }
-    if deg.iter().any(|a| !(0.0..=180.0).contains(a)) {
-        bail!("angles must lie within 0–180°");
+    if deg[0] != 0.0 || deg[deg.len() - 1] != 180.0 {
+        bail!("the angle grid must start at 0° and end at 180° (the CDF and moments integrate over it)");
     }
     if deg.windows(2).any(|w| w[1] <= w[0]) {
         bail!("angles must be strictly increasing");
@@ -108,6 +109,9 @@ mod tests {
         assert_eq!(g[501], 5.1);
         assert_eq!(g[2250], 180.0);
         validate_angles(&g).unwrap();
+        assert!(validate_angles(&[0.0, 90.0]).is_err());
+        assert!(validate_angles(&[0.0, 90.0, 90.0, 180.0]).is_err());
+        assert!(validate_angles(&[0.0, 1.0, 180.0]).is_ok());
     }
 
     #[test]
