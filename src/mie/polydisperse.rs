@@ -20,7 +20,7 @@ use super::distribution::SizeDistribution;
 use super::grid;
 use super::index::RefractiveIndex;
 use super::sphere::n_terms;
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
@@ -213,8 +213,13 @@ impl MieJob {
             _ => {}
         }
         self.index.validate()?;
-        for &l in self.wavelengths_nm.iter().chain(&RGB_WAVELENGTHS_NM) {
+        for &l in &self.wavelengths_nm {
             self.index.at(l)?;
+        }
+        for &l in &RGB_WAVELENGTHS_NM {
+            self.index
+                .at(l)
+                .context("the 650/510/440 nm LUT needs the index there too")?;
         }
         grid::validate_angles(&self.angles_deg)
     }
