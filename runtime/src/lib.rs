@@ -1,14 +1,25 @@
 //! `nephele-runtime`: what a renderer links to evaluate nephele's artefacts.
 //!
-//! This crate is `no_std` unless the default `std` feature is on, has no required
-//! dependencies and is f32-first. It will own every evaluator of the project (phase
-//! models, table lookups, collector search) so that the generators in `nephele` and the
-//! renderers that ship its tables run the very same code.
+//! `no_std` unless the default `std` feature is on (then enable `libm` for the math, as with
+//! glam: `default-features = false, features = ["libm"]`); no other dependency; f32-first,
+//! every evaluator also in f64. It owns every evaluator of the project (phase models, table
+//! lookups, collector search) so that the generators in `nephele` and the renderers that ship
+//! its tables run the very same code.
 //!
-//! Conventions: scattering angle θ between incident and scattered propagation
-//! directions, μ = cos θ (μ = 1 is forward); phase functions are normalised so that
-//! ∮ p dΩ = 1 (unit sr⁻¹).
+//! Conventions: scattering angle θ between incident and scattered propagation directions,
+//! μ = cos θ (μ = 1 is forward); phase functions are normalised so that ∮ p dΩ = 1 (sr⁻¹).
 #![cfg_attr(not(feature = "std"), no_std)]
+
+#[cfg(not(any(feature = "std", feature = "libm")))]
+compile_error!("nephele-runtime needs either the `std` feature (default) or `libm` for its math");
+
+pub mod frame;
+pub mod phase;
+pub mod presets;
+pub mod real;
+
+pub use phase::PhaseFunction;
+pub use real::Real;
 
 /// The crate version, for the JSON sidecars of artefacts built with it.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");

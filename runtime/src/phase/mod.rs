@@ -1,0 +1,53 @@
+//! Phase-function models: evaluation, pdf, exact sampling, mean cosine.
+//!
+//! Conventions: μ = cos θ between the incident and scattered propagation directions (μ = 1 is
+//! forward); every model is normalised, ∮ p dΩ = 1, unit sr⁻¹. `sample_mu(ξ)` maps ξ ∈ [0, 1]
+//! to a cosine distributed as p; for single-lobe models it is the inverse CDF (monotone in ξ),
+//! for mixtures it picks a lobe with ξ and reuses the rescaled ξ within it.
+
+mod draine;
+mod hg;
+mod mixture;
+mod rayleigh;
+mod schlick;
+mod vmf;
+
+pub use draine::Draine;
+pub use hg::HenyeyGreenstein;
+pub use mixture::{HgDraine, TwoTermHg};
+pub use rayleigh::Rayleigh;
+pub use schlick::Schlick;
+pub use vmf::VonMisesFisher;
+
+use crate::frame::{direction_from_cosine, Vec3};
+use crate::real::Real;
+
+/// A normalised phase function of the scattering cosine.
+pub trait PhaseFunction<F: Real> {
+    /// p(μ), sr⁻¹.
+    fn eval(&self, mu: F) -> F;
+
+    /// Density of `sample`'s directions per steradian: p(μ) for exact samplers.
+    fn pdf(&self, mu: F) -> F {
+        self.eval(mu)
+    }
+
+    /// A scattering cosine distributed as p, from ξ ∈ [0, 1].
+    fn sample_mu(&self, xi: F) -> F;
+
+    /// ⟨μ⟩ in closed form, where one exists.
+    fn mean_cosine(&self) -> Option<F>;
+
+    /// A scattered propagation direction around the incident one `wi` (unit), from two uniform
+    /// numbers, and its pdf per steradian.
+    fn sample(&self, xi1: F, xi2: F, wi: Vec3<F>) -> (Vec3<F>, F) {
+        let mu = self.sample_mu(xi1);
+        (direction_from_cosine(wi, mu, xi2), self.pdf(mu))
+    }
+}
+
+/// 1 / (4π) in the working precision.
+#[inline]
+pub(crate) fn inv_four_pi<F: Real>() -> F {
+    F::of(0.25) / F::PI
+}
