@@ -20,7 +20,9 @@ pub fn orthonormal_basis<F: Real>(n: Vec3<F>) -> (Vec3<F>, Vec3<F>) {
 /// The direction at cosine `mu` from the propagation direction `wi` and azimuth 2π`xi`.
 pub fn direction_from_cosine<F: Real>(wi: Vec3<F>, mu: F, xi: F) -> Vec3<F> {
     let (t, s) = orthonormal_basis(wi);
-    let sin_theta = (F::of(1.0) - mu * mu).clamp_to(F::of(0.0), F::of(1.0)).sqrt();
+    let sin_theta = (F::of(1.0) - mu * mu)
+        .clamp_to(F::of(0.0), F::of(1.0))
+        .sqrt();
     let (sp, cp) = (F::of(2.0) * F::PI * xi).sin_cos();
     let (a, b) = (sin_theta * cp, sin_theta * sp);
     [

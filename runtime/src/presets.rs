@@ -11,11 +11,18 @@
 //!
 //! with c = 1.19692 cos(a/b) + 1.37932 L + 0.0625835, a = (L − 0.238604)(L + 1.00667),
 //! b = 0.507522 − 0.15677 L (the paper's supplemental material). The main fit is used above
-//! 50 µm too (an extrapolation). The branches do **not** join continuously: at 5 µm g_HG jumps
-//! from 0.9669 (below) to 0.9703 (above), α from 18.07 to 18.34 and w_D from 0.4040 to 0.3989; at
-//! 1.5 µm and 0.1 µm the jumps are larger (see the test `branch_jumps_are_as_documented`). Our
-//! own refits (stage 3) will replace these as the default once validated; this stays as the
-//! named preset `jendersie_deon`.
+//! 50 µm too (an extrapolation). The branches do **not** join continuously (values just below
+//! → just above each edge, printed by the test `preset_matches_the_paper_and_jumps_where_documented`):
+//!
+//! | edge | g_HG | g_D | α | w_D |
+//! |---|---|---|---|---|
+//! | 5 µm | 0.96904 → 0.97068 | 0.50333 → 0.50834 | 18.071 → 17.068 | 0.44200 → 0.44783 |
+//! | 1.5 µm | 0.83849 → 0.88565 | 0.31262 → 0.40947 | 250 → 9.278 | 0.20999 → 0.37242 |
+//! | 0.1 µm | 0.13800 → 0.10383 | 0.09177 → 0.11556 | 250 → 250 | 0.23729 → 0.25771 |
+//!
+//! The largest is at 1.5 µm, where α drops from 250 to 9.3. Our own refits (stage 3) will
+//! replace these as the default once validated; this stays as the named preset
+//! `jendersie_deon`.
 
 use crate::phase::HgDraine;
 use crate::real::Real;
@@ -36,7 +43,12 @@ pub struct HgDraineParams {
 impl HgDraineParams {
     /// The blend in the working precision.
     pub fn phase<F: Real>(&self) -> HgDraine<F> {
-        HgDraine::hg_draine(F::of(self.g_hg), F::of(self.g_d), F::of(self.alpha), F::of(self.w_d))
+        HgDraine::hg_draine(
+            F::of(self.g_hg),
+            F::of(self.g_d),
+            F::of(self.alpha),
+            F::of(self.w_d),
+        )
     }
 }
 

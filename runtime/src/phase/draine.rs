@@ -7,9 +7,9 @@
 //! With v = √(1 + g² − 2gμ), a = 1 + g², v₀ = 1 + g:
 //!   M₂(μ) = −(1 − g²)/(8g³) [H(v) − H(v₀)],  H(v) = −a²/v − 2a v + v³/3,
 //! (v·F = ξ·v is the quartic of spec 20). The renderer-style closed-form root loses up to 0.1 of
-//! CDF in f32 at α = 250; here the CDF is evaluated in f64 and F(μ) = ξ solved by Newton's
-//! method inside a shrinking bracket, to ~1e-13, whatever the output precision. For |g| < 1e-3,
-//! where the 1/g³ above cancels, F uses the first-order expansion in g (error O(g²) < 1e-6).
+//! CDF in f32 at α = 250; here the CDF is evaluated in f64 in a form free of the 1/g³
+//! cancellation (below) and F(μ) = ξ solved by Newton's method inside a shrinking bracket, to
+//! ~1e-14, whatever the output precision: an f32 sample is the exact root rounded once.
 
 use super::{HenyeyGreenstein, PhaseFunction};
 use crate::real::Real;
@@ -31,7 +31,10 @@ impl<F: Real> Draine<F> {
 
     /// Cornette–Shanks (1992): Draine with α = 1 (its ⟨μ⟩ = 3g(4 + g²)/(5(2 + g²)) ≠ g).
     pub fn cornette_shanks(g: F) -> Self {
-        Self { g, alpha: F::of(1.0) }
+        Self {
+            g,
+            alpha: F::of(1.0),
+        }
     }
 
     /// The normalisation N = 1 + α(1 + 2g²)/3.
@@ -46,20 +49,23 @@ impl<F: Real> Draine<F> {
     }
 }
 
-/// F(μ) of Draine(g, α) in f64 (see the module notes).
+/// F(μ) of Draine(g, α) in f64, without the 1/g³ of the textbook form (see the module notes):
+///   M₂ = (1 − g²)(1 + μ) T / (12 P (v + v₀)),  P = v v₀,
+///   T = 3(1 − μ) Q + s (P − 3a),  Q = (P − a)/g = (g − 2μ)(1 + g)/(v + 1) + 1 − g,
+///   s = [g − 2μ − v + μ(g − 2μ)/(v + 1)]/(v + 1),
+/// which is H(v) − H(v₀) with its two factors of g divided out analytically (at g = 0 it gives
+/// M₂ = (1 + μ³)/6, the isotropic value).
 fn cdf_f64(g: f64, alpha: f64, mu: f64) -> f64 {
     let norm = 1.0 + alpha * (1.0 + 2.0 * g * g) / 3.0;
-    if Real::abs(g) < 1e-3 {
-        // 2π HG ≈ (1 + 3gμ)/2.
-        let even = (mu + 1.0) + alpha * (mu * mu * mu + 1.0) / 3.0;
-        let odd = 3.0 * g * ((mu * mu - 1.0) / 2.0 + alpha * (mu * mu * mu * mu - 1.0) / 4.0);
-        return 0.5 * (even + odd) / norm;
-    }
     let f_hg = HenyeyGreenstein::new(g).cdf(mu);
     let a = 1.0 + g * g;
-    let h = |v: f64| -a * a / v - 2.0 * a * v + v * v * v / 3.0;
     let v = Real::sqrt((a - 2.0 * g * mu).max(0.0));
-    let m2 = -(1.0 - g * g) / (8.0 * g * g * g) * (h(v) - h(1.0 + g));
+    let v0 = 1.0 + g;
+    let p = v * v0;
+    let q = (g - 2.0 * mu) * (1.0 + g) / (v + 1.0) + 1.0 - g;
+    let s = (g - 2.0 * mu - v + mu * (g - 2.0 * mu) / (v + 1.0)) / (v + 1.0);
+    let t = 3.0 * (1.0 - mu) * q + s * (p - 3.0 * a);
+    let m2 = (1.0 - g * g) * (1.0 + mu) * t / (12.0 * p * (v + v0));
     (f_hg + alpha * m2) / norm
 }
 
@@ -88,7 +94,11 @@ fn invert_cdf_f64(g: f64, alpha: f64, xi: f64) -> f64 {
         }
         let dp = 2.0 * core::f64::consts::PI * pdf_f64(g, alpha, mu);
         let next = mu - f / dp;
-        mu = if next > lo && next < hi { next } else { 0.5 * (lo + hi) };
+        mu = if next > lo && next < hi {
+            next
+        } else {
+            0.5 * (lo + hi)
+        };
         if hi - lo < 1e-15 {
             break;
         }

@@ -47,7 +47,10 @@ impl<F: Real> PhaseFunction<F> for HenyeyGreenstein<F> {
         let (one, half) = (F::of(1.0), F::of(0.5));
         let m0 = F::of(2.0) * xi - one;
         let s = one + g * m0;
-        let num = m0 + half * g * (F::of(3.0) + m0 * m0) + g * g * m0 + half * g * g * g * (m0 * m0 - one);
+        let num = m0
+            + half * g * (F::of(3.0) + m0 * m0)
+            + g * g * m0
+            + half * g * g * g * (m0 * m0 - one);
         (num / (s * s)).clamp_to(-one, one)
     }
 

@@ -31,7 +31,8 @@ impl<F: Real, A: PhaseFunction<F>, B: PhaseFunction<F>> PhaseFunction<F> for Mix
         if xi < self.w {
             self.first.sample_mu(xi / self.w)
         } else {
-            self.second.sample_mu(((xi - self.w) / (one - self.w)).clamp_to(F::of(0.0), one))
+            self.second
+                .sample_mu(((xi - self.w) / (one - self.w)).clamp_to(F::of(0.0), one))
         }
     }
 
@@ -47,7 +48,11 @@ pub type TwoTermHg<F> = Mixture<HenyeyGreenstein<F>, HenyeyGreenstein<F>, F>;
 impl<F: Real> TwoTermHg<F> {
     /// w HG(g1) + (1 − w) HG(g2).
     pub fn two_term(g1: F, g2: F, w: F) -> Self {
-        Self { first: HenyeyGreenstein::new(g1), second: HenyeyGreenstein::new(g2), w }
+        Self {
+            first: HenyeyGreenstein::new(g1),
+            second: HenyeyGreenstein::new(g2),
+            w,
+        }
     }
 }
 

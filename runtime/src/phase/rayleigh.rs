@@ -21,7 +21,11 @@ impl<F: Real> PhaseFunction<F> for Rayleigh {
         let q = F::of(4.0) * xi - F::of(2.0);
         // For q < 0 use the mirror root: u(−q) = 1/u(q), avoiding the cancellation in q + √….
         let r = (q * q + F::of(1.0)).sqrt();
-        let u = if q >= F::of(0.0) { (q + r).cbrt() } else { F::of(1.0) / (r - q).cbrt() };
+        let u = if q >= F::of(0.0) {
+            (q + r).cbrt()
+        } else {
+            F::of(1.0) / (r - q).cbrt()
+        };
         (u - F::of(1.0) / u).clamp_to(F::of(-1.0), F::of(1.0))
     }
 

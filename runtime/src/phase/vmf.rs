@@ -36,7 +36,9 @@ impl<F: Real> PhaseFunction<F> for VonMisesFisher<F> {
         let k = self.kappa;
         let one = F::of(1.0);
         if k < F::of(1e-4) {
-            return F::of(2.0) * xi - one;
+            // First order in κ: F(μ) = (1 + μ)/2 + κ(μ² − 1)/4, inverted around μ₀ = 2ξ − 1.
+            let m0 = F::of(2.0) * xi - one;
+            return m0 + F::of(0.5) * k * (one - m0 * m0);
         }
         let e = (F::of(-2.0) * k).exp();
         (one + (xi + (one - xi) * e).ln() / k).clamp_to(-one, one)
