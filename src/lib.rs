@@ -5,6 +5,7 @@
 
 pub mod io;
 pub mod mie;
+pub mod stats;
 
 /// Tool version written into every JSON sidecar.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");

@@ -17,12 +17,17 @@ pub fn orthonormal_basis<F: Real>(n: Vec3<F>) -> (Vec3<F>, Vec3<F>) {
     (t, s)
 }
 
-/// The direction at cosine `mu` from the propagation direction `wi` and azimuth 2π`xi`.
-pub fn direction_from_cosine<F: Real>(wi: Vec3<F>, mu: F, xi: F) -> Vec3<F> {
+/// The direction at cosine `mu` from the propagation direction `wi` and azimuth 2π`xi`;
+/// `one_minus_mu` = 1 − μ, given separately because it carries the precision of directions
+/// near the forward peak (in f32, μ rounds to 1 within 3e-8 of it; 1 − μ does not).
+pub fn direction_from_cosine<F: Real>(wi: Vec3<F>, mu: F, one_minus_mu: F, xi: F) -> Vec3<F> {
     let (t, s) = orthonormal_basis(wi);
-    let sin_theta = (F::of(1.0) - mu * mu)
-        .clamp_to(F::of(0.0), F::of(1.0))
-        .sqrt();
+    let sin2 = if mu > F::of(0.0) {
+        one_minus_mu * (F::of(2.0) - one_minus_mu)
+    } else {
+        F::of(1.0) - mu * mu
+    };
+    let sin_theta = sin2.clamp_to(F::of(0.0), F::of(1.0)).sqrt();
     let (sp, cp) = (F::of(2.0) * F::PI * xi).sin_cos();
     let (a, b) = (sin_theta * cp, sin_theta * sp);
     [

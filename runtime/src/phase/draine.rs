@@ -11,7 +11,7 @@
 //! cancellation (below) and F(μ) = ξ solved by Newton's method inside a shrinking bracket, to
 //! ~1e-14, whatever the output precision: an f32 sample is the exact root rounded once.
 
-use super::{HenyeyGreenstein, PhaseFunction};
+use super::{Cosine, HenyeyGreenstein, PhaseFunction};
 use crate::real::Real;
 
 /// Draine's phase function with asymmetry-like g ∈ (−1, 1) and α ≥ 0.
@@ -109,11 +109,22 @@ fn invert_cdf_f64(g: f64, alpha: f64, xi: f64) -> f64 {
 impl<F: Real> PhaseFunction<F> for Draine<F> {
     #[inline]
     fn eval(&self, mu: F) -> F {
-        HenyeyGreenstein::new(self.g).eval(mu) * (F::of(1.0) + self.alpha * mu * mu) / self.norm()
+        self.pdf_cosine(Cosine::from_mu(mu))
     }
 
-    fn sample_mu(&self, xi: F) -> F {
-        F::of(invert_cdf_f64(self.g.f64(), self.alpha.f64(), xi.f64()))
+    #[inline]
+    fn pdf_cosine(&self, c: Cosine<F>) -> F {
+        let mu = c.mu;
+        HenyeyGreenstein::new(self.g).pdf_cosine(c) * (F::of(1.0) + self.alpha * mu * mu)
+            / self.norm()
+    }
+
+    fn sample_cosine(&self, xi: F) -> Cosine<F> {
+        let mu = invert_cdf_f64(self.g.f64(), self.alpha.f64(), xi.f64());
+        Cosine {
+            mu: F::of(mu),
+            one_minus_mu: F::of(1.0 - mu),
+        }
     }
 
     fn mean_cosine(&self) -> Option<F> {

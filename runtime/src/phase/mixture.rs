@@ -5,7 +5,7 @@
 //! Sampling picks lobe 1 when ξ < w and reuses ξ/w (else (ξ − w)/(1 − w)) inside the lobe; the
 //! pdf of the sample is the mixture's.
 
-use super::{Draine, HenyeyGreenstein, PhaseFunction};
+use super::{Cosine, Draine, HenyeyGreenstein, PhaseFunction};
 use crate::real::Real;
 
 /// A weighted pair of lobes.
@@ -26,13 +26,18 @@ impl<F: Real, A: PhaseFunction<F>, B: PhaseFunction<F>> PhaseFunction<F> for Mix
     }
 
     #[inline]
-    fn sample_mu(&self, xi: F) -> F {
+    fn pdf_cosine(&self, c: Cosine<F>) -> F {
+        self.w * self.first.pdf_cosine(c) + (F::of(1.0) - self.w) * self.second.pdf_cosine(c)
+    }
+
+    #[inline]
+    fn sample_cosine(&self, xi: F) -> Cosine<F> {
         let one = F::of(1.0);
         if xi < self.w {
-            self.first.sample_mu(xi / self.w)
+            self.first.sample_cosine(xi / self.w)
         } else {
             self.second
-                .sample_mu(((xi - self.w) / (one - self.w)).clamp_to(F::of(0.0), one))
+                .sample_cosine(((xi - self.w) / (one - self.w)).clamp_to(F::of(0.0), one))
         }
     }
 

@@ -22,6 +22,34 @@ pub use vmf::VonMisesFisher;
 use crate::frame::{direction_from_cosine, Vec3};
 use crate::real::Real;
 
+/// A sampled scattering cosine with 1 − μ carried separately: near a strong forward peak
+/// (HG with g = 0.998 at 50 µm) f32 cannot tell μ from 1, while 1 − μ keeps full precision.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cosine<F> {
+    /// μ = cos θ.
+    pub mu: F,
+    /// 1 − μ, accurate to relative precision.
+    pub one_minus_mu: F,
+}
+
+impl<F: Real> Cosine<F> {
+    /// From μ alone (1 − μ then has only absolute precision).
+    pub fn from_mu(mu: F) -> Self {
+        Self {
+            mu,
+            one_minus_mu: F::of(1.0) - mu,
+        }
+    }
+
+    /// From 1 − μ.
+    pub fn from_one_minus_mu(one_minus_mu: F) -> Self {
+        Self {
+            mu: F::of(1.0) - one_minus_mu,
+            one_minus_mu,
+        }
+    }
+}
+
 /// A normalised phase function of the scattering cosine.
 pub trait PhaseFunction<F: Real> {
     /// p(μ), sr⁻¹.
@@ -33,7 +61,17 @@ pub trait PhaseFunction<F: Real> {
     }
 
     /// A scattering cosine distributed as p, from ξ ∈ [0, 1].
-    fn sample_mu(&self, xi: F) -> F;
+    fn sample_mu(&self, xi: F) -> F {
+        self.sample_cosine(xi).mu
+    }
+
+    /// [`Self::sample_mu`] with 1 − μ kept precise.
+    fn sample_cosine(&self, xi: F) -> Cosine<F>;
+
+    /// [`Self::pdf`] from a [`Cosine`], using 1 − μ where it matters.
+    fn pdf_cosine(&self, c: Cosine<F>) -> F {
+        self.pdf(c.mu)
+    }
 
     /// ⟨μ⟩ in closed form, where one exists.
     fn mean_cosine(&self) -> Option<F>;
@@ -41,8 +79,11 @@ pub trait PhaseFunction<F: Real> {
     /// A scattered propagation direction around the incident one `wi` (unit), from two uniform
     /// numbers, and its pdf per steradian.
     fn sample(&self, xi1: F, xi2: F, wi: Vec3<F>) -> (Vec3<F>, F) {
-        let mu = self.sample_mu(xi1);
-        (direction_from_cosine(wi, mu, xi2), self.pdf(mu))
+        let c = self.sample_cosine(xi1);
+        (
+            direction_from_cosine(wi, c.mu, c.one_minus_mu, xi2),
+            self.pdf_cosine(c),
+        )
     }
 }
 

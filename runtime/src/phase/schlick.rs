@@ -3,7 +3,7 @@
 //!   ⟨μ⟩ = 1/k − (1 − k²)/(2k²) ln((1 + k)/(1 − k))  (→ 2k/3 as k → 0),
 //! sampled by μ = (2ξ + k − 1)/(2kξ − k + 1), the exact inverse CDF.
 
-use super::{inv_four_pi, PhaseFunction};
+use super::{inv_four_pi, Cosine, PhaseFunction};
 use crate::real::Real;
 
 /// Schlick's phase function with k ∈ (−1, 1).
@@ -23,14 +23,34 @@ impl<F: Real> Schlick<F> {
 impl<F: Real> PhaseFunction<F> for Schlick<F> {
     #[inline]
     fn eval(&self, mu: F) -> F {
-        let d = F::of(1.0) - self.k * mu;
-        inv_four_pi::<F>() * (F::of(1.0) - self.k * self.k) / (d * d)
+        self.pdf_cosine(Cosine::from_mu(mu))
     }
 
+    /// With 1 − kμ = (1 − k) + k(1 − μ) on the forward side.
     #[inline]
-    fn sample_mu(&self, xi: F) -> F {
+    fn pdf_cosine(&self, c: Cosine<F>) -> F {
+        let (k, one) = (self.k, F::of(1.0));
+        let d = if c.mu > F::of(0.0) {
+            (one - k) + k * c.one_minus_mu
+        } else {
+            one - k * c.mu
+        };
+        inv_four_pi::<F>() * (one - k) * (one + k) / (d * d)
+    }
+
+    /// μ = (2ξ + k − 1)/(2kξ − k + 1) and 1 − μ = 2(1 − k)(1 − ξ)/(2kξ − k + 1).
+    #[inline]
+    fn sample_cosine(&self, xi: F) -> Cosine<F> {
         let (k, one, two) = (self.k, F::of(1.0), F::of(2.0));
-        ((two * xi + k - one) / (two * k * xi - k + one)).clamp_to(-one, one)
+        let den = two * k * xi - k + one;
+        let mu = ((two * xi + k - one) / den).clamp_to(-one, one);
+        if mu > F::of(0.0) {
+            Cosine::from_one_minus_mu(
+                (two * (one - k) * (one - xi) / den).clamp_to(F::of(0.0), one),
+            )
+        } else {
+            Cosine::from_mu(mu)
+        }
     }
 
     fn mean_cosine(&self) -> Option<F> {

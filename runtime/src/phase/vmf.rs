@@ -3,7 +3,7 @@
 //!   ⟨μ⟩ = coth κ − 1/κ  (→ κ/3 as κ → 0),
 //! sampled by μ = 1 + ln(ξ + (1 − ξ) e^{−2κ})/κ (Wenzel 1994 / Jakob 2012).
 
-use super::{inv_four_pi, PhaseFunction};
+use super::{inv_four_pi, Cosine, PhaseFunction};
 use crate::real::Real;
 
 /// von Mises–Fisher lobe with concentration κ ≥ 0 around the forward direction.
@@ -23,25 +23,32 @@ impl<F: Real> VonMisesFisher<F> {
 impl<F: Real> PhaseFunction<F> for VonMisesFisher<F> {
     #[inline]
     fn eval(&self, mu: F) -> F {
-        let k = self.kappa;
-        if k < F::of(1e-4) {
-            return inv_four_pi::<F>() * (F::of(1.0) + k * mu);
-        }
-        let one = F::of(1.0);
-        k * (k * (mu - one)).exp() / (F::of(2.0) * F::PI * (one - (F::of(-2.0) * k).exp()))
+        self.pdf_cosine(Cosine::from_mu(mu))
     }
 
     #[inline]
-    fn sample_mu(&self, xi: F) -> F {
+    fn pdf_cosine(&self, c: Cosine<F>) -> F {
+        let k = self.kappa;
+        if k < F::of(1e-4) {
+            return inv_four_pi::<F>() * (F::of(1.0) + k * c.mu);
+        }
+        k * (-k * c.one_minus_mu).exp()
+            / (F::of(2.0) * F::PI * (F::of(1.0) - (F::of(-2.0) * k).exp()))
+    }
+
+    /// 1 − μ = −ln(ξ + (1 − ξ) e^{−2κ})/κ, exact near the peak.
+    #[inline]
+    fn sample_cosine(&self, xi: F) -> Cosine<F> {
         let k = self.kappa;
         let one = F::of(1.0);
         if k < F::of(1e-4) {
             // First order in κ: F(μ) = (1 + μ)/2 + κ(μ² − 1)/4, inverted around μ₀ = 2ξ − 1.
             let m0 = F::of(2.0) * xi - one;
-            return m0 + F::of(0.5) * k * (one - m0 * m0);
+            return Cosine::from_mu(m0 + F::of(0.5) * k * (one - m0 * m0));
         }
         let e = (F::of(-2.0) * k).exp();
-        (one + (xi + (one - xi) * e).ln() / k).clamp_to(-one, one)
+        let omm = -(xi + (one - xi) * e).ln() / k;
+        Cosine::from_one_minus_mu(omm.clamp_to(F::of(0.0), F::of(2.0)))
     }
 
     fn mean_cosine(&self) -> Option<F> {

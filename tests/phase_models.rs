@@ -1,56 +1,18 @@
 //! Every phase model: normalisation, mean cosine, inverse CDF and sample/pdf consistency, at
 //! ordinary and extreme parameters, checked by adaptive quadrature of p (not of our CDFs).
 
+use nephele::stats::adaptive_simpson;
 use nephele_runtime::frame::dot;
 use nephele_runtime::phase::{
-    Draine, HenyeyGreenstein, HgDraine, Rayleigh, Schlick, TwoTermHg, VonMisesFisher,
+    Draine, HenyeyGreenstein, Rayleigh, Schlick, TwoTermHg, VonMisesFisher,
 };
 use nephele_runtime::presets::jendersie_deon;
 use nephele_runtime::PhaseFunction;
 use std::f64::consts::PI;
 
-/// Adaptive Simpson of f over [a, b] to absolute tolerance `tol`.
-fn simpson(f: &dyn Fn(f64) -> f64, a: f64, b: f64, tol: f64) -> f64 {
-    fn rec(
-        f: &dyn Fn(f64) -> f64,
-        a: f64,
-        b: f64,
-        fa: f64,
-        fm: f64,
-        fb: f64,
-        whole: f64,
-        tol: f64,
-        depth: u32,
-    ) -> f64 {
-        let m = 0.5 * (a + b);
-        let (lm, rm) = (0.5 * (a + m), 0.5 * (m + b));
-        let (flm, frm) = (f(lm), f(rm));
-        let left = (m - a) / 6.0 * (fa + 4.0 * flm + fm);
-        let right = (b - m) / 6.0 * (fm + 4.0 * frm + fb);
-        // Stop at the depth limit or where the tolerance is below what f64 can resolve.
-        if depth == 0 || (left + right - whole).abs() <= 15.0 * tol.max(1e-16 * whole.abs()) {
-            return left + right + (left + right - whole) / 15.0;
-        }
-        rec(f, a, m, fa, flm, fm, left, 0.5 * tol, depth - 1)
-            + rec(f, m, b, fm, frm, fb, right, 0.5 * tol, depth - 1)
-    }
-    let (fa, fb, fm) = (f(a), f(b), f(0.5 * (a + b)));
-    rec(
-        f,
-        a,
-        b,
-        fa,
-        fm,
-        fb,
-        (b - a) / 6.0 * (fa + 4.0 * fm + fb),
-        tol,
-        40,
-    )
-}
-
 /// ∫_{a}^{b} 2π p(μ) μ^k dμ.
 fn moment(p: &dyn PhaseFunction<f64>, a: f64, b: f64, k: i32) -> f64 {
-    simpson(&|mu| 2.0 * PI * p.eval(mu) * mu.powi(k), a, b, 1e-11)
+    adaptive_simpson(&|mu| 2.0 * PI * p.eval(mu) * mu.powi(k), a, b, 1e-11)
 }
 
 fn models() -> Vec<(String, Box<dyn PhaseFunction<f64>>)> {
