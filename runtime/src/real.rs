@@ -33,6 +33,8 @@ pub trait Real:
     fn sin_cos(self) -> (Self, Self);
     /// ∛x.
     fn cbrt(self) -> Self;
+    /// asin x.
+    fn asin(self) -> Self;
     /// Clamps to [lo, hi].
     fn clamp_to(self, lo: Self, hi: Self) -> Self {
         if self < lo {
@@ -46,7 +48,7 @@ pub trait Real:
 }
 
 macro_rules! impl_real {
-    ($t:ident, $sqrt:ident, $exp:ident, $ln:ident, $sin:ident, $cos:ident, $cbrt:ident) => {
+    ($t:ident, $sqrt:ident, $exp:ident, $ln:ident, $sin:ident, $cos:ident, $cbrt:ident, $asin:ident) => {
         impl Real for $t {
             const PI: Self = core::$t::consts::PI;
             #[inline]
@@ -81,6 +83,16 @@ macro_rules! impl_real {
             #[inline]
             fn cbrt(self) -> Self {
                 $t::cbrt(self)
+            }
+            #[cfg(feature = "std")]
+            #[inline]
+            fn asin(self) -> Self {
+                $t::asin(self)
+            }
+            #[cfg(not(feature = "std"))]
+            #[inline]
+            fn asin(self) -> Self {
+                libm::$asin(self)
             }
             #[cfg(not(feature = "std"))]
             #[inline]
@@ -119,5 +131,5 @@ macro_rules! impl_real {
     };
 }
 
-impl_real!(f32, sqrtf, expf, logf, sinf, cosf, cbrtf);
-impl_real!(f64, sqrt, exp, log, sin, cos, cbrt);
+impl_real!(f32, sqrtf, expf, logf, sinf, cosf, cbrtf, asinf);
+impl_real!(f64, sqrt, exp, log, sin, cos, cbrt, asin);

@@ -10,6 +10,7 @@ mod hg;
 mod mixture;
 mod rayleigh;
 mod schlick;
+mod tabulated;
 mod vmf;
 
 pub use draine::Draine;
@@ -17,6 +18,9 @@ pub use hg::HenyeyGreenstein;
 pub use mixture::{HgDraine, TwoTermHg};
 pub use rayleigh::Rayleigh;
 pub use schlick::Schlick;
+#[cfg(feature = "std")]
+pub use tabulated::TabulatedTable;
+pub use tabulated::{TableError, Tabulated};
 pub use vmf::VonMisesFisher;
 
 use crate::frame::{direction_from_cosine, Vec3};

@@ -1,0 +1,190 @@
+//! A phase function tabulated in θ (from a stage-1 Mie table), with exact inverse-CDF sampling.
+//!
+//! The density per unit angle f(θ) = 2π p(θ) sin θ is piecewise linear between the nodes
+//! 0 = θ_0 < θ_1 < … < θ_n = π and normalised by its own exact integral, so that `eval`, `pdf`
+//! and sampling describe one and the same distribution:
+//!   p(θ) = f(θ) / (2π sin θ),  CDF(θ) = C_i + f_i Δ + (f_{i+1} − f_i) Δ² / (2 h_i),  Δ = θ − θ_i.
+//! Sampling finds the interval by bisection on the CDF and solves that quadratic,
+//! Δ = 2r / (f_i + √(f_i² + 2 s r)), s = (f_{i+1} − f_i)/h_i, r = ξ − C_i (no cancellation).
+//! Working in θ rather than μ resolves forward peaks far narrower than f32's resolution in μ
+//! near 1 (50 µm droplets: 0.01° nodes, 1 − cos 0.01° = 1.5e-8).
+
+use super::{Cosine, PhaseFunction};
+use crate::real::Real;
+
+/// A borrowed table: nodes θ (radians, from 0 to π), normalised densities per unit angle f and
+/// the CDF at the nodes (0 … 1). Build one with [`TabulatedTable`] (std) or from stored arrays.
+#[derive(Clone, Copy, Debug)]
+pub struct Tabulated<'a, F> {
+    theta: &'a [F],
+    f: &'a [F],
+    cdf: &'a [F],
+}
+
+/// Why a table was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TableError {
+    /// Fewer than two nodes, or arrays of different lengths.
+    Shape,
+    /// θ not strictly increasing from 0 to π.
+    Angles,
+    /// A negative or non-finite value.
+    Values,
+}
+
+impl<'a, F: Real> Tabulated<'a, F> {
+    /// Wraps stored arrays after checking their shape and ranges.
+    pub fn from_parts(theta: &'a [F], f: &'a [F], cdf: &'a [F]) -> Result<Self, TableError> {
+        let n = theta.len();
+        if n < 2 || f.len() != n || cdf.len() != n {
+            return Err(TableError::Shape);
+        }
+        let pi_tol = F::of(1e-6);
+        if theta[0] != F::of(0.0)
+            || (theta[n - 1] - F::PI).abs() > pi_tol
+            || theta.windows(2).any(|w| !(w[1] > w[0]))
+        {
+            return Err(TableError::Angles);
+        }
+        if f.iter()
+            .chain(cdf)
+            .any(|v| !(*v >= F::of(0.0)) || !(v.f64().is_finite()))
+        {
+            return Err(TableError::Values);
+        }
+        Ok(Self { theta, f, cdf })
+    }
+
+    /// f(θ) on interval `i`.
+    fn density_at(&self, i: usize, theta: F) -> F {
+        let h = self.theta[i + 1] - self.theta[i];
+        self.f[i] + (self.f[i + 1] - self.f[i]) * (theta - self.theta[i]) / h
+    }
+
+    /// Interval containing θ.
+    fn interval(&self, theta: F) -> usize {
+        let n = self.theta.len();
+        self.theta.partition_point(|t| *t <= theta).clamp(1, n - 1) - 1
+    }
+}
+
+/// θ and sin θ of a cosine, accurate near both poles.
+fn angle<F: Real>(c: Cosine<F>) -> (F, F) {
+    let (one, two) = (F::of(1.0), F::of(2.0));
+    let omm = c.one_minus_mu.clamp_to(F::of(0.0), two);
+    let theta = if c.mu >= F::of(0.0) {
+        two * (omm / two).sqrt().asin()
+    } else {
+        F::PI - two * ((one + c.mu).clamp_to(F::of(0.0), one) / two).sqrt().asin()
+    };
+    (theta, (omm * (two - omm)).sqrt())
+}
+
+impl<F: Real> PhaseFunction<F> for Tabulated<'_, F> {
+    fn eval(&self, mu: F) -> F {
+        self.pdf_cosine(Cosine::from_mu(mu))
+    }
+
+    fn pdf_cosine(&self, c: Cosine<F>) -> F {
+        let (theta, sin) = angle(c);
+        let i = self.interval(theta);
+        let two_pi = F::of(2.0) * F::PI;
+        if sin <= F::of(0.0) {
+            // p = f/(2π sin θ) → f'(θ)/(2π) at the poles, where f vanishes.
+            let h = self.theta[i + 1] - self.theta[i];
+            return (self.f[i + 1] - self.f[i]).abs() / h / two_pi;
+        }
+        self.density_at(i, theta) / (two_pi * sin)
+    }
+
+    fn sample_cosine(&self, xi: F) -> Cosine<F> {
+        let n = self.cdf.len();
+        let i = self.cdf.partition_point(|c| *c <= xi).clamp(1, n - 1) - 1;
+        let h = self.theta[i + 1] - self.theta[i];
+        let (a, s) = (self.f[i], (self.f[i + 1] - self.f[i]) / h);
+        let r = (xi - self.cdf[i]).clamp_to(F::of(0.0), F::of(1.0));
+        let disc = (a * a + F::of(2.0) * s * r).clamp_to(F::of(0.0), F::of(f64::MAX));
+        let denom = a + disc.sqrt();
+        let delta = if denom > F::of(0.0) {
+            F::of(2.0) * r / denom
+        } else {
+            F::of(0.0)
+        };
+        let theta = self.theta[i] + delta.clamp_to(F::of(0.0), h);
+        let (sh, _) = (F::of(0.5) * theta).sin_cos();
+        if theta < F::of(0.5) * F::PI {
+            Cosine::from_one_minus_mu(F::of(2.0) * sh * sh)
+        } else {
+            Cosine::from_mu(theta.sin_cos().1)
+        }
+    }
+
+    fn mean_cosine(&self) -> Option<F> {
+        None
+    }
+}
+
+/// An owned table built from a phase function sampled at angles (std only).
+#[cfg(feature = "std")]
+#[derive(Clone, Debug)]
+pub struct TabulatedTable<F> {
+    theta: Vec<F>,
+    f: Vec<F>,
+    cdf: Vec<F>,
+}
+
+#[cfg(feature = "std")]
+impl<F: Real> TabulatedTable<F> {
+    /// From p(θ) (sr⁻¹, any normalisation) at angles in degrees from 0 to 180, increasing.
+    /// f = 2π p sin θ is integrated exactly as piecewise linear (in f64) and normalised.
+    pub fn from_phase(theta_deg: &[f64], phase: &[f64]) -> Result<Self, TableError> {
+        let n = theta_deg.len();
+        if n < 2 || phase.len() != n {
+            return Err(TableError::Shape);
+        }
+        if theta_deg[0] != 0.0
+            || theta_deg[n - 1] != 180.0
+            || theta_deg.windows(2).any(|w| !(w[1] > w[0]))
+        {
+            return Err(TableError::Angles);
+        }
+        if phase.iter().any(|p| !(p.is_finite() && *p >= 0.0)) {
+            return Err(TableError::Values);
+        }
+        let theta: Vec<f64> = theta_deg.iter().map(|d| d.to_radians()).collect();
+        let mut f: Vec<f64> = theta
+            .iter()
+            .zip(phase)
+            .map(|(t, p)| 2.0 * core::f64::consts::PI * p * t.sin())
+            .collect();
+        // sin(π) is 1.2e-16, not 0: make both poles exact.
+        f[0] = 0.0;
+        f[n - 1] = 0.0;
+        let mut cdf = vec![0.0; n];
+        for i in 1..n {
+            cdf[i] = cdf[i - 1] + 0.5 * (f[i - 1] + f[i]) * (theta[i] - theta[i - 1]);
+        }
+        let total = cdf[n - 1];
+        if !(total > 0.0) {
+            return Err(TableError::Values);
+        }
+        f.iter_mut().for_each(|v| *v /= total);
+        cdf.iter_mut().for_each(|v| *v /= total);
+        let mut theta_f: Vec<F> = theta.iter().map(|&t| F::of(t)).collect();
+        theta_f[n - 1] = F::PI;
+        Ok(Self {
+            theta: theta_f,
+            f: f.iter().map(|&v| F::of(v)).collect(),
+            cdf: cdf.iter().map(|&v| F::of(v)).collect(),
+        })
+    }
+
+    /// The table as a phase function.
+    pub fn view(&self) -> Tabulated<'_, F> {
+        Tabulated {
+            theta: &self.theta,
+            f: &self.f,
+            cdf: &self.cdf,
+        }
+    }
+}
