@@ -4,7 +4,9 @@
 //!
 //!     cargo run --release --example bench_phase [-- N]
 
-use nephele_runtime::phase::{Draine, HenyeyGreenstein, Rayleigh, Schlick, TabulatedTable, TwoTermHg, VonMisesFisher};
+use nephele_runtime::phase::{
+    Draine, HenyeyGreenstein, Rayleigh, Schlick, TabulatedTable, TwoTermHg, VonMisesFisher,
+};
 use nephele_runtime::presets::jendersie_deon;
 use nephele_runtime::{PhaseFunction, Real};
 use std::hint::black_box;
@@ -29,7 +31,10 @@ fn time<F: Real>(name: &str, n: usize, mut op: impl FnMut(&mut Rng) -> F) {
         acc = acc + op(&mut rng);
     }
     black_box(acc);
-    println!("{name:<34} {:6.2} ns", t0.elapsed().as_secs_f64() / n as f64 * 1e9);
+    println!(
+        "{name:<34} {:6.2} ns",
+        t0.elapsed().as_secs_f64() / n as f64 * 1e9
+    );
 }
 
 fn models<F: Real + 'static>(n: usize, prec: &str) {
@@ -40,33 +45,52 @@ fn models<F: Real + 'static>(n: usize, prec: &str) {
     let cases: Vec<(&str, Box<dyn PhaseFunction<F>>)> = vec![
         ("hg", Box::new(hg)),
         ("draine (d = 20 µm lobe)", Box::new(draine)),
-        ("draine g=0.02 α=250", Box::new(Draine::new(F::of(0.02), F::of(250.0)))),
+        (
+            "draine g=0.02 α=250",
+            Box::new(Draine::new(F::of(0.02), F::of(250.0))),
+        ),
         ("hg+draine (d = 20 µm)", Box::new(blend)),
         ("rayleigh", Box::new(Rayleigh)),
         ("schlick", Box::new(Schlick::new(F::of(0.8)))),
         ("vmf", Box::new(VonMisesFisher::new(F::of(20.0)))),
-        ("two-term hg", Box::new(TwoTermHg::two_term(F::of(0.9), F::of(-0.3), F::of(0.8)))),
+        (
+            "two-term hg",
+            Box::new(TwoTermHg::two_term(F::of(0.9), F::of(-0.3), F::of(0.8))),
+        ),
     ];
     for (name, p) in &cases {
-        time::<F>(&format!("{prec} {name} eval"), n, |r| p.eval(F::of(2.0) * r.next::<F>() - F::of(1.0)));
-        time::<F>(&format!("{prec} {name} sample"), n, |r| p.sample_mu(r.next::<F>()));
+        time::<F>(&format!("{prec} {name} eval"), n, |r| {
+            p.eval(F::of(2.0) * r.next::<F>() - F::of(1.0))
+        });
+        time::<F>(&format!("{prec} {name} sample"), n, |r| {
+            p.sample_mu(r.next::<F>())
+        });
     }
 }
 
 fn main() {
-    let n: usize = std::env::args().nth(1).map_or(10_000_000, |s| s.parse().unwrap());
+    let n: usize = std::env::args()
+        .nth(1)
+        .map_or(10_000_000, |s| s.parse().unwrap());
     models::<f32>(n, "f32");
     models::<f64>(n, "f64");
     // The tabulated 50 µm Mie table: nephele's main-job output if present, else a synthetic
     // peaked table on the same grid.
     let theta: Vec<f64> = nephele::mie::grid::reference_angles_deg();
-    let phase: Vec<f64> = theta.iter().map(|t| {
-        let mu = t.to_radians().cos();
-        (1.0 - 0.998f64 * 0.998) / (1.0 + 0.998f64 * 0.998 - 2.0 * 0.998 * mu).powf(1.5)
-    }).collect();
+    let phase: Vec<f64> = theta
+        .iter()
+        .map(|t| {
+            let mu = t.to_radians().cos();
+            (1.0 - 0.998f64 * 0.998) / (1.0 + 0.998f64 * 0.998 - 2.0 * 0.998 * mu).powf(1.5)
+        })
+        .collect();
     let tab = TabulatedTable::<f32>::from_phase(&theta, &phase).unwrap();
     let view = tab.view();
-    time::<f32>("f32 tabulated (2251 nodes) sample", n, |r| view.sample_mu(r.next::<f32>()));
-    time::<f32>("f32 tabulated (2251 nodes) eval", n, |r| view.eval(2.0 * r.next::<f32>() - 1.0));
+    time::<f32>("f32 tabulated (2251 nodes) sample", n, |r| {
+        view.sample_mu(r.next::<f32>())
+    });
+    time::<f32>("f32 tabulated (2251 nodes) eval", n, |r| {
+        view.eval(2.0 * r.next::<f32>() - 1.0)
+    });
     time::<f32>("(rng alone)", n, |r| r.next::<f32>());
 }
