@@ -8,8 +8,8 @@
 //!   M₂(μ) = −(1 − g²)/(8g³) [H(v) − H(v₀)],  H(v) = −a²/v − 2a v + v³/3,
 //! (v·F = ξ·v is the quartic of spec 20). The renderer-style closed-form root loses up to 0.1 of
 //! CDF in f32 at α = 250; here the CDF is evaluated in f64 in a form free of the 1/g³
-//! cancellation (below) and F(μ) = ξ solved by Halley's method inside a shrinking bracket, to
-//! ~1e-13, whatever the output precision: an f32 sample is the exact root rounded once.
+//! cancellation (below) and F(μ) = ξ solved by Newton's method inside a shrinking bracket, to
+//! ~1e-14, whatever the output precision: an f32 sample is the exact root rounded once.
 
 use super::{Cosine, HenyeyGreenstein, PhaseFunction};
 use crate::real::Real;
@@ -69,39 +69,36 @@ fn cdf_f64(g: f64, alpha: f64, mu: f64) -> f64 {
     (f_hg + alpha * m2) / norm
 }
 
-/// μ with F(μ) = ξ: Halley steps on the exact CDF (F′ = 2πp, F″ = 2πp′ in closed form, so
-/// the error cubes at each step: ~3 CDF evaluations from the HG start), kept inside a bracket
-/// that every step shrinks (bisection when a step would leave it). Stops when the step is
-/// below 1e-13: the last step's own error is then far below f64 resolution of the CDF.
+/// p(μ) of Draine(g, α) in f64.
+fn pdf_f64(g: f64, alpha: f64, mu: f64) -> f64 {
+    let norm = 1.0 + alpha * (1.0 + 2.0 * g * g) / 3.0;
+    HenyeyGreenstein::new(g).eval(mu) * (1.0 + alpha * mu * mu) / norm
+}
+
+/// μ with F(μ) = ξ: Newton steps on the exact CDF, kept inside a bracket that every step
+/// shrinks (bisection when Newton would leave it).
 fn invert_cdf_f64(g: f64, alpha: f64, xi: f64) -> f64 {
     let xi = xi.clamp(0.0, 1.0);
     let (mut lo, mut hi) = (-1.0f64, 1.0f64);
-    let norm = 1.0 + alpha * (1.0 + 2.0 * g * g) / 3.0;
     // Start from the HG sample: exact for α = 0 and close for moderate α.
     let mut mu = HenyeyGreenstein::new(g).sample_mu(xi);
     for _ in 0..100 {
         let f = cdf_f64(g, alpha, mu) - xi;
+        if Real::abs(f) <= 1e-14 {
+            break;
+        }
         if f > 0.0 {
             hi = mu;
         } else {
             lo = mu;
         }
-        // F′ = 2π HG (1 + αμ²)/N, F″ = 2π HG [3g(1 + αμ²)/d + 2αμ]/N, d = 1 + g² − 2gμ.
-        let d = 1.0 + g * g - 2.0 * g * mu;
-        let hg2pi = 0.5 * (1.0 - g * g) / (d * Real::sqrt(d));
-        let q = 1.0 + alpha * mu * mu;
-        let f1 = hg2pi * q / norm;
-        let f2 = hg2pi * (3.0 * g * q / d + 2.0 * alpha * mu) / norm;
-        let step = f / (f1 - 0.5 * f * f2 / f1);
-        let next = mu - step;
-        if next > lo && next < hi && step.is_finite() {
-            mu = next;
-            if Real::abs(step) < 1e-13 {
-                break;
-            }
+        let dp = 2.0 * core::f64::consts::PI * pdf_f64(g, alpha, mu);
+        let next = mu - f / dp;
+        mu = if next > lo && next < hi {
+            next
         } else {
-            mu = 0.5 * (lo + hi);
-        }
+            0.5 * (lo + hi)
+        };
         if hi - lo < 1e-15 {
             break;
         }
