@@ -2,6 +2,7 @@
 //! paper-preset Mie tables for d = 5, 10, 20 and 50 µm into outputs/.
 
 mod mie;
+mod phase;
 mod sphere;
 
 use anyhow::Result;
@@ -22,6 +23,8 @@ pub struct Cli {
 enum Command {
     /// Polydisperse, spectral Mie phase functions of water droplets (phase.npz + phase.json).
     Mie(mie::MieArgs),
+    /// Tabulate and sample a phase model of nephele-runtime (or a Mie table); renderer LUTs.
+    Phase(phase::PhaseArgs),
     /// One sphere: Q_ext, Q_sca, Q_back, g and S1, S2 at given angles, as JSON on stdout.
     Sphere(sphere::SphereArgs),
 }
@@ -37,6 +40,7 @@ pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Some(Command::Mie(args)) => mie::run(args),
         Some(Command::Sphere(args)) => sphere::run(args),
+        Some(Command::Phase(args)) => phase::run(args),
         None => mie::run_main_job(),
     }
 }
