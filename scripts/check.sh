@@ -17,6 +17,7 @@ ROOT=$(pwd)
 # Check scripts, run in this order; add new ones here (e.g. check_mitsuba.py).
 CHECKS=(
     check_mie.py
+    check_mitsuba.py
 )
 
 BUILD=1
