@@ -4,7 +4,7 @@
 
 use nephele::stats::chi2::{chi2_sphere, Chi2Config};
 use nephele_runtime::phase::{
-    Draine, HenyeyGreenstein, Rayleigh, Schlick, TwoTermHg, VonMisesFisher,
+    Draine, HenyeyGreenstein, Rayleigh, ReynoldsMcCormick, Schlick, TwoTermHg, VonMisesFisher,
 };
 use nephele_runtime::presets::jendersie_deon;
 use nephele_runtime::PhaseFunction;
@@ -40,6 +40,13 @@ fn cases() -> Vec<(
         ));
     }
     v.push(("Rayleigh".into(), Box::new(Rayleigh), Box::new(Rayleigh)));
+    for (g, a) in [(0.8, 1.0), (-0.6, 2.5), (0.97, 0.3)] {
+        v.push((
+            format!("Reynolds-McCormick g={g} a={a}"),
+            Box::new(ReynoldsMcCormick::new(g, a)),
+            Box::new(ReynoldsMcCormick::new(g as f32, a as f32)),
+        ));
+    }
     for k in [-0.8, 0.95] {
         v.push((
             format!("Schlick k={k}"),

@@ -4,7 +4,7 @@
 use nephele::stats::adaptive_simpson;
 use nephele_runtime::frame::dot;
 use nephele_runtime::phase::{
-    Draine, HenyeyGreenstein, Rayleigh, Schlick, TwoTermHg, VonMisesFisher,
+    Draine, HenyeyGreenstein, Rayleigh, ReynoldsMcCormick, Schlick, TwoTermHg, VonMisesFisher,
 };
 use nephele_runtime::presets::jendersie_deon;
 use nephele_runtime::PhaseFunction;
@@ -39,6 +39,19 @@ fn models() -> Vec<(String, Box<dyn PhaseFunction<f64>>)> {
         Box::new(Draine::cornette_shanks(0.8)),
     ));
     v.push(("Rayleigh".into(), Box::new(Rayleigh)));
+    for (g, a) in [
+        (0.5, 0.5),
+        (0.8, 1.0),
+        (-0.6, 2.5),
+        (0.3, 0.1),
+        (5e-5, 1.5),
+        (0.95, 0.3),
+    ] {
+        v.push((
+            format!("Reynolds-McCormick g={g} a={a}"),
+            Box::new(ReynoldsMcCormick::new(g, a)),
+        ));
+    }
     for k in [-0.9, -1e-4, 0.0, 0.5, 0.95] {
         v.push((format!("Schlick k={k}"), Box::new(Schlick::new(k))));
     }

@@ -6,7 +6,8 @@ use clap::{Args, ValueEnum};
 use nephele::io::{AtomicFiles, Npz};
 use nephele::mie::grid::angles_from_spec;
 use nephele_runtime::phase::{
-    Draine, HenyeyGreenstein, Rayleigh, Schlick, TabulatedTable, TwoTermHg, VonMisesFisher,
+    Draine, HenyeyGreenstein, Rayleigh, ReynoldsMcCormick, Schlick, TabulatedTable, TwoTermHg,
+    VonMisesFisher,
 };
 use nephele_runtime::presets::jendersie_deon;
 use nephele_runtime::PhaseFunction;
@@ -27,6 +28,8 @@ pub enum Model {
     CornetteShanks,
     /// Rayleigh (no parameter).
     Rayleigh,
+    /// Reynolds–McCormick (--g, --alpha > 0; α = 1/2 is HG).
+    ReynoldsMccormick,
     /// Schlick (--k).
     Schlick,
     /// von Mises–Fisher (--kappa).
@@ -122,6 +125,13 @@ impl PhaseArgs {
                 json!({ "g": g()? }),
             ),
             Model::Rayleigh => (Box::new(Rayleigh), json!({})),
+            Model::ReynoldsMccormick => {
+                let a = in_range(need(self.alpha, "alpha", m)?, "alpha", 0.0, 1e3, true)?;
+                (
+                    Box::new(ReynoldsMcCormick::new(g()?, a)),
+                    json!({ "g": g()?, "alpha": a }),
+                )
+            }
             Model::Schlick => {
                 let k = in_range(need(self.k, "k", m)?, "k", -1.0, 1.0, true)?;
                 (Box::new(Schlick::new(k)), json!({ "k": k }))

@@ -9,6 +9,7 @@ mod draine;
 mod hg;
 mod mixture;
 mod rayleigh;
+mod reynolds_mccormick;
 mod schlick;
 mod tabulated;
 mod vmf;
@@ -17,6 +18,7 @@ pub use draine::Draine;
 pub use hg::HenyeyGreenstein;
 pub use mixture::{HgDraine, TwoTermHg};
 pub use rayleigh::Rayleigh;
+pub use reynolds_mccormick::ReynoldsMcCormick;
 pub use schlick::Schlick;
 #[cfg(feature = "std")]
 pub use tabulated::TabulatedTable;
