@@ -4,7 +4,7 @@
 
 use nephele::stats::chi2::{chi2_sphere, Chi2Config};
 use nephele_runtime::phase::{
-    Draine, HenyeyGreenstein, Rayleigh, ReynoldsMcCormick, Schlick, TwoTermHg, VonMisesFisher,
+    Draine, HenyeyGreenstein, Rayleigh, ReynoldsMcCormick, Schlick, TwoTermHg, VonMisesFisher, Xlf,
 };
 use nephele_runtime::presets::jendersie_deon;
 use nephele_runtime::PhaseFunction;
@@ -40,6 +40,13 @@ fn cases() -> Vec<(
         ));
     }
     v.push(("Rayleigh".into(), Box::new(Rayleigh), Box::new(Rayleigh)));
+    for g in [-0.3, 0.05, 0.47] {
+        v.push((
+            format!("XLF g={g}"),
+            Box::new(Xlf::new(g).unwrap()),
+            Box::new(Xlf::new(g as f32).unwrap()),
+        ));
+    }
     for (g, a) in [(0.8, 1.0), (-0.6, 2.5), (0.97, 0.3)] {
         v.push((
             format!("Reynolds-McCormick g={g} a={a}"),

@@ -4,7 +4,7 @@
 use nephele::stats::adaptive_simpson;
 use nephele_runtime::frame::dot;
 use nephele_runtime::phase::{
-    Draine, HenyeyGreenstein, Rayleigh, ReynoldsMcCormick, Schlick, TwoTermHg, VonMisesFisher,
+    Draine, HenyeyGreenstein, Rayleigh, ReynoldsMcCormick, Schlick, TwoTermHg, VonMisesFisher, Xlf,
 };
 use nephele_runtime::presets::jendersie_deon;
 use nephele_runtime::PhaseFunction;
@@ -39,6 +39,9 @@ fn models() -> Vec<(String, Box<dyn PhaseFunction<f64>>)> {
         Box::new(Draine::cornette_shanks(0.8)),
     ));
     v.push(("Rayleigh".into(), Box::new(Rayleigh)));
+    for g in [-0.47, -0.1, 0.09, 1e-6, 0.2, 0.476955] {
+        v.push((format!("XLF g={g}"), Box::new(Xlf::new(g).unwrap())));
+    }
     for (g, a) in [
         (0.5, 0.5),
         (0.8, 1.0),
@@ -171,6 +174,28 @@ fn draine_f32_samples_have_cdf_error_below_1e_5() {
         "worst f32 Draine CDF error {:.2e} at g = {}, α = {}, ξ = {}",
         worst.0, worst.1, worst.2, worst.3
     );
+}
+
+#[test]
+fn xlf_is_non_negative_up_to_its_limit_and_refused_beyond() {
+    use nephele_runtime::phase::XLF_G_MAX;
+    for g in [XLF_G_MAX, -XLF_G_MAX] {
+        let p = Xlf::new(g).unwrap();
+        let min = (0..=2000)
+            .map(|i| p.eval(-1.0 + i as f64 / 1000.0))
+            .fold(f64::INFINITY, f64::min);
+        assert!(min >= 0.0 && min < 1e-4, "g = {g}: min p = {min}");
+    }
+    assert!(Xlf::new(0.48).is_none() && Xlf::new(-0.9).is_none() && Xlf::new(f64::NAN).is_none());
+    // The published form is not normalised: ∮ p̃ dΩ ≠ 1 (1.07 at g = 0.3).
+    let g: f64 = 0.3;
+    let raw = |mu: f64| {
+        (1.5 * (1.0 - g * g) / (2.0 + g * g) * (1.0 + mu * mu) / (1.0 + g * g - 2.0 * g * mu)
+            + g * mu)
+            / (4.0 * PI)
+    };
+    let total = adaptive_simpson(&|mu| 2.0 * PI * raw(mu), -1.0, 1.0, 1e-12);
+    assert!((total - 1.0).abs() > 0.01, "{total}");
 }
 
 #[test]

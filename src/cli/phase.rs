@@ -7,7 +7,7 @@ use nephele::io::{AtomicFiles, Npz};
 use nephele::mie::grid::angles_from_spec;
 use nephele_runtime::phase::{
     Draine, HenyeyGreenstein, Rayleigh, ReynoldsMcCormick, Schlick, TabulatedTable, TwoTermHg,
-    VonMisesFisher,
+    VonMisesFisher, Xlf, XLF_G_MAX,
 };
 use nephele_runtime::presets::jendersie_deon;
 use nephele_runtime::PhaseFunction;
@@ -34,6 +34,8 @@ pub enum Model {
     Schlick,
     /// von Mises–Fisher (--kappa).
     Vmf,
+    /// Xiao-Lei Fan's function, normalised (--g, |g| ≤ 0.476955 where it stays non-negative).
+    Xlf,
     /// w HG(g) + (1 − w) HG(g2) (--g, --g2, --w).
     TwoTermHg,
     /// Jendersie & d'Eon's HG + Draine blend, from --diameter or from --g, --g2 (g_D), --alpha, --w (w_D).
@@ -139,6 +141,13 @@ impl PhaseArgs {
             Model::Vmf => {
                 let k = in_range(need(self.kappa, "kappa", m)?, "kappa", 0.0, 1e7, false)?;
                 (Box::new(VonMisesFisher::new(k)), json!({ "kappa": k }))
+            }
+            Model::Xlf => {
+                let gv = g()?;
+                let xlf = Xlf::new(gv).with_context(|| {
+                    format!("--g must satisfy |g| ≤ {XLF_G_MAX} for xlf (it turns negative beyond), got {gv}")
+                })?;
+                (Box::new(xlf), json!({ "g": gv, "normalised": true }))
             }
             Model::TwoTermHg => {
                 let g2 = in_range(need(self.g2, "g2", m)?, "g2", -1.0, 1.0, true)?;

@@ -13,6 +13,7 @@ mod reynolds_mccormick;
 mod schlick;
 mod tabulated;
 mod vmf;
+mod xlf;
 
 pub use draine::Draine;
 pub use hg::HenyeyGreenstein;
@@ -24,6 +25,7 @@ pub use schlick::Schlick;
 pub use tabulated::TabulatedTable;
 pub use tabulated::{TableError, Tabulated};
 pub use vmf::VonMisesFisher;
+pub use xlf::{Xlf, XLF_G_MAX};
 
 use crate::frame::{direction_from_cosine, Vec3};
 use crate::real::Real;
