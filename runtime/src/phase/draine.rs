@@ -11,7 +11,7 @@
 //! cancellation (below) and F(μ) = ξ solved by Newton's method inside a shrinking bracket, to
 //! ~1e-14, whatever the output precision: an f32 sample is the exact root rounded once.
 
-use super::{Cosine, HenyeyGreenstein, PhaseFunction};
+use super::{invert_cdf, Cosine, HenyeyGreenstein, PhaseFunction};
 use crate::real::Real;
 
 /// Draine's phase function with asymmetry-like g ∈ (−1, 1) and α ≥ 0.
@@ -75,35 +75,16 @@ fn pdf_f64(g: f64, alpha: f64, mu: f64) -> f64 {
     HenyeyGreenstein::new(g).eval(mu) * (1.0 + alpha * mu * mu) / norm
 }
 
-/// μ with F(μ) = ξ: Newton steps on the exact CDF, kept inside a bracket that every step
-/// shrinks (bisection when Newton would leave it).
+/// μ with F(μ) = ξ (see [`invert_cdf`]).
 fn invert_cdf_f64(g: f64, alpha: f64, xi: f64) -> f64 {
-    let xi = xi.clamp(0.0, 1.0);
-    let (mut lo, mut hi) = (-1.0f64, 1.0f64);
     // Start from the HG sample: exact for α = 0 and close for moderate α.
-    let mut mu = HenyeyGreenstein::new(g).sample_mu(xi);
-    for _ in 0..100 {
-        let f = cdf_f64(g, alpha, mu) - xi;
-        if Real::abs(f) <= 1e-14 {
-            break;
-        }
-        if f > 0.0 {
-            hi = mu;
-        } else {
-            lo = mu;
-        }
-        let dp = 2.0 * core::f64::consts::PI * pdf_f64(g, alpha, mu);
-        let next = mu - f / dp;
-        mu = if next > lo && next < hi {
-            next
-        } else {
-            0.5 * (lo + hi)
-        };
-        if hi - lo < 1e-15 {
-            break;
-        }
-    }
-    mu
+    let start = HenyeyGreenstein::new(g).sample_mu(xi);
+    invert_cdf(
+        |mu| cdf_f64(g, alpha, mu),
+        |mu| pdf_f64(g, alpha, mu),
+        xi,
+        start,
+    )
 }
 
 impl<F: Real> PhaseFunction<F> for Draine<F> {

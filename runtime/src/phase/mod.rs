@@ -100,3 +100,37 @@ pub trait PhaseFunction<F: Real> {
 pub(crate) fn inv_four_pi<F: Real>() -> F {
     F::of(0.25) / F::PI
 }
+
+/// μ ∈ [−1, 1] with cdf(μ) = ξ: Newton steps (F′ = 2π p) from `start`, kept inside a bracket
+/// that every step shrinks (bisection when a step would leave it), to |F − ξ| ≤ 1e-14, in f64.
+pub(crate) fn invert_cdf(
+    cdf: impl Fn(f64) -> f64,
+    pdf: impl Fn(f64) -> f64,
+    xi: f64,
+    start: f64,
+) -> f64 {
+    let xi = xi.clamp(0.0, 1.0);
+    let (mut lo, mut hi) = (-1.0f64, 1.0f64);
+    let mut mu = start.clamp(-1.0, 1.0);
+    for _ in 0..100 {
+        let f = cdf(mu) - xi;
+        if Real::abs(f) <= 1e-14 {
+            break;
+        }
+        if f > 0.0 {
+            hi = mu;
+        } else {
+            lo = mu;
+        }
+        let next = mu - f / (2.0 * core::f64::consts::PI * pdf(mu));
+        mu = if next > lo && next < hi {
+            next
+        } else {
+            0.5 * (lo + hi)
+        };
+        if hi - lo < 1e-15 {
+            break;
+        }
+    }
+    mu
+}

@@ -14,7 +14,7 @@
 //! Sampling inverts the CDF by bracketed Newton in f64, as for Draine; the mean cosine is
 //! ⟨μ⟩ = [A K(g) + 2g/3] / (A I(g)) with K = ∫ μ(1 + μ²)/(a − bμ) dμ.
 
-use super::{Cosine, PhaseFunction};
+use super::{invert_cdf, Cosine, PhaseFunction};
 use crate::real::Real;
 
 /// Largest |g| for which the normalised XLF stays non-negative.
@@ -106,30 +106,13 @@ impl<F: Real> PhaseFunction<F> for Xlf<F> {
     }
 
     fn sample_cosine(&self, xi: F) -> Cosine<F> {
-        let xi = xi.f64().clamp(0.0, 1.0);
-        let (mut lo, mut hi) = (-1.0f64, 1.0f64);
-        let mut mu = 2.0 * xi - 1.0;
-        for _ in 0..100 {
-            let f = self.cdf_f64(mu) - xi;
-            if Real::abs(f) <= 1e-14 {
-                break;
-            }
-            if f > 0.0 {
-                hi = mu;
-            } else {
-                lo = mu;
-            }
-            let dp = 2.0 * core::f64::consts::PI * self.eval(F::of(mu)).f64();
-            let next = mu - f / dp;
-            mu = if next > lo && next < hi {
-                next
-            } else {
-                0.5 * (lo + hi)
-            };
-            if hi - lo < 1e-15 {
-                break;
-            }
-        }
+        let xi = xi.f64();
+        let mu = invert_cdf(
+            |mu| self.cdf_f64(mu),
+            |mu| self.eval(F::of(mu)).f64(),
+            xi,
+            2.0 * xi - 1.0,
+        );
         Cosine {
             mu: F::of(mu),
             one_minus_mu: F::of(1.0 - mu),
