@@ -374,18 +374,16 @@ impl MieJob {
         let (mut out, eff, work) =
             weighted_intensity(&particles, &rows, &basis, &|done| progress(done, n_p));
         let eff: Vec<(f64, f64)> = eff.iter().map(|e| (e.q_sca, e.g)).collect();
+        let integrals: Vec<RowIntegrals> = rows
+            .iter()
+            .map(|r| RowIntegrals::new(r, &particles, &eff, self.medium_index))
+            .collect();
         // Normalise each row by its analytic cross-section: Σ w π x² Q_sca (the k² cancels).
         let n_ang = mu.len();
-        for (r, row) in rows.iter().enumerate() {
-            let norm: f64 = row
-                .span
-                .particles()
-                .zip(&row.span.weights)
-                .map(|(i, w)| w * PI * particles[i].x.powi(2) * eff[i].0)
-                .sum();
+        for (r, ints) in integrals.iter().enumerate() {
             out[r * n_ang..(r + 1) * n_ang]
                 .iter_mut()
-                .for_each(|v| *v /= norm);
+                .for_each(|v| *v /= ints.norm);
         }
         let per_dist = self.wavelengths_nm.len() + RGB_WAVELENGTHS_NM.len();
         let tables = self
@@ -394,11 +392,12 @@ impl MieJob {
             .enumerate()
             .map(|(q, d)| {
                 let rs = q * per_dist..(q + 1) * per_dist;
-                let integrals: Vec<RowIntegrals> = rows[rs.clone()]
-                    .iter()
-                    .map(|r| RowIntegrals::new(r, &particles, &eff, self.medium_index))
-                    .collect();
-                self.assemble(*d, &out[rs.start * n_ang..rs.end * n_ang], &integrals, &mu)
+                self.assemble(
+                    *d,
+                    &out[rs.start * n_ang..rs.end * n_ang],
+                    &integrals[rs],
+                    &mu,
+                )
             })
             .collect::<Result<Vec<_>>>()?;
         Ok((
@@ -478,6 +477,8 @@ impl MieJob {
 
 /// Integral quantities of one weight row, from the Mie series (no angular quadrature).
 struct RowIntegrals {
+    /// Σ w π x² Q_sca with the row's own (unnormalised) weights: k² C_sca of the row.
+    norm: f64,
     g: f64,
     c_sca_um2: f64,
     q_sca: f64,
@@ -487,10 +488,11 @@ struct RowIntegrals {
 impl RowIntegrals {
     fn new(row: &Row, particles: &[Particle], eff: &[(f64, f64)], n_med: f64) -> Self {
         let total: f64 = row.span.weights.iter().sum();
-        let (mut area, mut vol, mut sca, mut gsca) = (0.0, 0.0, 0.0, 0.0);
+        let (mut area, mut vol, mut sca, mut gsca, mut norm) = (0.0, 0.0, 0.0, 0.0, 0.0);
         let to_r_um = row.lambda_nm * 1e-3 / (2.0 * PI * n_med); // r = x λ / (2π n_med)
-        for (i, w) in row.span.particles().zip(&row.span.weights) {
-            let w = w / total;
+        for (i, &w0) in row.span.particles().zip(&row.span.weights) {
+            norm += w0 * PI * particles[i].x.powi(2) * eff[i].0;
+            let w = w0 / total;
             let r = particles[i].x * to_r_um;
             let (q, g) = eff[i];
             area += w * PI * r * r;
@@ -499,6 +501,7 @@ impl RowIntegrals {
             gsca += w * q * PI * r * r * g;
         }
         Self {
+            norm,
             g: gsca / sca,
             c_sca_um2: sca,
             q_sca: sca / area,
