@@ -68,10 +68,26 @@ fn models<F: Real + 'static>(n: usize, prec: &str) {
     }
 }
 
+/// The same loops with the concrete type known (static dispatch, as a renderer would call).
+fn static_dispatch<P: PhaseFunction<f32>>(name: &str, p: &P, n: usize) {
+    time::<f32>(&format!("f32 {name} eval (static)"), n, |r| {
+        p.eval(2.0 * r.next::<f32>() - 1.0)
+    });
+    time::<f32>(&format!("f32 {name} sample (static)"), n, |r| {
+        p.sample_mu(r.next::<f32>())
+    });
+}
+
 fn main() {
     let n: usize = std::env::args()
         .nth(1)
         .map_or(10_000_000, |s| s.parse().unwrap());
+    static_dispatch("hg", &HenyeyGreenstein::new(0.85f32), n);
+    static_dispatch(
+        "hg+draine (d = 20 µm)",
+        &jendersie_deon(20.0).phase::<f32>(),
+        n,
+    );
     models::<f32>(n, "f32");
     models::<f64>(n, "f64");
     // The tabulated 50 µm Mie table: nephele's main-job output if present, else a synthetic

@@ -37,7 +37,11 @@ impl<F: Real> HenyeyGreenstein<F> {
 impl<F: Real> PhaseFunction<F> for HenyeyGreenstein<F> {
     #[inline]
     fn eval(&self, mu: F) -> F {
-        self.pdf_cosine(Cosine::from_mu(mu))
+        // From μ alone 1 − μ carries no extra digits: the plain, branch-free form.
+        let g = self.g;
+        let one = F::of(1.0);
+        let d = one + g * g - F::of(2.0) * g * mu;
+        inv_four_pi::<F>() * (one - g) * (one + g) / (d * d.sqrt())
     }
 
     /// With d = 1 + g² − 2gμ = (1 − g)² + 2g(1 − μ), exact near the forward peak.
