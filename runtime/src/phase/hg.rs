@@ -25,6 +25,15 @@ impl<F: Real> HenyeyGreenstein<F> {
         Self { g }
     }
 
+    /// p from d = 1 + g² − 2gμ, written by the caller as (1 − g)² + 2g(1 − μ) for g ≥ 0 and
+    /// (1 + g)² − 2g(1 + μ) for g < 0, so that the peak's small d keeps its digits (the branch
+    /// is on g, not μ: free in a loop).
+    #[inline]
+    fn from_d(&self, d: F) -> F {
+        let one = F::of(1.0);
+        inv_four_pi::<F>() * (one - self.g) * (one + self.g) / (d * d.sqrt())
+    }
+
     /// The CDF F(μ) = ∫_{−1}^{μ} 2π p dμ′.
     pub fn cdf(&self, mu: F) -> F {
         let g = self.g;
@@ -37,24 +46,23 @@ impl<F: Real> HenyeyGreenstein<F> {
 impl<F: Real> PhaseFunction<F> for HenyeyGreenstein<F> {
     #[inline]
     fn eval(&self, mu: F) -> F {
-        // From μ alone 1 − μ carries no extra digits: the plain, branch-free form.
-        let g = self.g;
-        let one = F::of(1.0);
-        let d = one + g * g - F::of(2.0) * g * mu;
-        inv_four_pi::<F>() * (one - g) * (one + g) / (d * d.sqrt())
+        let (one, two) = (F::of(1.0), F::of(2.0));
+        self.from_d(if self.g >= F::of(0.0) {
+            (one - self.g) * (one - self.g) + two * self.g * (one - mu)
+        } else {
+            (one + self.g) * (one + self.g) - two * self.g * (one + mu)
+        })
     }
 
-    /// With d = 1 + g² − 2gμ = (1 − g)² + 2g(1 − μ), exact near the forward peak.
+    /// As `eval`, with 1 − μ taken from the cosine (exact near the forward peak).
     #[inline]
     fn pdf_cosine(&self, c: Cosine<F>) -> F {
-        let g = self.g;
-        let one = F::of(1.0);
-        let d = if c.mu > F::of(0.0) {
-            (one - g) * (one - g) + F::of(2.0) * g * c.one_minus_mu
+        if self.g >= F::of(0.0) {
+            let one = F::of(1.0);
+            self.from_d((one - self.g) * (one - self.g) + F::of(2.0) * self.g * c.one_minus_mu)
         } else {
-            one + g * g - F::of(2.0) * g * c.mu
-        };
-        inv_four_pi::<F>() * (one - g) * (one + g) / (d * d.sqrt())
+            self.eval(c.mu)
+        }
     }
 
     #[inline]
