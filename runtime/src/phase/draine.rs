@@ -111,23 +111,35 @@ impl<F: Real> Draine<F> {
 /// which is H(v) − H(v₀) with its two factors of g divided out analytically (at g = 0 it gives
 /// M₂ = (1 + μ³)/6, the isotropic value).
 fn cdf_f64(g: f64, alpha: f64, mu: f64) -> f64 {
+    cdf_and_density(g, alpha, mu).0
+}
+
+/// (F(μ), F′(μ) = 2π p(μ)) sharing one square root; see `cdf_f64`'s notes for the algebra.
+#[inline]
+fn cdf_and_density(g: f64, alpha: f64, mu: f64) -> (f64, f64) {
     let norm = 1.0 + alpha * (1.0 + 2.0 * g * g) / 3.0;
-    let f_hg = HenyeyGreenstein::new(g).cdf(mu);
     let a = 1.0 + g * g;
-    let v = Real::sqrt((a - 2.0 * g * mu).max(0.0));
+    // d = 1 + g² − 2gμ written to keep its digits in the peak (as in HG).
+    let d = if g >= 0.0 {
+        (1.0 - g) * (1.0 - g) + 2.0 * g * (1.0 - mu)
+    } else {
+        (1.0 + g) * (1.0 + g) - 2.0 * g * (1.0 + mu)
+    };
+    let v = Real::sqrt(d.max(0.0));
     let v0 = 1.0 + g;
+    let f_hg = (1.0 - g) * (1.0 + mu) / (v * (v0 + v));
     let p = v * v0;
     let q = (g - 2.0 * mu) * (1.0 + g) / (v + 1.0) + 1.0 - g;
     let s = (g - 2.0 * mu - v + mu * (g - 2.0 * mu) / (v + 1.0)) / (v + 1.0);
     let t = 3.0 * (1.0 - mu) * q + s * (p - 3.0 * a);
     let m2 = (1.0 - g * g) * (1.0 + mu) * t / (12.0 * p * (v + v0));
-    (f_hg + alpha * m2) / norm
+    let density = 0.5 * (1.0 - g * g) / (d * v) * (1.0 + alpha * mu * mu) / norm;
+    ((f_hg + alpha * m2) / norm, density)
 }
 
 /// p(μ) of Draine(g, α) in f64.
 fn pdf_f64(g: f64, alpha: f64, mu: f64) -> f64 {
-    let norm = 1.0 + alpha * (1.0 + 2.0 * g * g) / 3.0;
-    HenyeyGreenstein::new(g).eval(mu) * (1.0 + alpha * mu * mu) / norm
+    cdf_and_density(g, alpha, mu).1 / (2.0 * core::f64::consts::PI)
 }
 
 /// μ with F(μ) = ξ (see [`invert_cdf`]).
@@ -136,8 +148,8 @@ fn invert_cdf_f64(g: f64, alpha: f64, xi: f64, guess: &InverseGuess) -> f64 {
     // One Newton step from the Hermite guess; a step below 1e-7 leaves an error of order
     // step² · p′/p — far below 1e-12 — so the result stands without another CDF evaluation.
     let mu0 = guess.at(xi);
-    let step =
-        (cdf_f64(g, alpha, mu0) - xi) / (2.0 * core::f64::consts::PI * pdf_f64(g, alpha, mu0));
+    let (f, density) = cdf_and_density(g, alpha, mu0);
+    let step = (f - xi) / density;
     let mu1 = mu0 - step;
     if step.abs() < 1e-7 && (-1.0..=1.0).contains(&mu1) {
         return mu1;
