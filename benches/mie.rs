@@ -3,10 +3,7 @@
 //! against miepython lives in scripts/bench_mie.py (same machine, same run).
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use nephele::mie::colour::Illuminant;
 use nephele::mie::distribution::SizeDistribution;
-use nephele::mie::grid::reference_angles_deg;
-use nephele::mie::index::RefractiveIndex;
 use nephele::mie::{MieCoefficients, MieJob, SizeRule};
 use num_complex::Complex64;
 use std::hint::black_box;
@@ -20,19 +17,12 @@ fn coefficients(c: &mut Criterion) {
 }
 
 fn product_rule_job(c: &mut Criterion) {
-    let job = MieJob {
-        distributions: vec![SizeDistribution::LogNormal {
-            d_median_um: 5.0,
-            sigma: 0.25,
-        }],
-        wavelengths_nm: (0..31).map(|i| 400.0 + 10.0 * i as f64).collect(),
-        rule: SizeRule::Product { sizes: 41 },
-        index: RefractiveIndex::Constant { n: 1.333, k: 0.0 },
-        medium_index: 1.0,
-        angles_deg: reference_angles_deg(),
-        illuminant: Illuminant::D65,
-        legendre: 64,
+    let dist = SizeDistribution::LogNormal {
+        d_median_um: 5.0,
+        sigma: 0.25,
     };
+    let wavelengths = (0..31).map(|i| 400.0 + 10.0 * i as f64).collect();
+    let job = MieJob::paper(dist, SizeRule::Product { sizes: 41 }, wavelengths);
     let mut group = c.benchmark_group("polydisperse");
     group.sample_size(10);
     group.bench_function("d=5 product 41x31, 2251 angles", |b| {

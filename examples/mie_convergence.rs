@@ -6,28 +6,21 @@
 //!
 //!     cargo run --release --example mie_convergence [-- D1,D2,… [REFINE]]
 
-use nephele::mie::colour::Illuminant;
 use nephele::mie::distribution::SizeDistribution;
-use nephele::mie::grid::reference_angles_deg;
-use nephele::mie::index::RefractiveIndex;
 use nephele::mie::{MieJob, SizeRule};
 
 fn job(d: f64, rule: SizeRule, n_lambda: usize) -> MieJob {
-    MieJob {
-        distributions: vec![SizeDistribution::LogNormal {
+    let wavelengths = (0..n_lambda)
+        .map(|i| 400.0 + 300.0 * i as f64 / (n_lambda - 1) as f64)
+        .collect();
+    MieJob::paper(
+        SizeDistribution::LogNormal {
             d_median_um: d,
             sigma: 0.25,
-        }],
-        wavelengths_nm: (0..n_lambda)
-            .map(|i| 400.0 + 300.0 * i as f64 / (n_lambda - 1) as f64)
-            .collect(),
+        },
         rule,
-        index: RefractiveIndex::Constant { n: 1.333, k: 0.0 },
-        medium_index: 1.0,
-        angles_deg: reference_angles_deg(),
-        illuminant: Illuminant::D65,
-        legendre: 8,
-    }
+        wavelengths,
+    )
 }
 
 fn worst(a: &[f64], b: &[f64], theta: &[f64]) -> (f64, f64) {

@@ -3,7 +3,7 @@
 
 use nephele::mie::colour::Illuminant;
 use nephele::mie::distribution::SizeDistribution;
-use nephele::mie::grid::{legendre_moments, reference_angles_deg, solid_angle_weights};
+use nephele::mie::grid::{legendre_moments, solid_angle_weights};
 use nephele::mie::index::RefractiveIndex;
 use nephele::mie::polydisperse::CONVERGED_DEFAULT;
 use nephele::mie::{MieCoefficients, MieJob, PhaseTable, SizeRule};
@@ -11,16 +11,9 @@ use num_complex::Complex64;
 use std::f64::consts::PI;
 
 fn job(dist: SizeDistribution, rule: SizeRule, wavelengths: &[f64]) -> MieJob {
-    MieJob {
-        distributions: vec![dist],
-        wavelengths_nm: wavelengths.to_vec(),
-        rule,
-        index: RefractiveIndex::Constant { n: 1.333, k: 0.0 },
-        medium_index: 1.0,
-        angles_deg: reference_angles_deg(),
-        illuminant: Illuminant::D65,
-        legendre: 16,
-    }
+    let mut j = MieJob::paper(dist, rule, wavelengths.to_vec());
+    j.legendre = 16;
+    j
 }
 
 fn grid(lo: f64, hi: f64, n: usize) -> Vec<f64> {

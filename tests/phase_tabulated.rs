@@ -2,10 +2,7 @@
 //! the table at its nodes, and chi-square of its sampler (f64 and f32) at 10 and 50 µm, where
 //! the forward peak is narrower than f32's resolution in μ.
 
-use nephele::mie::colour::Illuminant;
 use nephele::mie::distribution::SizeDistribution;
-use nephele::mie::grid::reference_angles_deg;
-use nephele::mie::index::RefractiveIndex;
 use nephele::mie::{MieJob, PhaseTable, SizeRule};
 use nephele::stats::adaptive_simpson;
 use nephele::stats::chi2::{chi2_sphere, Chi2Config};
@@ -14,19 +11,12 @@ use nephele_runtime::PhaseFunction;
 use std::f64::consts::PI;
 
 fn mie(d: f64) -> PhaseTable {
-    let job = MieJob {
-        distributions: vec![SizeDistribution::LogNormal {
-            d_median_um: d,
-            sigma: 0.25,
-        }],
-        wavelengths_nm: (0..16).map(|i| 400.0 + 20.0 * i as f64).collect(),
-        rule: SizeRule::Product { sizes: 41 },
-        index: RefractiveIndex::Constant { n: 1.333, k: 0.0 },
-        medium_index: 1.0,
-        angles_deg: reference_angles_deg(),
-        illuminant: Illuminant::D65,
-        legendre: 2,
+    let dist = SizeDistribution::LogNormal {
+        d_median_um: d,
+        sigma: 0.25,
     };
+    let wavelengths = (0..16).map(|i| 400.0 + 20.0 * i as f64).collect();
+    let job = MieJob::paper(dist, SizeRule::Product { sizes: 41 }, wavelengths);
     job.compute(&|_, _| {}).unwrap().0.remove(0)
 }
 

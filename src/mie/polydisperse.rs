@@ -175,6 +175,21 @@ fn converged_nodes(x_lo: f64, x_hi: f64, h: f64, dx: f64) -> (Vec<f64>, Vec<f64>
 }
 
 impl MieJob {
+    /// The paper's setting for one distribution: water n = 1.333 in air, the 2251-angle
+    /// reference grid, D65, 64 Legendre moments; `wavelengths_nm` and `rule` as given.
+    pub fn paper(distribution: SizeDistribution, rule: SizeRule, wavelengths_nm: Vec<f64>) -> Self {
+        Self {
+            distributions: vec![distribution],
+            wavelengths_nm,
+            rule,
+            index: RefractiveIndex::Constant { n: 1.333, k: 0.0 },
+            medium_index: 1.0,
+            angles_deg: grid::reference_angles_deg(),
+            illuminant: Illuminant::D65,
+            legendre: 64,
+        }
+    }
+
     /// Checks the job; errors name the offending input.
     pub fn validate(&self) -> Result<()> {
         if self.distributions.is_empty() {
