@@ -75,14 +75,20 @@ fn models<F: Real>(c: &mut Criterion, prec: &str) {
 fn all(c: &mut Criterion) {
     models::<f32>(c, "f32");
     models::<f64>(c, "f64");
-    // A strongly peaked table on the 2251-angle grid (HG g = 0.998, like the 50 µm HG lobe).
-    let theta = nephele::mie::grid::reference_angles_deg();
-    let phase: Vec<f64> = theta
-        .iter()
-        .map(|t| HenyeyGreenstein::new(0.998f64).eval(t.to_radians().cos()))
-        .collect();
-    let table = TabulatedTable::<f32>::from_phase(&theta, &phase).expect("valid table");
-    bench_model(c, "f32/tabulated-2251", &table.view());
+    // The 50 µm Mie table of stage 1 (product rule 41 × 16: the peak is what matters here).
+    let dist = nephele::mie::distribution::SizeDistribution::LogNormal {
+        d_median_um: 50.0,
+        sigma: 0.25,
+    };
+    let wavelengths = (0..16).map(|i| 400.0 + 20.0 * i as f64).collect();
+    let job = nephele::mie::MieJob::paper(
+        dist,
+        nephele::mie::SizeRule::Product { sizes: 41 },
+        wavelengths,
+    );
+    let mie = job.compute(&|_, _| {}).expect("Mie table").0.remove(0);
+    let table = TabulatedTable::<f32>::from_phase(&mie.theta_deg, &mie.phase).expect("valid table");
+    bench_model(c, "f32/tabulated-mie-50um", &table.view());
 }
 
 criterion_group!(benches, all);

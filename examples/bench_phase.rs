@@ -90,22 +90,25 @@ fn main() {
     );
     models::<f32>(n, "f32");
     models::<f64>(n, "f64");
-    // The tabulated 50 µm Mie table: nephele's main-job output if present, else a synthetic
-    // peaked table on the same grid.
-    let theta: Vec<f64> = nephele::mie::grid::reference_angles_deg();
-    let phase: Vec<f64> = theta
-        .iter()
-        .map(|t| {
-            let mu = t.to_radians().cos();
-            (1.0 - 0.998f64 * 0.998) / (1.0 + 0.998f64 * 0.998 - 2.0 * 0.998 * mu).powf(1.5)
-        })
-        .collect();
+    // The 50 µm Mie table of stage 1 (product rule 41 × 16: the peak is what matters here).
+    let dist = nephele::mie::distribution::SizeDistribution::LogNormal {
+        d_median_um: 50.0,
+        sigma: 0.25,
+    };
+    let wavelengths = (0..16).map(|i| 400.0 + 20.0 * i as f64).collect();
+    let job = nephele::mie::MieJob::paper(
+        dist,
+        nephele::mie::SizeRule::Product { sizes: 41 },
+        wavelengths,
+    );
+    let mie = job.compute(&|_, _| {}).unwrap().0.remove(0);
+    let (theta, phase) = (mie.theta_deg, mie.phase);
     let tab = TabulatedTable::<f32>::from_phase(&theta, &phase).unwrap();
     let view = tab.view();
-    time::<f32>("f32 tabulated (2251 nodes) sample", n, |r| {
+    time::<f32>("f32 tabulated 50 µm Mie sample", n, |r| {
         view.sample_mu(r.next::<f32>())
     });
-    time::<f32>("f32 tabulated (2251 nodes) eval", n, |r| {
+    time::<f32>("f32 tabulated 50 µm Mie eval", n, |r| {
         view.eval(2.0 * r.next::<f32>() - 1.0)
     });
     time::<f32>("(rng alone)", n, |r| r.next::<f32>());

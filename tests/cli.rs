@@ -168,3 +168,53 @@ fn sphere_prints_json() {
         .status
         .success());
 }
+
+#[test]
+fn phase_writes_tables_luts_and_csv_and_refuses_bad_models() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("p");
+    let o = nephele(&[
+        "phase",
+        "--model",
+        "hg-draine",
+        "--diameter",
+        "10",
+        "--samples",
+        "1000",
+        "--csv",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut files = files_in(&out);
+    files.sort();
+    assert_eq!(files, ["phase.csv", "phase.json", "phase.npz"]);
+    let mut npz = npyz::npz::NpzArchive::open(out.join("phase.npz")).unwrap();
+    for key in [
+        "theta_deg",
+        "mu",
+        "phase",
+        "lut_theta_deg",
+        "lut_phase",
+        "icdf_mu",
+        "samples_mu",
+    ] {
+        assert!(npz.by_name(key).unwrap().is_some(), "phase.npz lacks {key}");
+    }
+    for bad in [
+        vec!["--model", "gauss"],
+        vec!["--model", "hg"],
+        vec!["--model", "hg", "--g", "1.5"],
+        vec!["--model", "xlf", "--g", "0.9"],
+    ] {
+        let bad_out = dir.path().join("bad");
+        let mut args = vec!["phase", "--out", bad_out.to_str().unwrap()];
+        args.extend(bad.iter().copied());
+        let o = nephele(&args);
+        assert!(
+            !o.status.success() && String::from_utf8_lossy(&o.stderr).contains("error"),
+            "{bad:?}"
+        );
+        assert!(files_in(&bad_out).is_empty(), "{bad:?} left files");
+    }
+}

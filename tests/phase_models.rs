@@ -203,6 +203,10 @@ fn preset_matches_the_paper_and_jumps_where_documented() {
     // Paper eqs. 4–7 at d = 10 µm, evaluated by hand from the published constants.
     let p = jendersie_deon(10.0);
     let d: f64 = 10.0;
+    assert_eq!(
+        nephele_runtime::phase::HgDraine::<f64>::from_diameter(10.0),
+        p.phase::<f64>()
+    );
     assert!((p.g_hg - (-0.0990567 / (d - 1.67154)).exp()).abs() < 1e-15);
     assert!((p.alpha - (3.62489 - 8.29288 / (d + 5.52825)).exp()).abs() < 1e-12);
     let documented = [

@@ -14,6 +14,7 @@ use nephele_runtime::PhaseFunction;
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use serde_json::json;
+use std::io::Write;
 use std::path::PathBuf;
 
 /// The models of nephele-runtime.
@@ -89,6 +90,9 @@ pub struct PhaseArgs {
     /// Output directory.
     #[arg(long, default_value = "outputs/phase")]
     out: PathBuf,
+    /// Also write phase.csv (theta_deg, mu, phase) for spreadsheets.
+    #[arg(long)]
+    csv: bool,
 }
 
 fn need(v: Option<f64>, name: &str, model: Model) -> Result<f64> {
@@ -239,6 +243,15 @@ pub fn run(args: PhaseArgs) -> Result<()> {
         &args.out.join("phase.json"),
         &serde_json::to_vec_pretty(&sidecar)?,
     )?;
+    if args.csv {
+        set.write(&args.out.join("phase.csv"), |w| {
+            writeln!(w, "theta_deg,mu,phase")?;
+            for i in 0..mu.len() {
+                writeln!(w, "{},{:.17e},{:.17e}", theta_deg[i], mu[i], phase[i])?;
+            }
+            Ok(())
+        })?;
+    }
     set.commit()?;
     println!(
         "{:?}: mean cosine {:?} → {}",

@@ -19,6 +19,9 @@ pub struct Tabulated<'a, F> {
     theta: &'a [F],
     f: &'a [F],
     cdf: &'a [F],
+    /// Optional guide table: guide[k] is the interval holding ξ = k/len (so sampling scans
+    /// one or two intervals instead of bisecting); empty means bisection.
+    guide: &'a [u32],
 }
 
 /// Why a table was refused.
@@ -52,7 +55,12 @@ impl<'a, F: Real> Tabulated<'a, F> {
         {
             return Err(TableError::Values);
         }
-        Ok(Self { theta, f, cdf })
+        Ok(Self {
+            theta,
+            f,
+            cdf,
+            guide: &[],
+        })
     }
 
     /// f(θ) on interval `i`.
@@ -99,7 +107,17 @@ impl<F: Real> PhaseFunction<F> for Tabulated<'_, F> {
 
     fn sample_cosine(&self, xi: F) -> Cosine<F> {
         let n = self.cdf.len();
-        let i = self.cdf.partition_point(|c| *c <= xi).clamp(1, n - 1) - 1;
+        let i = if self.guide.is_empty() {
+            self.cdf.partition_point(|c| *c <= xi).clamp(1, n - 1) - 1
+        } else {
+            let g = self.guide.len();
+            let k = ((xi.f64() * g as f64) as usize).min(g - 1);
+            let mut i = self.guide[k] as usize;
+            while i + 2 < n && self.cdf[i + 1] <= xi {
+                i += 1;
+            }
+            i
+        };
         let h = self.theta[i + 1] - self.theta[i];
         let (a, s) = (self.f[i], (self.f[i + 1] - self.f[i]) / h);
         let r = (xi - self.cdf[i]).clamp_to(F::of(0.0), F::of(1.0));
@@ -131,6 +149,7 @@ pub struct TabulatedTable<F> {
     theta: Vec<F>,
     f: Vec<F>,
     cdf: Vec<F>,
+    guide: Vec<u32>,
 }
 
 #[cfg(feature = "std")]
@@ -172,10 +191,19 @@ impl<F: Real> TabulatedTable<F> {
         cdf.iter_mut().for_each(|v| *v /= total);
         let mut theta_f: Vec<F> = theta.iter().map(|&t| F::of(t)).collect();
         theta_f[n - 1] = F::PI;
+        let cdf: Vec<F> = cdf.iter().map(|&v| F::of(v)).collect();
+        // guide[k]: the last interval whose CDF start is ≤ k/n (one entry per interval).
+        let guide = (0..n - 1)
+            .map(|k| {
+                let xi = F::of(k as f64 / (n - 1) as f64);
+                (cdf.partition_point(|c| *c <= xi).clamp(1, n - 1) - 1) as u32
+            })
+            .collect();
         Ok(Self {
             theta: theta_f,
             f: f.iter().map(|&v| F::of(v)).collect(),
-            cdf: cdf.iter().map(|&v| F::of(v)).collect(),
+            cdf,
+            guide,
         })
     }
 
@@ -185,6 +213,7 @@ impl<F: Real> TabulatedTable<F> {
             theta: &self.theta,
             f: &self.f,
             cdf: &self.cdf,
+            guide: &self.guide,
         }
     }
 }
