@@ -3,7 +3,6 @@
 //! against miepython lives in scripts/bench_mie.py (same machine, same run).
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use nephele::mie::distribution::SizeDistribution;
 use nephele::mie::{MieCoefficients, MieJob, SizeRule};
 use num_complex::Complex64;
 use std::hint::black_box;
@@ -17,12 +16,7 @@ fn coefficients(c: &mut Criterion) {
 }
 
 fn product_rule_job(c: &mut Criterion) {
-    let dist = SizeDistribution::LogNormal {
-        d_median_um: 5.0,
-        sigma: 0.25,
-    };
-    let wavelengths = (0..31).map(|i| 400.0 + 10.0 * i as f64).collect();
-    let job = MieJob::paper(dist, SizeRule::Product { sizes: 41 }, wavelengths);
+    let job = MieJob::paper(5.0, SizeRule::Product { sizes: 41 }, 31);
     let mut group = c.benchmark_group("polydisperse");
     group.sample_size(10);
     group.bench_function("d=5 product 41x31, 2251 angles", |b| {

@@ -76,16 +76,7 @@ fn all(c: &mut Criterion) {
     models::<f32>(c, "f32");
     models::<f64>(c, "f64");
     // The 50 µm Mie table of stage 1 (product rule 41 × 16: the peak is what matters here).
-    let dist = nephele::mie::distribution::SizeDistribution::LogNormal {
-        d_median_um: 50.0,
-        sigma: 0.25,
-    };
-    let wavelengths = (0..16).map(|i| 400.0 + 20.0 * i as f64).collect();
-    let job = nephele::mie::MieJob::paper(
-        dist,
-        nephele::mie::SizeRule::Product { sizes: 41 },
-        wavelengths,
-    );
+    let job = nephele::mie::MieJob::paper(50.0, nephele::mie::SizeRule::Product { sizes: 41 }, 16);
     let mie = job.compute(&|_, _| {}).expect("Mie table").0.remove(0);
     let table = TabulatedTable::<f32>::from_phase(&mie.theta_deg, &mie.phase).expect("valid table");
     bench_model(c, "f32/tabulated-mie-50um", &table.view());

@@ -6,22 +6,7 @@
 //!
 //!     cargo run --release --example mie_convergence [-- D1,D2,… [REFINE]]
 
-use nephele::mie::distribution::SizeDistribution;
 use nephele::mie::{MieJob, SizeRule};
-
-fn job(d: f64, rule: SizeRule, n_lambda: usize) -> MieJob {
-    let wavelengths = (0..n_lambda)
-        .map(|i| 400.0 + 300.0 * i as f64 / (n_lambda - 1) as f64)
-        .collect();
-    MieJob::paper(
-        SizeDistribution::LogNormal {
-            d_median_um: d,
-            sigma: 0.25,
-        },
-        rule,
-        wavelengths,
-    )
-}
 
 fn worst(a: &[f64], b: &[f64], theta: &[f64]) -> (f64, f64) {
     a.iter()
@@ -76,14 +61,14 @@ fn main() {
     println!("|---|---|---|---|---|---|");
     for d in ds {
         let t0 = std::time::Instant::now();
-        let (r, _) = job(d, reference.0, reference.1)
+        let (r, _) = MieJob::paper(d, reference.0, reference.1)
             .compute(&|_, _| {})
             .unwrap();
         eprintln!("reference d = {d}: {:.1} s", t0.elapsed().as_secs_f64());
         let theta = &r[0].theta_deg;
         for (name, rule, nl) in candidates {
             let t0 = std::time::Instant::now();
-            let (c, _) = job(d, rule, nl).compute(&|_, _| {}).unwrap();
+            let (c, _) = MieJob::paper(d, rule, nl).compute(&|_, _| {}).unwrap();
             let s = t0.elapsed().as_secs_f64();
             let (w, at) = worst(&c[0].phase, &r[0].phase, theta);
             let n30 = theta.iter().position(|&t| t >= 30.0).unwrap();

@@ -12,18 +12,33 @@ fn nephele(args: &[&str]) -> Output {
 
 fn files_in(dir: &Path) -> Vec<String> {
     match std::fs::read_dir(dir) {
-        Ok(rd) => rd
-            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .collect(),
+        Ok(rd) => {
+            let mut names: Vec<String> = rd
+                .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                .collect();
+            names.sort();
+            names
+        }
         Err(_) => vec![],
     }
+}
+
+/// Runs nephele and asserts that it succeeded.
+fn succeeds(args: &[&str]) -> Output {
+    let o = nephele(args);
+    assert!(
+        o.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o
 }
 
 #[test]
 fn mie_writes_npz_json_csv_and_plot() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("t");
-    let o = nephele(&[
+    succeeds(&[
         "mie",
         "--diameter",
         "3",
@@ -35,9 +50,7 @@ fn mie_writes_npz_json_csv_and_plot() {
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let mut files = files_in(&out);
-    files.sort();
+    let files = files_in(&out);
     assert_eq!(files, ["phase.csv", "phase.json", "phase.npz", "phase.png"]);
     let json: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("phase.json")).unwrap()).unwrap();
@@ -136,7 +149,7 @@ fn config_file_and_flags_combine() {
     )
     .unwrap();
     let out = dir.path().join("o");
-    let o = nephele(&[
+    succeeds(&[
         "mie",
         "--config",
         cfg.to_str().unwrap(),
@@ -146,7 +159,6 @@ fn config_file_and_flags_combine() {
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let json: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("phase.json")).unwrap()).unwrap();
     let job = &json["config"]["job"];
@@ -158,10 +170,9 @@ fn config_file_and_flags_combine() {
 
 #[test]
 fn sphere_prints_json() {
-    let o = nephele(&[
+    let o = succeeds(&[
         "sphere", "--index", "1.5+0.1i", "--x", "10", "--angles", "0,140",
     ]);
-    assert!(o.status.success());
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert!((v["qext"].as_f64().unwrap() - 2.459791).abs() < 5e-7);
     assert!(!nephele(&["sphere", "--index", "1.5", "--x", "-1"])
@@ -173,7 +184,7 @@ fn sphere_prints_json() {
 fn phase_writes_tables_luts_and_csv_and_refuses_bad_models() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("p");
-    let o = nephele(&[
+    succeeds(&[
         "phase",
         "--model",
         "hg-draine",
@@ -185,9 +196,7 @@ fn phase_writes_tables_luts_and_csv_and_refuses_bad_models() {
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let mut files = files_in(&out);
-    files.sort();
+    let files = files_in(&out);
     assert_eq!(files, ["phase.csv", "phase.json", "phase.npz"]);
     let mut npz = npyz::npz::NpzArchive::open(out.join("phase.npz")).unwrap();
     for key in [

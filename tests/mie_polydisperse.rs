@@ -11,7 +11,9 @@ use num_complex::Complex64;
 use std::f64::consts::PI;
 
 fn job(dist: SizeDistribution, rule: SizeRule, wavelengths: &[f64]) -> MieJob {
-    let mut j = MieJob::paper(dist, rule, wavelengths.to_vec());
+    let mut j = MieJob::paper(1.0, rule, 2);
+    j.distributions = vec![dist];
+    j.wavelengths_nm = wavelengths.to_vec();
     j.legendre = 16;
     j
 }

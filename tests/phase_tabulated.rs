@@ -2,7 +2,6 @@
 //! the table at its nodes, and chi-square of its sampler (f64 and f32) at 10 and 50 µm, where
 //! the forward peak is narrower than f32's resolution in μ.
 
-use nephele::mie::distribution::SizeDistribution;
 use nephele::mie::{MieJob, PhaseTable, SizeRule};
 use nephele::stats::adaptive_simpson;
 use nephele::stats::chi2::{chi2_sphere, Chi2Config};
@@ -11,12 +10,7 @@ use nephele_runtime::PhaseFunction;
 use std::f64::consts::PI;
 
 fn mie(d: f64) -> PhaseTable {
-    let dist = SizeDistribution::LogNormal {
-        d_median_um: d,
-        sigma: 0.25,
-    };
-    let wavelengths = (0..16).map(|i| 400.0 + 20.0 * i as f64).collect();
-    let job = MieJob::paper(dist, SizeRule::Product { sizes: 41 }, wavelengths);
+    let job = MieJob::paper(d, SizeRule::Product { sizes: 41 }, 16);
     job.compute(&|_, _| {}).unwrap().0.remove(0)
 }
 

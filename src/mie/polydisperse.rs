@@ -175,12 +175,19 @@ fn converged_nodes(x_lo: f64, x_hi: f64, h: f64, dx: f64) -> (Vec<f64>, Vec<f64>
 }
 
 impl MieJob {
-    /// The paper's setting for one distribution: water n = 1.333 in air, the 2251-angle
-    /// reference grid, D65, 64 Legendre moments; `wavelengths_nm` and `rule` as given.
-    pub fn paper(distribution: SizeDistribution, rule: SizeRule, wavelengths_nm: Vec<f64>) -> Self {
+    /// The paper's setting at median diameter `d_median_um`: log-normal σ = 0.25, water
+    /// n = 1.333 in air, `n_wavelengths` uniform over 400–700 nm, the 2251-angle reference
+    /// grid, D65, 64 Legendre moments; `rule` as given.
+    pub fn paper(d_median_um: f64, rule: SizeRule, n_wavelengths: usize) -> Self {
+        let step = 300.0 / (n_wavelengths.max(2) - 1) as f64;
         Self {
-            distributions: vec![distribution],
-            wavelengths_nm,
+            distributions: vec![SizeDistribution::LogNormal {
+                d_median_um,
+                sigma: 0.25,
+            }],
+            wavelengths_nm: (0..n_wavelengths)
+                .map(|i| 400.0 + step * i as f64)
+                .collect(),
             rule,
             index: RefractiveIndex::Constant { n: 1.333, k: 0.0 },
             medium_index: 1.0,
