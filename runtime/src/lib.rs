@@ -1,7 +1,8 @@
 //! `nephele-runtime`: what a renderer links to evaluate nephele's artefacts.
 //!
-//! `no_std` unless the default `std` feature is on (then enable `libm` for the math, as with
-//! glam: `default-features = false, features = ["libm"]`); no other dependency; f32-first,
+//! `no_std` unless the default `std` feature is on; without `std` the math comes from `libm`
+//! when its feature is on (as with glam: `default-features = false, features = ["libm"]`), else
+//! from the small built-in [`soft_math`]; no other dependency; f32-first,
 //! every evaluator also in f64. It owns every evaluator of the project (phase models, table
 //! lookups, collector search) so that the generators in `nephele` and the renderers that ship
 //! its tables run the very same code.
@@ -10,13 +11,11 @@
 //! μ = cos θ (μ = 1 is forward); phase functions are normalised so that ∮ p dΩ = 1 (sr⁻¹).
 #![cfg_attr(not(feature = "std"), no_std)]
 
-#[cfg(not(any(feature = "std", feature = "libm")))]
-compile_error!("nephele-runtime needs either the `std` feature (default) or `libm` for its math");
-
 pub mod frame;
 pub mod phase;
 pub mod presets;
 pub mod real;
+pub mod soft_math;
 
 pub use phase::PhaseFunction;
 pub use real::Real;

@@ -1,6 +1,7 @@
 //! The floating-point types the runtime works in: `f32` (what renderers use) and `f64` (what
-//! the generators use), with the few math functions the evaluators need — from `std`, or from
-//! `libm` in `no_std` builds (as glam does).
+//! the generators use), with the few math functions the evaluators need. They come from `std`
+//! (default), else from the `libm` crate (feature `libm`, as glam does), else from the small
+//! built-in [`crate::soft_math`] so that a bare `--no-default-features` build still works.
 
 use core::ops::{Add, Div, Mul, Neg, Sub};
 
@@ -48,7 +49,7 @@ pub trait Real:
 }
 
 macro_rules! impl_real {
-    ($t:ident, $sqrt:ident, $exp:ident, $ln:ident, $sin:ident, $cos:ident, $cbrt:ident, $asin:ident) => {
+    ($t:ident, $sqrt:path, $exp:path, $ln:path, $sin_cos:path, $cbrt:path, $asin:path) => {
         impl Real for $t {
             const PI: Self = core::$t::consts::PI;
             #[inline]
@@ -59,65 +60,29 @@ macro_rules! impl_real {
             fn f64(self) -> f64 {
                 self as f64
             }
-            #[cfg(feature = "std")]
             #[inline]
             fn sqrt(self) -> Self {
-                $t::sqrt(self)
+                $sqrt(self)
             }
-            #[cfg(feature = "std")]
             #[inline]
             fn exp(self) -> Self {
-                $t::exp(self)
+                $exp(self)
             }
-            #[cfg(feature = "std")]
             #[inline]
             fn ln(self) -> Self {
-                $t::ln(self)
+                $ln(self)
             }
-            #[cfg(feature = "std")]
             #[inline]
             fn sin_cos(self) -> (Self, Self) {
-                $t::sin_cos(self)
+                $sin_cos(self)
             }
-            #[cfg(feature = "std")]
             #[inline]
             fn cbrt(self) -> Self {
-                $t::cbrt(self)
+                $cbrt(self)
             }
-            #[cfg(feature = "std")]
             #[inline]
             fn asin(self) -> Self {
-                $t::asin(self)
-            }
-            #[cfg(not(feature = "std"))]
-            #[inline]
-            fn asin(self) -> Self {
-                libm::$asin(self)
-            }
-            #[cfg(not(feature = "std"))]
-            #[inline]
-            fn cbrt(self) -> Self {
-                libm::$cbrt(self)
-            }
-            #[cfg(not(feature = "std"))]
-            #[inline]
-            fn sqrt(self) -> Self {
-                libm::$sqrt(self)
-            }
-            #[cfg(not(feature = "std"))]
-            #[inline]
-            fn exp(self) -> Self {
-                libm::$exp(self)
-            }
-            #[cfg(not(feature = "std"))]
-            #[inline]
-            fn ln(self) -> Self {
-                libm::$ln(self)
-            }
-            #[cfg(not(feature = "std"))]
-            #[inline]
-            fn sin_cos(self) -> (Self, Self) {
-                (libm::$sin(self), libm::$cos(self))
+                $asin(self)
             }
             #[inline]
             fn abs(self) -> Self {
@@ -131,5 +96,19 @@ macro_rules! impl_real {
     };
 }
 
-impl_real!(f32, sqrtf, expf, logf, sinf, cosf, cbrtf, asinf);
-impl_real!(f64, sqrt, exp, log, sin, cos, cbrt, asin);
+#[cfg(feature = "std")]
+impl_real!(f32, f32::sqrt, f32::exp, f32::ln, f32::sin_cos, f32::cbrt, f32::asin);
+#[cfg(feature = "std")]
+impl_real!(f64, f64::sqrt, f64::exp, f64::ln, f64::sin_cos, f64::cbrt, f64::asin);
+
+#[cfg(all(not(feature = "std"), feature = "libm"))]
+impl_real!(f32, libm::sqrtf, libm::expf, libm::logf, libm::sincosf, libm::cbrtf, libm::asinf);
+#[cfg(all(not(feature = "std"), feature = "libm"))]
+impl_real!(f64, libm::sqrt, libm::exp, libm::log, libm::sincos, libm::cbrt, libm::asin);
+
+#[cfg(not(any(feature = "std", feature = "libm")))]
+use crate::soft_math as soft;
+#[cfg(not(any(feature = "std", feature = "libm")))]
+impl_real!(f32, soft::sqrtf, soft::expf, soft::lnf, soft::sin_cosf, soft::cbrtf, soft::asinf);
+#[cfg(not(any(feature = "std", feature = "libm")))]
+impl_real!(f64, soft::sqrt, soft::exp, soft::ln, soft::sin_cos, soft::cbrt, soft::asin);
