@@ -3,6 +3,7 @@
 //! Stages are modules with one job each: [`mie`] (phase-function tables), [`io`] (atomic
 //! NumPy/JSON/CSV/PNG outputs). The evaluators renderers need live in `nephele-runtime`.
 
+pub mod fit;
 pub mod io;
 pub mod mie;
 pub mod stats;

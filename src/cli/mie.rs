@@ -24,7 +24,8 @@ pub struct MieArgs {
     #[serde(skip)]
     config: Option<PathBuf>,
     /// Median diameter in µm (mode diameter for gamma, the size for mono); a list "5,10,20"
-    /// or a range "5:50:46" computes several tables sharing one ln-x table. [default: 10]
+    /// or a range "5:50:46" (or log-spaced "log:0.1:5:30") computes several tables sharing one
+    /// ln-x table. [default: 10]
     #[arg(long, value_name = "UM", allow_hyphen_values = true)]
     #[serde(default, deserialize_with = "str_or_num")]
     diameter: Option<String>,
@@ -127,7 +128,7 @@ impl MieArgs {
     }
 
     /// The typed job these options describe.
-    fn job(&self) -> Result<MieJob> {
+    pub(super) fn job(&self) -> Result<MieJob> {
         let diameters = parse_list(self.diameter.as_deref().unwrap_or("10"), "--diameter")?;
         let sigma = self.sigma.unwrap_or(0.25);
         let distributions = diameters
@@ -234,6 +235,15 @@ fn parse_range(s: &str, what: &str) -> Result<Vec<f64>> {
 
 /// `10`, `5,10,20` or `5:50:46`.
 fn parse_list(s: &str, what: &str) -> Result<Vec<f64>> {
+    if let Some(range) = s.strip_prefix("log:") {
+        let v = parse_range(range, what)?;
+        if v[0] <= 0.0 {
+            bail!("{what}: 'log:{range}' needs MIN > 0");
+        }
+        let (lo, hi, n) = (v[0].ln(), v[v.len() - 1].ln(), v.len());
+        let step = if n > 1 { (hi - lo) / (n - 1) as f64 } else { 0.0 };
+        return Ok((0..n).map(|i| (lo + step * i as f64).exp()).collect());
+    }
     if s.contains(':') {
         return parse_range(s, what);
     }
@@ -257,21 +267,9 @@ pub fn run(args: MieArgs) -> Result<()> {
     compute_and_write(&job, &args, &out)
 }
 
-/// The main job: paper preset (n = 1.333, σ = 0.25, 400–700 nm) at 5, 10, 20, 50 µm.
-pub fn run_main_job() -> Result<()> {
-    let args = MieArgs {
-        diameter: Some("5,10,20,50".into()),
-        ..Default::default()
-    };
-    let job = args.job()?;
-    eprintln!(
-        "nephele {}: paper-preset Mie tables for d = 5, 10, 20, 50 µm → outputs/mie",
-        nephele::VERSION
-    );
-    compute_and_write(&job, &args, Path::new("outputs/mie"))
-}
 
-fn compute_and_write(job: &MieJob, args: &MieArgs, out: &Path) -> Result<()> {
+/// Computes a job with a progress bar: the tables, their statistics and the seconds taken.
+pub(super) fn compute_with_bar(job: &MieJob) -> Result<(Vec<PhaseTable>, JobStats, f64)> {
     let bar = ProgressBar::new(0).with_style(
         ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} spheres ({elapsed}, eta {eta})")
             .expect("static template"),
@@ -283,14 +281,19 @@ fn compute_and_write(job: &MieJob, args: &MieArgs, out: &Path) -> Result<()> {
         bar.set_position(done as u64);
     })?;
     bar.finish_and_clear();
-    let compute_s = t0.elapsed().as_secs_f64();
+    Ok((tables, stats, t0.elapsed().as_secs_f64()))
+}
+
+fn compute_and_write(job: &MieJob, args: &MieArgs, out: &Path) -> Result<()> {
+    let (tables, stats, compute_s) = compute_with_bar(job)?;
     let t1 = Instant::now();
     write_outputs(job, args, &tables, &stats, compute_s, out)?;
     report(&tables, &stats, compute_s, t1.elapsed().as_secs_f64(), out);
     Ok(())
 }
 
-fn write_outputs(
+/// Writes tables (phase.npz/json per table, phase.png) as `nephele mie` does.
+pub(super) fn write_outputs(
     job: &MieJob,
     args: &MieArgs,
     tables: &[PhaseTable],

@@ -1,6 +1,8 @@
-//! Command-line definitions. Without a subcommand, `nephele` runs the main job: the
-//! paper-preset Mie tables for d = 5, 10, 20 and 50 µm into outputs/.
+//! Command-line definitions. Without a subcommand, `nephele` runs the main job: the paper's
+//! setup (fit-configs/paper.json) — Mie tables for d = 5…50 µm and every model fitted to them —
+//! into outputs/.
 
+mod fit;
 mod mie;
 mod phase;
 mod sphere;
@@ -23,6 +25,8 @@ pub struct Cli {
 enum Command {
     /// Polydisperse, spectral Mie phase functions of water droplets (phase.npz + phase.json).
     Mie(mie::MieArgs),
+    /// Fit HG, two-term HG, Cornette–Shanks, Draine and HG+Draine to Mie tables; diameter curves.
+    Fit(fit::FitArgs),
     /// Tabulate and sample a phase model of nephele-runtime (or a Mie table); renderer LUTs.
     Phase(phase::PhaseArgs),
     /// One sphere: Q_ext, Q_sca, Q_back, g and S1, S2 at given angles, as JSON on stdout.
@@ -41,6 +45,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Mie(args)) => mie::run(args),
         Some(Command::Sphere(args)) => sphere::run(args),
         Some(Command::Phase(args)) => phase::run(args),
-        None => mie::run_main_job(),
+        Some(Command::Fit(args)) => fit::run(args),
+        None => fit::run_main_job(),
     }
 }

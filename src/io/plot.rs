@@ -15,6 +15,17 @@ fn register_font() {
     });
 }
 
+/// How a series is drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Style {
+    /// A solid line.
+    Line,
+    /// A dashed line.
+    Dashed,
+    /// Markers only.
+    Points,
+}
+
 /// One named curve.
 pub struct Curve<'a> {
     /// Legend label.
@@ -25,6 +36,34 @@ pub struct Curve<'a> {
     pub y: &'a [f64],
 }
 
+/// One named series with a style and a colour index (same index, same colour across panels).
+pub struct Series<'a> {
+    /// Legend label.
+    pub label: String,
+    /// Abscissae.
+    pub x: &'a [f64],
+    /// Ordinates (> 0 for a log axis; others are skipped there).
+    pub y: &'a [f64],
+    /// Line, dashes or markers.
+    pub style: Style,
+    /// Colour (index into the palette; 0 is black).
+    pub colour: usize,
+}
+
+/// One chart of a figure.
+pub struct Panel<'a> {
+    /// Caption.
+    pub title: String,
+    /// x axis label.
+    pub x_label: String,
+    /// y axis label.
+    pub y_label: String,
+    /// Logarithmic y axis.
+    pub log_y: bool,
+    /// The series.
+    pub series: Vec<Series<'a>>,
+}
+
 /// A line plot with a logarithmic y axis, written as a PNG at `path`.
 pub fn log_y_plot(
     path: &Path,
@@ -33,58 +72,138 @@ pub fn log_y_plot(
     y_label: &str,
     curves: &[Curve],
 ) -> Result<()> {
+    let series = curves
+        .iter()
+        .enumerate()
+        .map(|(i, c)| Series { label: c.label.clone(), x: c.x, y: c.y, style: Style::Line, colour: i + 1 })
+        .collect();
+    let panel = Panel {
+        title: title.to_string(),
+        x_label: x_label.to_string(),
+        y_label: y_label.to_string(),
+        log_y: true,
+        series,
+    };
+    panels_plot(path, (1200, 800), 1, &[panel])
+}
+
+fn colour_of(i: usize) -> RGBAColor {
+    if i == 0 {
+        BLACK.to_rgba()
+    } else {
+        Palette99::pick(i - 1).to_rgba()
+    }
+}
+
+/// Panels on a grid of `cols` columns, written as one PNG of `size` pixels at `path`.
+pub fn panels_plot(path: &Path, size: (u32, u32), cols: usize, panels: &[Panel]) -> Result<()> {
     register_font();
     let err = |e: &dyn std::fmt::Display| anyhow!("plot '{}': {e}", path.display());
-    let xs = curves.iter().flat_map(|c| c.x.iter().copied());
-    let (x0, x1) = xs.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-        (a.min(v), b.max(v))
-    });
-    let ys = curves
-        .iter()
-        .flat_map(|c| c.y.iter().copied())
-        .filter(|v| *v > 0.0);
-    let (y0, y1) = ys.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-        (a.min(v), b.max(v))
-    });
-    let root = BitMapBackend::new(path, (1200, 800)).into_drawing_area();
+    let root = BitMapBackend::new(path, size).into_drawing_area();
     root.fill(&WHITE).map_err(|e| err(&e))?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(title, ("sans-serif", 28))
-        .margin(20)
-        .x_label_area_size(50)
-        .y_label_area_size(90)
-        .build_cartesian_2d(x0..x1, (y0 * 0.8..y1 * 1.25).log_scale())
-        .map_err(|e| err(&e))?;
-    chart
-        .configure_mesh()
-        .x_desc(x_label)
-        .y_desc(y_label)
-        .label_style(("sans-serif", 18))
-        .y_label_formatter(&|v| format!("{v:.0e}"))
-        .draw()
-        .map_err(|e| err(&e))?;
-    for (i, c) in curves.iter().enumerate() {
-        let colour = Palette99::pick(i).to_rgba();
-        let points =
-            c.x.iter()
-                .zip(c.y)
-                .filter(|(_, y)| **y > 0.0)
-                .map(|(x, y)| (*x, *y));
+    let rows = panels.len().div_ceil(cols.max(1));
+    let areas = root.split_evenly((rows, cols.max(1)));
+    for (panel, area) in panels.iter().zip(areas.iter()) {
+        draw_panel(area, panel).map_err(|e| err(&e))?;
+    }
+    root.present().map_err(|e| err(&e))?;
+    Ok(())
+}
+
+/// The data range of a panel: (x0, x1, y0, y1), positive y only on a log axis.
+fn extent(panel: &Panel) -> (f64, f64, f64, f64) {
+    let mut r = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+    for s in &panel.series {
+        for (&x, &y) in s.x.iter().zip(s.y) {
+            if !(x.is_finite() && y.is_finite()) || (panel.log_y && y <= 0.0) {
+                continue;
+            }
+            r = (r.0.min(x), r.1.max(x), r.2.min(y), r.3.max(y));
+        }
+    }
+    if r.0 >= r.1 {
+        r = (r.0 - 1.0, r.0 + 1.0, r.2, r.3);
+    }
+    if r.2 >= r.3 {
+        r = (r.0, r.1, r.2 - 0.5 * r.2.abs().max(1e-3), r.3 + 0.5 * r.3.abs().max(1e-3));
+    }
+    r
+}
+
+fn draw_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    panel: &Panel,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let (x0, x1, y0, y1) = extent(panel);
+    let mut builder = ChartBuilder::on(area);
+    builder
+        .caption(&panel.title, ("sans-serif", 24))
+        .margin(15)
+        .x_label_area_size(45)
+        .y_label_area_size(80);
+    if panel.log_y {
+        let mut chart = builder.build_cartesian_2d(x0..x1, (y0 * 0.8..y1 * 1.25).log_scale())?;
         chart
-            .draw_series(LineSeries::new(points, colour.stroke_width(2)))
-            .map_err(|e| err(&e))?
-            .label(c.label.clone())
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(3))
-            });
+            .configure_mesh()
+            .x_desc(&panel.x_label)
+            .y_desc(&panel.y_label)
+            .label_style(("sans-serif", 16))
+            .y_label_formatter(&|v| format!("{v:.0e}"))
+            .draw()?;
+        draw_series(&mut chart, panel, true)
+    } else {
+        let pad = 0.05 * (y1 - y0);
+        let mut chart = builder.build_cartesian_2d(x0..x1, (y0 - pad)..(y1 + pad))?;
+        chart
+            .configure_mesh()
+            .x_desc(&panel.x_label)
+            .y_desc(&panel.y_label)
+            .label_style(("sans-serif", 16))
+            .draw()?;
+        draw_series(&mut chart, panel, false)
+    }
+}
+
+fn draw_series<'a, DB: DrawingBackend + 'a, X, Y>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
+    panel: &Panel,
+    log_y: bool,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>>
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    for s in &panel.series {
+        let colour = colour_of(s.colour);
+        let points: Vec<(f64, f64)> = s
+            .x
+            .iter()
+            .zip(s.y)
+            .filter(|(x, y)| x.is_finite() && y.is_finite() && (!log_y || **y > 0.0))
+            .map(|(x, y)| (*x, *y))
+            .collect();
+        let anno = match s.style {
+            Style::Line => chart.draw_series(LineSeries::new(points, colour.stroke_width(2)))?,
+            Style::Dashed => chart.draw_series(DashedLineSeries::new(
+                points,
+                8,
+                6,
+                colour.stroke_width(2),
+            ))?,
+            Style::Points => chart.draw_series(
+                points.into_iter().map(|p| Circle::new(p, 4, colour.filled())),
+            )?,
+        };
+        let style = s.style;
+        anno.label(s.label.clone()).legend(move |(x, y)| match style {
+            Style::Points => Circle::new((x + 10, y), 4, colour.filled()).into_dyn(),
+            _ => PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(3)).into_dyn(),
+        });
     }
     chart
         .configure_series_labels()
-        .label_font(("sans-serif", 20))
+        .label_font(("sans-serif", 16))
         .background_style(WHITE.mix(0.8))
         .border_style(BLACK)
         .draw()
-        .map_err(|e| err(&e))?;
-    root.present().map_err(|e| err(&e))?;
-    Ok(())
 }

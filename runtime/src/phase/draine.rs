@@ -164,10 +164,19 @@ fn invert_cdf_f64(g: f64, alpha: f64, xi: f64, guess: &InverseGuess) -> f64 {
     )
 }
 
+/// Draine's p(μ) (sr⁻¹) without building the sampler's table: for callers that only evaluate
+/// at ever-changing (g, α), such as the fits of stage 3.
+#[inline]
+pub fn phase_draine<F: Real>(g: F, alpha: F, mu: F) -> F {
+    let one = F::of(1.0);
+    let norm = one + alpha * (one + F::of(2.0) * g * g) / F::of(3.0);
+    HenyeyGreenstein::new(g).eval(mu) * (one + alpha * mu * mu) / norm
+}
+
 impl<F: Real> PhaseFunction<F> for Draine<F> {
     #[inline]
     fn eval(&self, mu: F) -> F {
-        HenyeyGreenstein::new(self.g).eval(mu) * (F::of(1.0) + self.alpha * mu * mu) / self.norm()
+        phase_draine(self.g, self.alpha, mu)
     }
 
     #[inline]

@@ -15,7 +15,7 @@ mod tabulated;
 mod vmf;
 mod xlf;
 
-pub use draine::Draine;
+pub use draine::{phase_draine, Draine};
 pub use hg::HenyeyGreenstein;
 pub use mixture::{HgDraine, TwoTermHg};
 pub use rayleigh::Rayleigh;

@@ -1,0 +1,269 @@
+//! `nephele fit`: Mie tables for a config's diameters, then every model fitted to them.
+
+use super::mie::{compute_with_bar, write_outputs as write_mie, MieArgs};
+use anyhow::{Context, Result};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use nephele::fit::{figures, run::FitReport, FitConfig, Loss, Model};
+use nephele::io::{AtomicFiles, Npz};
+use nephele::mie::PhaseTable;
+use serde::{Deserialize, Serialize};
+use serde_json::json;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Options of `nephele fit`.
+#[derive(Args, Debug, Clone)]
+pub struct FitArgs {
+    /// Fit config (JSON): {"description": …, "mie": {keys of `nephele mie --config`},
+    /// "fit": {"models", "loss", "alpha_max", "curves", "figure_diameters_um"}}; see
+    /// fit-configs/README.md.
+    #[arg(long, value_name = "FILE")]
+    config: PathBuf,
+    /// Output directory. [default: outputs/fit]
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// Do not draw the figures.
+    #[arg(long)]
+    no_plot: bool,
+}
+
+/// A fit config file.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FitFile {
+    /// Free text.
+    #[serde(default)]
+    description: String,
+    /// The Mie tables: the keys of `nephele mie --config` (diameter list/range, sigma, …).
+    mie: MieArgs,
+    /// What to fit.
+    #[serde(default)]
+    fit: FitConfig,
+}
+
+impl FitFile {
+    /// Reads and validates a config file.
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("cannot read config '{}'", path.display()))?;
+        let file: FitFile =
+            serde_json::from_str(&text).with_context(|| format!("config '{}'", path.display()))?;
+        file.fit.validate().with_context(|| format!("config '{}'", path.display()))?;
+        file.mie.job().with_context(|| format!("config '{}': mie", path.display()))?;
+        Ok(file)
+    }
+}
+
+/// Runs `nephele fit`.
+pub fn run(args: FitArgs) -> Result<()> {
+    let file = FitFile::load(&args.config)?;
+    let out = args.out.unwrap_or_else(|| PathBuf::from("outputs/fit"));
+    let mie_out = out.join("mie");
+    run_file(&file, &out, &mie_out, !args.no_plot)
+}
+
+/// The main job: Mie + fits of fit-configs/paper.json (embedded) into outputs/fit, and the Mie
+/// tables at the figure diameters (5, 10, 20, 50 µm) into outputs/mie.
+pub fn run_main_job() -> Result<()> {
+    let text = include_str!("../../fit-configs/paper.json");
+    let file: FitFile = serde_json::from_str(text).context("embedded fit-configs/paper.json")?;
+    file.fit.validate()?;
+    eprintln!(
+        "nephele {}: the paper's setup (water n = 1.333, σ = 0.25, 400–700 nm), d = 5…50 µm: \
+         Mie tables, then HG, two-term HG, Cornette–Shanks, Draine and HG+Draine fits \
+         → outputs/fit, outputs/mie",
+        nephele::VERSION
+    );
+    run_file(&file, Path::new("outputs/fit"), Path::new("outputs/mie"), true)
+}
+
+fn run_file(file: &FitFile, out: &Path, mie_out: &Path, plot: bool) -> Result<()> {
+    let job = file.mie.job()?;
+    let t0 = Instant::now();
+    let (tables, stats, mie_s) = compute_with_bar(&job)?;
+    let t1 = Instant::now();
+    let bar = ProgressBar::new(0).with_style(
+        ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} fits ({elapsed}, eta {eta})")
+            .expect("static template"),
+    );
+    bar.set_message("fit");
+    let (report, _targets) = nephele::fit::run(&file.fit, &tables, &|done, total| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    })?;
+    bar.finish_and_clear();
+    let fit_s = t1.elapsed().as_secs_f64();
+    let timings = json!({ "mie_s": mie_s, "fit_s": fit_s, "threads": rayon::current_num_threads() });
+    let t2 = Instant::now();
+    write_outputs(file, &tables, &report, timings, out, plot)?;
+    // The Mie tables of the figure diameters, as `nephele mie` writes them.
+    let mut shown: Vec<PhaseTable> = Vec::new();
+    for &d in &file.fit.figure_diameters_um {
+        let i = figures::nearest(&report, d);
+        if !shown.iter().any(|t| t.distribution == tables[i].distribution) {
+            shown.push(tables[i].clone());
+        }
+    }
+    write_mie(&job, &file.mie, &shown, &stats, mie_s, mie_out)?;
+    print_summary(&report, &file.fit, out);
+    eprintln!(
+        "Mie {mie_s:.1} s, fits {fit_s:.1} s, writing {:.1} s; total {:.1} s",
+        t2.elapsed().as_secs_f64(),
+        t0.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+fn loss_info(loss: Loss) -> serde_json::Value {
+    let (name, weight) = match loss {
+        Loss::Eas => ("E_AS", "|cos θ| sin θ"),
+        Loss::LogL2 => ("log L2", "sin θ"),
+    };
+    json!({
+        "name": name,
+        "definition": format!("∫₀^π {weight} (ln p(θ) − ln p_Mie(θ))² dθ"),
+        "grid": "the Mie tables' angles (default: 2251-angle reference grid, 0.01° to 5°, 0.1° beyond), trapezoid weights in θ (radians)",
+    })
+}
+
+/// The paper's main-branch curves in our notation (see src/fit/curves.rs), for fits.json.
+fn paper_curves() -> serde_json::Value {
+    json!({
+        "name": "jendersie_deon (nephele_runtime::presets)",
+        "source": "Jendersie & d'Eon 2023, eqs. 4–7 (5–50 µm); supplement branches below 5 µm",
+        "range_um": [5.0, 50.0],
+        "g_hg": {"expression": "exp(-0.0990567/(d - 1.67154))", "form": "exp_rational_no_offset", "coefficients": {"B": 0.0990567, "C": -1.67154}},
+        "g_d": {"expression": "exp(-2.20679/(d + 3.91029) - 0.428934)", "form": "exp_rational", "coefficients": {"A": -0.428934, "B": 2.20679, "C": 3.91029}},
+        "alpha": {"expression": "exp(3.62489 - 8.29288/(d + 5.52825))", "form": "exp_rational", "coefficients": {"A": 3.62489, "B": 8.29288, "C": 5.52825}},
+        "w_d": {"expression": "exp(-0.599085/(d - 0.641583) - 0.665888)", "form": "exp_rational", "coefficients": {"A": -0.665888, "B": 0.599085, "C": -0.641583}},
+    })
+}
+
+fn write_outputs(
+    file: &FitFile,
+    tables: &[PhaseTable],
+    report: &FitReport,
+    timings: serde_json::Value,
+    out: &Path,
+    plot: bool,
+) -> Result<()> {
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create '{}'", out.display()))?;
+    let mut set = AtomicFiles::new();
+    let mie: Vec<serde_json::Value> = tables
+        .iter()
+        .map(|t| json!({"d_um": t.distribution.nominal_diameter_um(), "g": t.g, "c_sca_um2": t.c_sca_um2}))
+        .collect();
+    let doc = json!({
+        "version": nephele::VERSION,
+        "git_commit": option_env!("NEPHELE_GIT_COMMIT"),
+        "config": file,
+        "loss": loss_info(file.fit.loss),
+        "timings": timings,
+        "mie": mie,
+        "paper": paper_curves(),
+        "result": report,
+    });
+    set.write(&out.join("fits.json"), |w| {
+        serde_json::to_writer_pretty(&mut *w, &doc)?;
+        Ok(())
+    })?;
+    set.write(&out.join("fits.npz"), |w| npz(report).write_to(w))?;
+    if plot {
+        let fig = |name: &str| out.join(name);
+        let loss_name = if file.fit.loss == Loss::Eas { "E_AS" } else { "log L2" };
+        set.write_via_path(&fig("phase_fits.png"), |p| {
+            figures::phase_figure(p, report, tables, &file.fit.figure_diameters_um)
+        })?;
+        set.write_via_path(&fig("loss_vs_diameter.png"), |p| figures::loss_figure(p, report, loss_name))?;
+        if report.fits[0].models.contains_key("hg_draine") {
+            set.write_via_path(&fig("hg_draine_params.png"), |p| figures::params_figure(p, report))?;
+        }
+    }
+    set.commit()
+}
+
+/// NumPy arrays: diameters, each model's loss and parameters, the paper's and our curves'.
+fn npz(report: &FitReport) -> Npz {
+    let n = report.diameters_um.len();
+    let mut z = Npz::new();
+    z.add("diameters_um", &[n], &report.diameters_um);
+    for m in Model::ALL {
+        if !report.fits[0].models.contains_key(m.name()) {
+            continue;
+        }
+        let k = m.param_names().len();
+        let loss: Vec<f64> = report.fits.iter().map(|f| f.models[m.name()].optimum.loss).collect();
+        let params: Vec<f64> =
+            report.fits.iter().flat_map(|f| f.models[m.name()].optimum.params.clone()).collect();
+        z.add(&format!("loss_{}", m.name()), &[n], &loss);
+        z.add(&format!("params_{}", m.name()), &[n, k], &params);
+    }
+    let paper: Vec<f64> = report.fits.iter().map(|f| f.paper.loss).collect();
+    z.add("loss_paper", &[n], &paper);
+    let mut curve = vec![f64::NAN; n];
+    let mut curve_params = vec![f64::NAN; 4 * n];
+    for b in &report.branches {
+        for p in &b.points {
+            if let Some(i) = report.diameters_um.iter().position(|d| *d == p.d_um) {
+                curve[i] = p.loss_curve;
+                for (k, name) in nephele::fit::run::HG_DRAINE_PARAMS.iter().enumerate() {
+                    curve_params[4 * i + k] = p.params_curve[*name];
+                }
+            }
+        }
+    }
+    z.add("loss_curve", &[n], &curve);
+    z.add("params_curve", &[n, 4], &curve_params);
+    z
+}
+
+fn print_summary(report: &FitReport, cfg: &FitConfig, out: &Path) {
+    let models = cfg.models().unwrap_or_default();
+    let mut head = format!("{:>8}", "d (µm)");
+    for m in &models {
+        head += &format!(" {:>12}", m.label());
+    }
+    head += &format!(" {:>12} {:>12}", "paper curve", "our curve");
+    println!("{head}");
+    for (i, f) in report.fits.iter().enumerate() {
+        let mut row = format!("{:>8.3}", f.d_um);
+        for m in &models {
+            let o = &f.models[m.name()].optimum;
+            row += &format!(" {:>11.4e}{}", o.loss, if o.converged { ' ' } else { '*' });
+        }
+        let ours = report
+            .branches
+            .iter()
+            .flat_map(|b| b.points.iter())
+            .find(|p| p.d_um == report.diameters_um[i])
+            .map_or("-".to_string(), |p| format!("{:.4e}", p.loss_curve));
+        row += &format!(" {:>12.4e} {:>12}", f.paper.loss, ours);
+        println!("{row}");
+    }
+    let not_converged: usize = report
+        .fits
+        .iter()
+        .flat_map(|f| f.models.values())
+        .filter(|m| !m.optimum.converged)
+        .count();
+    println!(
+        "loss per model at its per-diameter optimum ({} marked * did not meet the convergence test); \
+         warm-start sweeps: {}, optima improved by them: {}",
+        not_converged, report.sweeps, report.improved_by_warm_starts
+    );
+    for b in &report.branches {
+        let worst = b.points.iter().map(|p| p.extra_loss_relative).fold(0.0, f64::max);
+        println!(
+            "curves {:?} µm: loss ≤ the paper's curves at {}/{} diameters; largest extra loss over the optimum {:.1}%",
+            b.range_um,
+            b.curve_beats_paper[0],
+            b.curve_beats_paper[1],
+            100.0 * worst
+        );
+        for (name, c) in &b.curves {
+            println!("  {name:>6}(d) = {}", c.expression);
+        }
+    }
+    println!("wrote {}/fits.json, fits.npz and figures", out.display());
+}

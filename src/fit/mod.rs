@@ -1,0 +1,22 @@
+//! Stage 3: fitting analytic phase functions to Mie (spec 30).
+//!
+//! - [`loss`]: E_AS (Jendersie & d'Eon eq. 1) as a grid-independent integral, with its gradient.
+//! - [`model`]: the candidate models (HG, two-term HG, Cornette–Shanks, Draine, HG+Draine):
+//!   ln p and ∂ ln p/∂θ in closed form, bounds as smooth maps.
+//! - [`optimize`]: coarse-grid start + L-BFGS (argmin) in unconstrained variables.
+//! - [`curves`]: HG+Draine parameters as functions of the diameter.
+//! - [`run`]: a whole config — per-diameter fits, warm-start sweeps, curves, the paper beside.
+//! - [`figures`], [`config`].
+
+pub mod config;
+pub mod curves;
+pub mod figures;
+pub mod loss;
+pub mod model;
+pub mod optimize;
+pub mod run;
+
+pub use config::FitConfig;
+pub use loss::{Loss, Target};
+pub use model::Model;
+pub use run::{run, FitReport};

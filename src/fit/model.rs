@@ -1,0 +1,335 @@
+//! The candidate analytic models of stage 3, as functions of a parameter vector θ: ln p(μ; θ)
+//! and its gradient ∂ ln p/∂θ in closed form, bounds and the smooth maps that enforce them.
+//!
+//! Values come from the runtime's evaluators (`HenyeyGreenstein::eval`, `phase_draine`); only
+//! the derivatives are written here. With t = 1 + g² − 2gμ and N = 1 + α(1 + 2g²)/3:
+//!
+//!   ∂ ln HG/∂g = −2g/(1 − g²) − 3(g − μ)/t,
+//!   ∂ ln D/∂g  = ∂ ln HG/∂g − 4αg/(3N),      ∂ ln D/∂α = μ²/(1 + αμ²) − (1 + 2g²)/(3N),
+//!
+//! and for a blend p = (1 − w) a + w b: ∂ ln p/∂θ_a = (1 − w) a ∂ ln a/∂θ_a / p,
+//! ∂ ln p/∂θ_b = w b ∂ ln b/∂θ_b / p, ∂ ln p/∂w = (b − a)/p.
+
+use nephele_runtime::phase::{phase_draine, Draine, HenyeyGreenstein, HgDraine, TwoTermHg};
+use nephele_runtime::PhaseFunction;
+use serde::{Deserialize, Serialize};
+
+/// A model fitted to Mie.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Model {
+    /// Henyey–Greenstein: θ = [g].
+    Hg,
+    /// w HG(g₁) + (1 − w) HG(g₂): θ = [g1, g2, w].
+    TwoTermHg,
+    /// Cornette–Shanks (Draine with α = 1): θ = [g].
+    CornetteShanks,
+    /// Draine: θ = [g, alpha].
+    Draine,
+    /// (1 − w_D) HG(g_HG) + w_D Draine(g_D, α): θ = [g_hg, g_d, alpha, w_d].
+    HgDraine,
+}
+
+/// Where a parameter lives, and the smooth map from an unconstrained u onto it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Bound {
+    /// (−1, 1) by θ = tanh u.
+    Symmetric,
+    /// (lo, hi) by θ = lo + (hi − lo)/(1 + e^{−u}).
+    Interval(f64, f64),
+    /// Unbounded: θ = u.
+    Free,
+}
+
+impl Bound {
+    /// θ(u).
+    pub fn to_param(self, u: f64) -> f64 {
+        match self {
+            Bound::Symmetric => u.tanh(),
+            Bound::Interval(lo, hi) => lo + (hi - lo) / (1.0 + (-u).exp()),
+            Bound::Free => u,
+        }
+    }
+
+    /// dθ/du.
+    pub fn slope(self, u: f64) -> f64 {
+        match self {
+            Bound::Symmetric => 1.0 - u.tanh().powi(2),
+            Bound::Interval(lo, hi) => {
+                let s = 1.0 / (1.0 + (-u).exp());
+                (hi - lo) * s * (1.0 - s)
+            }
+            Bound::Free => 1.0,
+        }
+    }
+
+    /// u(θ), for θ strictly inside the bound (clamped 1e-12 inside otherwise).
+    pub fn to_free(self, theta: f64) -> f64 {
+        match self {
+            Bound::Symmetric => theta.clamp(-1.0 + 1e-12, 1.0 - 1e-12).atanh(),
+            Bound::Interval(lo, hi) => {
+                let s = ((theta - lo) / (hi - lo)).clamp(1e-12, 1.0 - 1e-12);
+                (s / (1.0 - s)).ln()
+            }
+            Bound::Free => theta,
+        }
+    }
+
+    /// θ moved strictly inside the bound (by 1e-9 of its width).
+    pub fn clamp(self, theta: f64) -> f64 {
+        let (lo, hi) = match self {
+            Bound::Symmetric => (-1.0, 1.0),
+            Bound::Interval(lo, hi) => (lo, hi),
+            Bound::Free => return theta,
+        };
+        let eps = 1e-9 * (hi - lo);
+        theta.clamp(lo + eps, hi - eps)
+    }
+}
+
+impl Model {
+    /// Every model, in the order of reports.
+    pub const ALL: [Model; 5] = [
+        Model::Hg,
+        Model::TwoTermHg,
+        Model::CornetteShanks,
+        Model::Draine,
+        Model::HgDraine,
+    ];
+
+    /// The config/report name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Model::Hg => "hg",
+            Model::TwoTermHg => "two_term_hg",
+            Model::CornetteShanks => "cornette_shanks",
+            Model::Draine => "draine",
+            Model::HgDraine => "hg_draine",
+        }
+    }
+
+    /// A label for figures.
+    pub fn label(self) -> &'static str {
+        match self {
+            Model::Hg => "HG",
+            Model::TwoTermHg => "two-term HG",
+            Model::CornetteShanks => "Cornette-Shanks",
+            Model::Draine => "Draine",
+            Model::HgDraine => "HG+Draine",
+        }
+    }
+
+    /// Parses a config name; the error lists the valid ones.
+    pub fn from_name(name: &str) -> anyhow::Result<Model> {
+        Model::ALL
+            .into_iter()
+            .find(|m| m.name() == name)
+            .ok_or_else(|| {
+                let valid: Vec<&str> = Model::ALL.iter().map(|m| m.name()).collect();
+                anyhow::anyhow!("unknown model `{name}` (valid: {})", valid.join(", "))
+            })
+    }
+
+    /// The names of θ's components.
+    pub fn param_names(self) -> &'static [&'static str] {
+        match self {
+            Model::Hg | Model::CornetteShanks => &["g"],
+            Model::TwoTermHg => &["g1", "g2", "w"],
+            Model::Draine => &["g", "alpha"],
+            Model::HgDraine => &["g_hg", "g_d", "alpha", "w_d"],
+        }
+    }
+
+    /// The bounds of θ; α ∈ (0, `alpha_max`).
+    pub fn bounds(self, alpha_max: f64) -> Vec<Bound> {
+        let alpha = Bound::Interval(0.0, alpha_max);
+        let w = Bound::Interval(0.0, 1.0);
+        match self {
+            Model::Hg | Model::CornetteShanks => vec![Bound::Symmetric],
+            Model::TwoTermHg => vec![Bound::Symmetric, Bound::Symmetric, w],
+            Model::Draine => vec![Bound::Symmetric, alpha],
+            Model::HgDraine => vec![Bound::Symmetric, Bound::Symmetric, alpha, w],
+        }
+    }
+
+    /// A coarse grid of θ covering droplet-like shapes, the global start of the fits.
+    pub fn coarse_grid(self, alpha_max: f64) -> Vec<Vec<f64>> {
+        let gs = |lo: f64, hi: f64, n: usize| -> Vec<f64> {
+            (0..n).map(|i| lo + (hi - lo) * i as f64 / (n - 1) as f64).collect()
+        };
+        let alphas: Vec<f64> = [0.01, 0.3, 1.0, 3.0, 10.0, 30.0, 100.0, 250.0]
+            .into_iter()
+            .map(|a: f64| a.min(0.98 * alpha_max))
+            .collect();
+        let forward = [0.5, 0.7, 0.8, 0.88, 0.93, 0.96, 0.98, 0.99, 0.995];
+        let mut grid = Vec::new();
+        match self {
+            Model::Hg | Model::CornetteShanks => {
+                grid.extend(gs(-0.9, 0.99, 64).into_iter().map(|g| vec![g]))
+            }
+            Model::TwoTermHg => {
+                for &g1 in &forward {
+                    for g2 in gs(-0.8, 0.6, 8) {
+                        for w in gs(0.3, 0.97, 7) {
+                            grid.push(vec![g1, g2, w]);
+                        }
+                    }
+                }
+            }
+            Model::Draine => {
+                for g in gs(-0.8, 0.99, 24) {
+                    for &a in &alphas {
+                        grid.push(vec![g, a]);
+                    }
+                }
+            }
+            Model::HgDraine => {
+                for &g_hg in &forward {
+                    for g_d in gs(-0.4, 0.9, 8) {
+                        for &a in &alphas {
+                            for w in [0.05, 0.15, 0.3, 0.45, 0.6, 0.8] {
+                                grid.push(vec![g_hg, g_d, a, w]);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        grid
+    }
+
+    /// ln p(μ; θ), writing ∂ ln p/∂θ into `grad` (θ.len() entries).
+    #[inline]
+    pub fn ln_phase_grad(self, theta: &[f64], mu: f64, grad: &mut [f64]) -> f64 {
+        match self {
+            Model::Hg => {
+                let (p, dg) = hg_lobe(theta[0], mu);
+                grad[0] = dg;
+                p.ln()
+            }
+            Model::CornetteShanks => {
+                let (p, dg, _) = draine_lobe(theta[0], 1.0, mu);
+                grad[0] = dg;
+                p.ln()
+            }
+            Model::Draine => {
+                let (p, dg, da) = draine_lobe(theta[0], theta[1], mu);
+                grad[0] = dg;
+                grad[1] = da;
+                p.ln()
+            }
+            Model::TwoTermHg => {
+                // p = w HG(g1) + (1 − w) HG(g2)
+                let w = theta[2];
+                let (a, da) = hg_lobe(theta[0], mu);
+                let (b, db) = hg_lobe(theta[1], mu);
+                let p = w * a + (1.0 - w) * b;
+                grad[0] = w * a * da / p;
+                grad[1] = (1.0 - w) * b * db / p;
+                grad[2] = (a - b) / p;
+                p.ln()
+            }
+            Model::HgDraine => {
+                let w = theta[3];
+                let (a, da) = hg_lobe(theta[0], mu);
+                let (b, dbg, dba) = draine_lobe(theta[1], theta[2], mu);
+                let p = (1.0 - w) * a + w * b;
+                grad[0] = (1.0 - w) * a * da / p;
+                grad[1] = w * b * dbg / p;
+                grad[2] = w * b * dba / p;
+                grad[3] = (b - a) / p;
+                p.ln()
+            }
+        }
+    }
+
+    /// The runtime's evaluator for θ (for figures and the sampler).
+    pub fn phase(self, theta: &[f64]) -> Box<dyn PhaseFunction<f64> + Send + Sync> {
+        match self {
+            Model::Hg => Box::new(HenyeyGreenstein::new(theta[0])),
+            Model::CornetteShanks => Box::new(Draine::cornette_shanks(theta[0])),
+            Model::Draine => Box::new(Draine::new(theta[0], theta[1])),
+            Model::TwoTermHg => Box::new(TwoTermHg::two_term(theta[0], theta[1], theta[2])),
+            Model::HgDraine => {
+                Box::new(HgDraine::hg_draine(theta[0], theta[1], theta[2], theta[3]))
+            }
+        }
+    }
+}
+
+/// HG(g, μ) and ∂ ln HG/∂g.
+#[inline]
+fn hg_lobe(g: f64, mu: f64) -> (f64, f64) {
+    let p = HenyeyGreenstein::new(g).eval(mu);
+    // t = 1 + g² − 2gμ, written to keep its digits in the peak (as the runtime does).
+    let t = if g >= 0.0 {
+        (1.0 - g) * (1.0 - g) + 2.0 * g * (1.0 - mu)
+    } else {
+        (1.0 + g) * (1.0 + g) - 2.0 * g * (1.0 + mu)
+    };
+    (p, -2.0 * g / ((1.0 - g) * (1.0 + g)) - 3.0 * (g - mu) / t)
+}
+
+/// Draine(g, α, μ), ∂ ln D/∂g and ∂ ln D/∂α.
+#[inline]
+fn draine_lobe(g: f64, alpha: f64, mu: f64) -> (f64, f64, f64) {
+    let p = phase_draine(g, alpha, mu);
+    let (_, dg_hg) = hg_lobe(g, mu);
+    let norm = 1.0 + alpha * (1.0 + 2.0 * g * g) / 3.0;
+    let q = 1.0 + alpha * mu * mu;
+    (
+        p,
+        dg_hg - 4.0 * alpha * g / (3.0 * norm),
+        mu * mu / q - (1.0 + 2.0 * g * g) / (3.0 * norm),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gradients_match_central_differences() {
+        let cases: [(Model, Vec<f64>); 5] = [
+            (Model::Hg, vec![0.83]),
+            (Model::CornetteShanks, vec![-0.4]),
+            (Model::Draine, vec![0.6, 17.0]),
+            (Model::TwoTermHg, vec![0.9, -0.3, 0.8]),
+            (Model::HgDraine, vec![0.97, 0.5, 18.0, 0.44]),
+        ];
+        for (m, theta) in cases {
+            for mu in [-1.0, -0.3, 0.0, 0.5, 0.99, 1.0] {
+                let mut grad = vec![0.0; theta.len()];
+                let mut scratch = grad.clone();
+                m.ln_phase_grad(&theta, mu, &mut grad);
+                for k in 0..theta.len() {
+                    let h = 1e-6 * theta[k].abs().max(1e-3);
+                    let (mut tp, mut tm) = (theta.clone(), theta.clone());
+                    tp[k] += h;
+                    tm[k] -= h;
+                    let fd = (m.ln_phase_grad(&tp, mu, &mut scratch)
+                        - m.ln_phase_grad(&tm, mu, &mut scratch))
+                        / (2.0 * h);
+                    assert!(
+                        (fd - grad[k]).abs() <= 1e-6 * fd.abs().max(1.0),
+                        "{m:?} θ{k} at μ = {mu}: analytic {} vs difference {fd}",
+                        grad[k]
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn bounds_round_trip() {
+        for b in [Bound::Symmetric, Bound::Interval(0.0, 250.0), Bound::Interval(0.0, 1.0)] {
+            for u in [-5.0, -0.3, 0.0, 2.0, 7.0] {
+                let t = b.to_param(u);
+                assert!((b.to_free(t) - u).abs() < 1e-8, "{b:?} u = {u}");
+                let h = 1e-6;
+                let fd = (b.to_param(u + h) - b.to_param(u - h)) / (2.0 * h);
+                assert!((fd - b.slope(u)).abs() < 1e-7 * fd.abs().max(1.0));
+            }
+        }
+    }
+}
