@@ -227,3 +227,84 @@ fn phase_writes_tables_luts_and_csv_and_refuses_bad_models() {
         assert!(files_in(&bad_out).is_empty(), "{bad:?} left files");
     }
 }
+
+#[test]
+fn fit_quick_config_writes_json_npz_and_figures() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("fit");
+    let o = succeeds(&[
+        "fit",
+        "--config",
+        concat!(env!("CARGO_MANIFEST_DIR"), "/fit-configs/quick.json"),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        files_in(&out),
+        [
+            "fits.json",
+            "fits.npz",
+            "hg_draine_params.png",
+            "loss_vs_diameter.png",
+            "mie",
+            "phase_fits.png"
+        ]
+    );
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("fits.json")).unwrap()).unwrap();
+    let fits = doc["result"]["fits"].as_array().unwrap();
+    assert_eq!(fits.len(), 6);
+    for f in fits {
+        let blend = &f["models"]["hg_draine"]["optimum"];
+        let hg = &f["models"]["hg"]["optimum"];
+        // A 4-parameter blend that contains HG cannot fit worse than HG alone.
+        assert!(blend["loss"].as_f64().unwrap() <= hg["loss"].as_f64().unwrap());
+        assert!(blend["evaluations"].as_u64().unwrap() > 0);
+        assert!(blend["grad_norm"].as_f64().unwrap().is_finite());
+        assert!(f["paper"]["loss"].as_f64().unwrap() >= blend["loss"].as_f64().unwrap());
+    }
+    assert!(doc["result"]["branches"][0]["curves"]["g_hg"]["expression"].is_string());
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("paper curve"), "{stdout}");
+}
+
+#[test]
+fn bad_fit_configs_are_one_error_line_and_no_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let mie = r#""mie": {"diameter": "5,10", "wavelengths": "400:700:4"}"#;
+    let cases = [
+        (format!(r#"{{{mie}, "fit": {{"modles": ["hg"]}}}}"#), "unknown field"),
+        (format!(r#"{{{mie}, "fit": {{"models": ["hg", "gaussian"]}}}}"#), "hg_draine"),
+        (
+            format!(
+                r#"{{{mie}, "fit": {{"curves": [{{"range_um": [5, 10], "g_hg": "spline",
+                   "g_d": "constant", "alpha": "constant", "w_d": "constant"}}]}}}}"#
+            ),
+            "exp_rational",
+        ),
+        (
+            format!(
+                r#"{{{mie}, "fit": {{"curves": [{{"range_um": [10, 5], "g_hg": "constant",
+                   "g_d": "constant", "alpha": "constant", "w_d": "constant"}}]}}}}"#
+            ),
+            "lo < hi",
+        ),
+        (format!(r#"{{{mie}, "fit": {{"alpha_max": -3}}}}"#), "alpha_max"),
+        (r#"{"mie": {"diameter": "-5"}}"#.to_string(), "diameter"),
+        (r#"{"mie": {"diameter": "5"}, "extra": 1}"#.to_string(), "unknown field"),
+        ("{not json".to_string(), "config"),
+    ];
+    for (i, (text, expect)) in cases.iter().enumerate() {
+        let cfg = dir.path().join(format!("cfg{i}.json"));
+        std::fs::write(&cfg, text).unwrap();
+        let out = dir.path().join(format!("out{i}"));
+        let o = nephele(&["fit", "--config", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{text} should fail");
+        assert!(
+            err.trim().lines().count() == 1 && err.starts_with("error: ") && err.contains(expect),
+            "{text}: {err}"
+        );
+        assert!(files_in(&out).is_empty(), "{text} left files: {:?}", files_in(&out));
+    }
+}

@@ -22,7 +22,7 @@
 
 use super::loss::Target;
 use super::model::{Bound, Model};
-use super::optimize::{minimise, Objective, Optimum};
+use super::optimize::{minimise, polish_iters, Objective, Optimum};
 use anyhow::{bail, Result};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -323,12 +323,16 @@ impl Objective for JointLoss<'_> {
     }
 }
 
+/// Largest L-BFGS iterations of the joint polish.
+const CURVE_MAX_ITERS: u64 = 4000;
+
 /// Step 2 from the step-1 curves: returns the polished curves and the optimiser's report.
 pub fn polish_on_loss(curves: [Curve; 4], sites: &[Site<'_>], alpha_max: f64) -> ([Curve; 4], Optimum) {
     let c0: Vec<f64> = curves.iter().flat_map(|c| c.coef.clone()).collect();
     let joint = JointLoss { curves: &curves, sites, bounds: Model::HgDraine.bounds(alpha_max) };
     let free = vec![Bound::Free; c0.len()];
-    let best = minimise(&joint, &free, &[c0.clone()], 1, &[]);
+    // 12–16 coefficients along narrow valleys: more iterations than a per-diameter fit.
+    let best = polish_iters(&joint, &free, &c0, CURVE_MAX_ITERS);
     let mut out = curves.clone();
     let mut at = 0;
     for curve in out.iter_mut() {

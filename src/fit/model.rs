@@ -30,10 +30,15 @@ pub enum Model {
     HgDraine,
 }
 
+/// The largest |g| a fit may reach (HG at g = 0.999999 peaks at 2·10¹², still finite).
+pub const G_MAX: f64 = 1.0 - 1e-6;
+
 /// Where a parameter lives, and the smooth map from an unconstrained u onto it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Bound {
-    /// (−1, 1) by θ = tanh u.
+    /// (−G, G) by θ = G tanh u, G = [`G_MAX`]: tanh rounds to exactly ±1 for |u| > 19, where
+    /// HG's normalisation 1 − g² vanishes and ln p = −∞; a line search that wanders there
+    /// must still see a finite loss.
     Symmetric,
     /// (lo, hi) by θ = lo + (hi − lo)/(1 + e^{−u}).
     Interval(f64, f64),
@@ -45,7 +50,7 @@ impl Bound {
     /// θ(u).
     pub fn to_param(self, u: f64) -> f64 {
         match self {
-            Bound::Symmetric => u.tanh(),
+            Bound::Symmetric => G_MAX * u.tanh(),
             Bound::Interval(lo, hi) => lo + (hi - lo) / (1.0 + (-u).exp()),
             Bound::Free => u,
         }
@@ -54,7 +59,7 @@ impl Bound {
     /// dθ/du.
     pub fn slope(self, u: f64) -> f64 {
         match self {
-            Bound::Symmetric => 1.0 - u.tanh().powi(2),
+            Bound::Symmetric => G_MAX * (1.0 - u.tanh().powi(2)),
             Bound::Interval(lo, hi) => {
                 let s = 1.0 / (1.0 + (-u).exp());
                 (hi - lo) * s * (1.0 - s)
@@ -66,7 +71,7 @@ impl Bound {
     /// u(θ), for θ strictly inside the bound (clamped 1e-12 inside otherwise).
     pub fn to_free(self, theta: f64) -> f64 {
         match self {
-            Bound::Symmetric => theta.clamp(-1.0 + 1e-12, 1.0 - 1e-12).atanh(),
+            Bound::Symmetric => (theta / G_MAX).clamp(-1.0 + 1e-12, 1.0 - 1e-12).atanh(),
             Bound::Interval(lo, hi) => {
                 let s = ((theta - lo) / (hi - lo)).clamp(1e-12, 1.0 - 1e-12);
                 (s / (1.0 - s)).ln()
@@ -78,7 +83,7 @@ impl Bound {
     /// θ moved strictly inside the bound (by 1e-9 of its width).
     pub fn clamp(self, theta: f64) -> f64 {
         let (lo, hi) = match self {
-            Bound::Symmetric => (-1.0, 1.0),
+            Bound::Symmetric => (-G_MAX, G_MAX),
             Bound::Interval(lo, hi) => (lo, hi),
             Bound::Free => return theta,
         };

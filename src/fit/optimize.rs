@@ -60,7 +60,7 @@ impl<O: Objective> CostFunction for Free<'_, O> {
     type Param = Vec<f64>;
     type Output = f64;
     fn cost(&self, u: &Vec<f64>) -> Result<f64, argmin::core::Error> {
-        Ok(self.objective.loss(&self.theta(u)))
+        finite(self.objective.loss(&self.theta(u)), u)
     }
 }
 
@@ -69,13 +69,29 @@ impl<O: Objective> Gradient for Free<'_, O> {
     type Gradient = Vec<f64>;
     fn gradient(&self, u: &Vec<f64>) -> Result<Vec<f64>, argmin::core::Error> {
         let mut g = vec![0.0; u.len()];
-        self.objective.loss_grad(&self.theta(u), &mut g);
+        finite(self.objective.loss_grad(&self.theta(u), &mut g), u)?;
+        finite(g.iter().sum(), u)?;
         Ok(g.iter().zip(u.iter().zip(self.bounds)).map(|(g, (u, b))| g * b.slope(*u)).collect())
     }
 }
 
-/// L-BFGS from θ₀ (moved inside its bounds).
+/// A non-finite loss stops the polish with an error (reported, the best start kept) instead of
+/// letting argmin's More–Thuente search, which has no iteration cap, chase NaN comparisons.
+fn finite(loss: f64, u: &[f64]) -> Result<f64, argmin::core::Error> {
+    if loss.is_finite() {
+        Ok(loss)
+    } else {
+        Err(argmin::core::Error::msg(format!("loss {loss} at u = {u:?}")))
+    }
+}
+
+/// L-BFGS from θ₀ (moved inside its bounds), at most [`MAX_ITERS`] iterations.
 pub fn polish<O: Objective>(objective: &O, bounds: &[Bound], theta0: &[f64]) -> Optimum {
+    polish_iters(objective, bounds, theta0, MAX_ITERS)
+}
+
+/// L-BFGS from θ₀ (moved inside its bounds), at most `max_iters` iterations.
+pub fn polish_iters<O: Objective>(objective: &O, bounds: &[Bound], theta0: &[f64], max_iters: u64) -> Optimum {
     let free = Free { objective, bounds };
     let u0: Vec<f64> = theta0.iter().zip(bounds).map(|(t, b)| b.to_free(*t)).collect();
     let solver = LBFGS::new(MoreThuenteLineSearch::new(), 8)
@@ -83,7 +99,7 @@ pub fn polish<O: Objective>(objective: &O, bounds: &[Bound], theta0: &[f64]) -> 
         .and_then(|s| s.with_tolerance_cost(1e-15));
     let run = solver.and_then(|s| {
         Executor::new(free, s)
-            .configure(|state| state.param(u0.clone()).max_iters(MAX_ITERS))
+            .configure(|state| state.param(u0.clone()).max_iters(max_iters))
             .run()
     });
     let free = Free { objective, bounds };
