@@ -15,10 +15,11 @@
 //!
 //! Two steps. (1) Each parameter alone by least squares (in ln θ for the exp forms, in θ for
 //! the others) through the per-diameter optima — what the paper did. (2) All coefficients
-//! together by minimising the mean relative excess loss (1/n) Σ_d E_AS(θ(d); d)/E_opt(d) with
-//! L-BFGS and the chain rule through the loss gradient: the curve is judged by the loss it
-//! gives, not by how close its parameters are to the optima (the loss is flat along some
-//! parameter combinations and steep along others).
+//! together by minimising the total loss over the total optimum, Σ_d E_AS(θ(d); d) / Σ_d
+//! E_opt(d), with L-BFGS and the chain rule through the loss gradient, from the step-1 curves
+//! and from the same forms fitted through the paper's parameters (the better kept): the curve
+//! is judged by the loss it gives, not by how close its parameters are to the optima (the loss
+//! is flat along some parameter combinations and steep along others).
 
 use super::loss::Target;
 use super::model::{Bound, Model};
@@ -160,19 +161,24 @@ impl Curve {
     /// θ(d) as a formula with the numbers in (d in µm).
     pub fn expression(&self) -> String {
         let k = self.coefficients();
-        let pole = |c: f64| if c < 0.0 { format!("d - {:.6}", -c) } else { format!("d + {c:.6}") };
+        // "x - c" written with the sign folded in: "x + 0.5" rather than "x - -0.5".
+        let minus = |x: &str, c: f64| if c < 0.0 { format!("{x} + {:.6}", -c) } else { format!("{x} - {c:.6}") };
         match self.form {
-            Form::ExpRational => format!("exp({:.6} - {:.6}/({}))", k["A"], k["B"], pole(k["C"])),
-            Form::ExpRationalNoOffset => format!("exp(-{:.6}/({}))", k["B"], pole(k["C"])),
+            Form::ExpRational => {
+                let sign = if k["B"] < 0.0 { '+' } else { '-' };
+                format!("exp({:.6} {sign} {:.6}/({}))", k["A"], k["B"].abs(), minus("d", -k["C"]))
+            }
+            Form::ExpRationalNoOffset => format!("exp(-{:.6}/({}))", k["B"], minus("d", -k["C"])),
             Form::PolyLnD(_) | Form::Constant => {
+                let x = minus("ln d", self.ln_d0);
                 let terms: Vec<String> = self
                     .coef
                     .iter()
                     .enumerate()
                     .map(|(i, c)| match i {
                         0 => format!("{c:.6}"),
-                        1 => format!("{c:+.6}*(ln d - {:.6})", self.ln_d0),
-                        _ => format!("{c:+.6}*(ln d - {:.6})^{i}", self.ln_d0),
+                        1 => format!("{c:+.6}*({x})"),
+                        _ => format!("{c:+.6}*({x})^{i}"),
                     })
                     .collect();
                 terms.join(" ")
@@ -263,7 +269,8 @@ pub struct Site<'a> {
     pub e_opt: f64,
 }
 
-/// Step 2: the mean relative loss (1/n) Σ E_AS(θ(d))/E_opt(d) of four HG+Draine curves.
+/// Step 2: the total loss of four HG+Draine curves over the total optimum,
+/// Σ_d E_AS(θ(d); d) / Σ_d E_opt(d) (≥ 1).
 struct JointLoss<'a> {
     curves: &'a [Curve; 4],
     sites: &'a [Site<'a>],
@@ -285,6 +292,9 @@ impl JointLoss<'_> {
 impl Objective for JointLoss<'_> {
     fn loss_grad(&self, c: &[f64], grad: &mut [f64]) -> f64 {
         let parts = self.split(c);
+        // One scale for all sites: a per-site 1/E_opt would let the smallest droplets, whose
+        // optima reach 10⁻⁶, outweigh the rest by orders of magnitude.
+        let scale = 1.0 / self.sites.iter().map(|s| s.e_opt).sum::<f64>();
         // Per site in parallel, summed in order: the same bits whatever the thread count.
         let per_site: Vec<(f64, Vec<f64>)> = self
             .sites
@@ -303,20 +313,18 @@ impl Objective for JointLoss<'_> {
                 }
                 let mut de = [0.0; 4];
                 let e = site.target.loss_grad(Model::HgDraine, &theta, &mut de);
-                let scale = 1.0 / site.e_opt;
                 let g: Vec<f64> = (0..4)
                     .flat_map(|k| dtheta_dc[k].iter().map(move |x| x * de[k] * scale).collect::<Vec<_>>())
                     .collect();
                 (e * scale, g)
             })
             .collect();
-        let n = self.sites.len() as f64;
         grad.iter_mut().for_each(|x| *x = 0.0);
         let mut total = 0.0;
         for (e, g) in &per_site {
-            total += e / n;
+            total += e;
             for (a, b) in grad.iter_mut().zip(g) {
-                *a += b / n;
+                *a += b;
             }
         }
         total

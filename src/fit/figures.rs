@@ -8,6 +8,11 @@ use crate::mie::PhaseTable;
 use anyhow::Result;
 use std::path::Path;
 
+/// Diameters spanning more than a decade are drawn on a log axis.
+fn wide(d: &[f64]) -> bool {
+    d.first().zip(d.last()).is_some_and(|(lo, hi)| *lo > 0.0 && hi / lo > 10.0)
+}
+
 /// Index of the fitted diameter nearest to `d`.
 pub fn nearest(report: &FitReport, d: f64) -> usize {
     let dist = |i: usize| (report.diameters_um[i] - d).abs();
@@ -41,6 +46,7 @@ pub fn phase_figure(path: &Path, report: &FitReport, tables: &[PhaseTable], want
             x_label: "scattering angle θ (degrees)".into(),
             y_label: "p(θ) (1/sr)".into(),
             log_y: true,
+            log_x: false,
             series: s
                 .iter()
                 .map(|(label, y, style, colour)| Series {
@@ -80,6 +86,7 @@ pub fn loss_figure(path: &Path, report: &FitReport, loss_name: &str) -> Result<(
         x_label: "median diameter d (µm)".into(),
         y_label: loss_name.into(),
         log_y: true,
+        log_x: wide(d),
         series: series_data
             .iter()
             .map(|(l, x, y, s, c)| Series { label: l.clone(), x, y, style: *s, colour: *c })
@@ -92,19 +99,21 @@ pub fn loss_figure(path: &Path, report: &FitReport, loss_name: &str) -> Result<(
 pub fn params_figure(path: &Path, report: &FitReport) -> Result<()> {
     let d = &report.diameters_um;
     let (lo, hi) = (d[0], d[d.len() - 1]);
-    let dense: Vec<f64> = (0..=400).map(|i| lo + (hi - lo) * i as f64 / 400.0).collect();
+    let at = |t: f64| if wide(d) { lo * (hi / lo).powf(t) } else { lo + (hi - lo) * t };
+    let dense: Vec<f64> = (0..=400).map(|i| at(i as f64 / 400.0)).collect();
     let mut data: Vec<Vec<(String, Vec<f64>, Vec<f64>, Style, usize)>> = Vec::new();
-    for (k, name) in HG_DRAINE_PARAMS.iter().enumerate() {
+    for k in 0..HG_DRAINE_PARAMS.len() {
         let mut s = Vec::new();
         let opt: Vec<f64> = report.fits.iter().map(|f| f.models["hg_draine"].optimum.params[k]).collect();
         s.push(("per-diameter optimum".to_string(), d.clone(), opt, Style::Points, 0));
         let paper: Vec<f64> = dense.iter().map(|&x| paper_theta(x)[k]).collect();
         s.push(("paper's curve".into(), dense.clone(), paper, Style::Dashed, 7));
-        for b in &report.branches {
+        for (j, b) in report.branches.iter().enumerate() {
             let [a, z] = b.range_um;
             let x: Vec<f64> = dense.iter().copied().filter(|x| (a..=z).contains(x)).collect();
             let y = x.iter().map(|&x| b.fitted[k].at(x)).collect();
-            s.push((format!("our curve {name}"), x, y, Style::Line, 1));
+            let label = if j == 0 { format!("our curve{}", if report.branches.len() > 1 { "s" } else { "" }) } else { String::new() };
+            s.push((label, x, y, Style::Line, 1));
         }
         data.push(s);
     }
@@ -116,6 +125,7 @@ pub fn params_figure(path: &Path, report: &FitReport) -> Result<()> {
             x_label: "median diameter d (µm)".into(),
             y_label: name.to_string(),
             log_y: false,
+            log_x: wide(d),
             series: s
                 .iter()
                 .map(|(l, x, y, st, c)| Series { label: l.clone(), x, y, style: *st, colour: *c })

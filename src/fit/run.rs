@@ -96,6 +96,9 @@ pub struct BranchReport {
     pub curves_step1: BTreeMap<String, CurveReport>,
     /// The joint polish's optimiser record (its θ are the internal coefficients).
     pub polish: Optimum,
+    /// Which step-2 start won: "optima" (curves through our optima) or "paper" (the same forms
+    /// through the paper's parameters).
+    pub polish_start: String,
     /// Per diameter of the range.
     pub points: Vec<CurvePoint>,
     /// Diameters where our curve's loss ≤ the paper's, of all in the range.
@@ -274,18 +277,28 @@ fn fit_branch(
         bail!("curve range {:?} µm holds {} fitted diameters; need at least {}", branch.range_um, idx.len(), max_coef + 1);
     }
     let d: Vec<f64> = idx.iter().map(|&i| report.diameters_um[i]).collect();
-    let step1: Vec<Curve> = (0..4)
-        .map(|k| {
-            let theta: Vec<f64> = idx.iter().map(|&i| best[i][hgd].params[k]).collect();
-            fit_points(forms[k], &d, &theta)
-        })
-        .collect::<Result<_>>()?;
-    let step1: [Curve; 4] = step1.try_into().expect("four curves");
+    // Step 1 through our optima; the same forms through the paper's parameters as a second
+    // start of step 2 (where the optima jump between modes, as below 1 µm, a curve through
+    // them is a poor start and the paper's smoother path a better one).
+    let through = |param: &dyn Fn(usize, usize) -> f64| -> Result<[Curve; 4]> {
+        let curves: Vec<Curve> = (0..4)
+            .map(|k| fit_points(forms[k], &d, &idx.iter().map(|&i| param(i, k)).collect::<Vec<_>>()))
+            .collect::<Result<_>>()?;
+        Ok(curves.try_into().expect("four curves"))
+    };
+    let step1 = through(&|i, k| best[i][hgd].params[k])?;
+    let via_paper = through(&|i, k| paper_theta(report.diameters_um[i])[k])?;
     let sites: Vec<Site> = idx
         .iter()
         .map(|&i| Site { d: report.diameters_um[i], target: &targets[i], e_opt: best[i][hgd].loss })
         .collect();
-    let (curves, polish) = polish_on_loss(step1.clone(), &sites, cfg.alpha_max);
+    let from_optima = polish_on_loss(step1.clone(), &sites, cfg.alpha_max);
+    let from_paper = polish_on_loss(via_paper, &sites, cfg.alpha_max);
+    let (polish_start, (curves, polish)) = if from_paper.1.loss < from_optima.1.loss {
+        ("paper", from_paper)
+    } else {
+        ("optima", from_optima)
+    };
     let bounds = Model::HgDraine.bounds(cfg.alpha_max);
     let at = |c: &[Curve; 4], d: f64| -> [f64; 4] { std::array::from_fn(|k| bounds[k].clamp(c[k].at(d))) };
     let points: Vec<CurvePoint> = sites
@@ -314,6 +327,7 @@ fn fit_branch(
         curves: by_name(&curves),
         curves_step1: by_name(&step1),
         polish,
+        polish_start: polish_start.to_string(),
         curve_beats_paper: [beats, points.len()],
         points,
         fitted: curves.to_vec(),

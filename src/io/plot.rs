@@ -2,6 +2,7 @@
 //! library is needed.
 
 use anyhow::{anyhow, Result};
+use plotters::coord::ranged1d::ValueFormatter;
 use plotters::prelude::*;
 use std::path::Path;
 use std::sync::Once;
@@ -60,6 +61,8 @@ pub struct Panel<'a> {
     pub y_label: String,
     /// Logarithmic y axis.
     pub log_y: bool,
+    /// Logarithmic x axis (ignored unless every x > 0).
+    pub log_x: bool,
     /// The series.
     pub series: Vec<Series<'a>>,
 }
@@ -82,6 +85,7 @@ pub fn log_y_plot(
         x_label: x_label.to_string(),
         y_label: y_label.to_string(),
         log_y: true,
+        log_x: false,
         series,
     };
     panels_plot(path, (1200, 800), 1, &[panel])
@@ -139,29 +143,66 @@ fn draw_panel<DB: DrawingBackend>(
     builder
         .caption(&panel.title, ("sans-serif", 24))
         .margin(15)
+        .margin_right(30)
         .x_label_area_size(45)
         .y_label_area_size(80);
-    if panel.log_y {
-        let mut chart = builder.build_cartesian_2d(x0..x1, (y0 * 0.8..y1 * 1.25).log_scale())?;
-        chart
-            .configure_mesh()
-            .x_desc(&panel.x_label)
-            .y_desc(&panel.y_label)
-            .label_style(("sans-serif", 16))
-            .y_label_formatter(&|v| format!("{v:.0e}"))
-            .draw()?;
-        draw_series(&mut chart, panel, true)
-    } else {
-        let pad = 0.05 * (y1 - y0);
-        let mut chart = builder.build_cartesian_2d(x0..x1, (y0 - pad)..(y1 + pad))?;
-        chart
-            .configure_mesh()
-            .x_desc(&panel.x_label)
-            .y_desc(&panel.y_label)
-            .label_style(("sans-serif", 16))
-            .draw()?;
-        draw_series(&mut chart, panel, false)
+    let pad = 0.05 * (y1 - y0);
+    let (ly0, ly1) = (y0 * 0.8, y1 * 1.25);
+    // plotters labels a log axis below 1 sparsely: ticks at 1-2-5 × 10^k instead.
+    let lx = || (x0..x1).log_scale().with_key_points(ticks_125(x0, x1));
+    match (panel.log_x && x0 > 0.0, panel.log_y) {
+        (false, false) => draw_chart(builder.build_cartesian_2d(x0..x1, (y0 - pad)..(y1 + pad))?, panel),
+        (false, true) => draw_chart(builder.build_cartesian_2d(x0..x1, (ly0..ly1).log_scale())?, panel),
+        (true, false) => draw_chart(builder.build_cartesian_2d(lx(), (y0 - pad)..(y1 + pad))?, panel),
+        (true, true) => draw_chart(builder.build_cartesian_2d(lx(), (ly0..ly1).log_scale())?, panel),
     }
+}
+
+/// 1, 2, 5 × 10^k inside [lo, hi] (none unless 0 < lo ≤ hi < ∞).
+fn ticks_125(lo: f64, hi: f64) -> Vec<f64> {
+    let mut out = Vec::new();
+    if !(lo > 0.0 && lo <= hi && hi.is_finite()) {
+        return out;
+    }
+    let mut decade = 10f64.powi(lo.log10().floor() as i32);
+    while decade <= hi {
+        out.extend([1.0, 2.0, 5.0].iter().map(|m| m * decade).filter(|v| (lo..=hi).contains(v)));
+        decade *= 10.0;
+    }
+    out
+}
+
+/// Whole numbers on a wide axis ("180", not "180.0"), otherwise at most 4 decimals without
+/// trailing zeros ("0.3", not "0.30000000000000004").
+fn tick(v: &f64, span: f64) -> String {
+    if span >= 20.0 {
+        return format!("{v:.0}");
+    }
+    let s = format!("{v:.4}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" { "0".into() } else { s.into() }
+}
+
+fn draw_chart<'a, DB: DrawingBackend + 'a, X, Y>(
+    mut chart: ChartContext<'a, DB, Cartesian2d<X, Y>>,
+    panel: &Panel,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>>
+where
+    X: Ranged<ValueType = f64> + ValueFormatter<f64>,
+    Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
+{
+    let (x0, x1, y0, y1) = extent(panel);
+    let x_fmt = |v: &f64| tick(v, if panel.log_x { 0.0 } else { x1 - x0 });
+    let y_fmt = |v: &f64| if panel.log_y { format!("{v:.0e}") } else { tick(v, y1 - y0) };
+    chart
+        .configure_mesh()
+        .x_desc(&panel.x_label)
+        .y_desc(&panel.y_label)
+        .label_style(("sans-serif", 16))
+        .x_label_formatter(&x_fmt)
+        .y_label_formatter(&y_fmt)
+        .draw()?;
+    draw_series(&mut chart, panel, panel.log_y)
 }
 
 fn draw_series<'a, DB: DrawingBackend + 'a, X, Y>(
@@ -194,6 +235,9 @@ where
                 points.into_iter().map(|p| Circle::new(p, 4, colour.filled())),
             )?,
         };
+        if s.label.is_empty() {
+            continue; // no legend entry
+        }
         let style = s.style;
         anno.label(s.label.clone()).legend(move |(x, y)| match style {
             Style::Points => Circle::new((x + 10, y), 4, colour.filled()).into_dyn(),
