@@ -94,8 +94,8 @@ fn run_file(file: &FitFile, out: &Path, mie_out: &Path, plot: bool) -> Result<()
     })?;
     bar.finish_and_clear();
     let fit_s = t1.elapsed().as_secs_f64();
-    let timings = json!({ "mie_s": mie_s, "fit_s": fit_s, "threads": rayon::current_num_threads() });
     let t2 = Instant::now();
+    let timings = json!({ "mie_s": mie_s, "fit_s": fit_s, "threads": rayon::current_num_threads() });
     write_outputs(file, &tables, &report, timings, out, plot)?;
     // The Mie tables of the figure diameters, as `nephele mie` writes them.
     let mut shown: Vec<PhaseTable> = Vec::new();

@@ -9,10 +9,11 @@ use nephele_runtime::phase::{
     Draine, HenyeyGreenstein, Rayleigh, ReynoldsMcCormick, Schlick, TabulatedTable, TwoTermHg,
     VonMisesFisher, Xlf, XLF_G_MAX,
 };
-use nephele_runtime::presets::jendersie_deon;
+use nephele_runtime::presets::{jendersie_deon, nephele_refit};
 use nephele_runtime::PhaseFunction;
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
+use serde::Serialize;
 use serde_json::json;
 use std::io::Write;
 use std::path::PathBuf;
@@ -39,10 +40,20 @@ pub enum Model {
     Xlf,
     /// w HG(g) + (1 − w) HG(g2) (--g, --g2, --w).
     TwoTermHg,
-    /// Jendersie & d'Eon's HG + Draine blend, from --diameter or from --g, --g2 (g_D), --alpha, --w (w_D).
+    /// HG + Draine blend (Jendersie & d'Eon), from --diameter (and --preset) or from --g, --g2 (g_D), --alpha, --w (w_D).
     HgDraine,
     /// A Mie table (--table phase.npz from `nephele mie`).
     Tabulated,
+}
+
+/// The HG+Draine diameter presets of nephele-runtime.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Preset {
+    /// `presets::jendersie_deon`: the paper's curves and its supplement's branches.
+    JendersieDeon,
+    /// `presets::nephele_refit`: nephele's refit on the same Mie setup.
+    Nephele,
 }
 
 /// Options of `nephele phase`.
@@ -69,9 +80,13 @@ pub struct PhaseArgs {
     /// von Mises–Fisher κ ≥ 0.
     #[arg(long)]
     kappa: Option<f64>,
-    /// Droplet diameter in µm for the HG+Draine preset of Jendersie & d'Eon.
+    /// Droplet diameter in µm for an HG+Draine preset (--preset).
     #[arg(long, value_name = "UM")]
     diameter: Option<f64>,
+    /// Which diameter → parameter curves --diameter uses: the paper's (Jendersie & d'Eon 2023)
+    /// or nephele's refit (stage 3, docs/fit.md).
+    #[arg(long, value_enum, default_value_t = Preset::JendersieDeon)]
+    preset: Preset,
     /// phase.npz of `nephele mie` (its `phase` on its `theta_deg`) for --model tabulated.
     #[arg(long, value_name = "FILE")]
     table: Option<PathBuf>,
@@ -163,7 +178,13 @@ impl PhaseArgs {
             }
             Model::HgDraine => {
                 let p = match self.diameter {
-                    Some(d) => jendersie_deon(in_range(d, "diameter", 0.0, 1e4, true)?),
+                    Some(d) => {
+                        let d = in_range(d, "diameter", 0.0, 1e4, true)?;
+                        match self.preset {
+                            Preset::JendersieDeon => jendersie_deon(d),
+                            Preset::Nephele => nephele_refit(d),
+                        }
+                    }
                     None => nephele_runtime::presets::HgDraineParams {
                         g_hg: g()?,
                         g_d: in_range(need(self.g2, "g2", m)?, "g2", -1.0, 1.0, true)?,
@@ -171,7 +192,7 @@ impl PhaseArgs {
                         w_d: in_range(need(self.w, "w", m)?, "w", 0.0, 1.0, false)?,
                     },
                 };
-                let echo = json!({ "g_hg": p.g_hg, "g_d": p.g_d, "alpha": p.alpha, "w_d": p.w_d, "diameter_um": self.diameter });
+                let echo = json!({ "g_hg": p.g_hg, "g_d": p.g_d, "alpha": p.alpha, "w_d": p.w_d, "diameter_um": self.diameter, "preset": self.diameter.map(|_| self.preset) });
                 (Box::new(p.phase::<f64>()), echo)
             }
             Model::Tabulated => bail!("internal: tabulated is built from its table"),
