@@ -226,7 +226,13 @@ fn print_summary(report: &FitReport, cfg: &FitConfig, out: &Path) {
     }
     head += &format!(" {:>12} {:>12}", "paper curve", "our curve");
     println!("{head}");
+    // One screen: about ten rows (every row is in fits.json).
+    let stride = report.fits.len().div_ceil(10).max(1);
+    let last = report.fits.len() - 1;
     for (i, f) in report.fits.iter().enumerate() {
+        if i % stride != 0 && i != last {
+            continue;
+        }
         let mut row = format!("{:>8.3}", f.d_um);
         for m in &models {
             let o = &f.models[m.name()].optimum;
