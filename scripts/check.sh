@@ -18,6 +18,7 @@ ROOT=$(pwd)
 CHECKS=(
     check_mie.py
     check_mitsuba.py
+    check_fit.py
 )
 
 BUILD=1

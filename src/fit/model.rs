@@ -157,6 +157,31 @@ impl Model {
         }
     }
 
+    /// Starts for this model built from the optimum θ of a simpler model it contains (or
+    /// nearly contains): HG+Draine holds HG (w_D → 0), Draine (w_D → 1) and two-term HG
+    /// (α → 0); Draine holds Cornette–Shanks (α = 1) and HG (α → 0). A small second lobe is
+    /// added in a few directions, since that is where the extra freedom usually pays.
+    pub fn nested_starts(self, inner: Model, t: &[f64]) -> Vec<Vec<f64>> {
+        let a0 = 1e-3; // α → 0: Draine → HG
+        match (self, inner) {
+            (Model::Draine, Model::Hg) => vec![vec![t[0], a0]],
+            (Model::Draine, Model::CornetteShanks) => vec![vec![t[0], 1.0]],
+            (Model::HgDraine, Model::Hg) => [-0.5, 0.0, 0.5]
+                .iter()
+                .map(|&g_d| vec![t[0], g_d, 10.0, 0.05])
+                .collect(),
+            (Model::HgDraine, Model::TwoTermHg) => {
+                vec![vec![t[0], t[1], a0, 1.0 - t[2]], vec![t[1], t[0], a0, t[2]]]
+            }
+            (Model::HgDraine, Model::CornetteShanks) => vec![vec![0.0, t[0], 1.0, 0.98]],
+            (Model::HgDraine, Model::Draine) => [-0.5, 0.0, 0.5]
+                .iter()
+                .map(|&g_hg| vec![g_hg, t[0], t[1], 0.98])
+                .collect(),
+            _ => Vec::new(),
+        }
+    }
+
     /// A coarse grid of θ covering droplet-like shapes, the global start of the fits.
     pub fn coarse_grid(self, alpha_max: f64) -> Vec<Vec<f64>> {
         let gs = |lo: f64, hi: f64, n: usize| -> Vec<f64> {
@@ -188,11 +213,16 @@ impl Model {
                     }
                 }
             }
+            // Small droplets have optima far from the large-droplet shape: a backward HG lobe of
+            // weight 0.01 beside a forward Draine lobe (0.85 µm), or a faint backward Draine lobe
+            // (2.5 µm); SciPy from random starts found them when this grid lacked g_HG < 0.5 and
+            // w_D > 0.8 (scripts/check_fit.py).
             Model::HgDraine => {
-                for &g_hg in &forward {
-                    for g_d in gs(-0.4, 0.9, 8) {
+                let g_hgs = [-0.6, -0.3, 0.0, 0.3].iter().chain(&forward);
+                for &g_hg in g_hgs {
+                    for g_d in gs(-0.8, 0.9, 8) {
                         for &a in &alphas {
-                            for w in [0.05, 0.15, 0.3, 0.45, 0.6, 0.8] {
+                            for w in [0.02, 0.05, 0.15, 0.3, 0.45, 0.6, 0.8, 0.95, 0.99] {
                                 grid.push(vec![g_hg, g_d, a, w]);
                             }
                         }

@@ -30,7 +30,7 @@ impl Objective for ModelLoss<'_> {
 }
 
 /// L-BFGS starts taken from the coarse grid.
-const GRID_STARTS: usize = 4;
+const GRID_STARTS: usize = 6;
 /// Largest number of warm-start sweeps.
 const MAX_SWEEPS: usize = 4;
 
@@ -154,20 +154,25 @@ pub fn run(
         .collect::<Result<_>>()?;
     let total = diameters.len() * models.len();
     let done = std::sync::atomic::AtomicUsize::new(0);
-    // Independent global fits, parallel over (diameter, model).
-    let jobs: Vec<(usize, Model)> =
-        (0..diameters.len()).flat_map(|i| models.iter().map(move |m| (i, *m))).collect();
-    let first: Vec<Optimum> = jobs
-        .par_iter()
-        .map(|&(i, m)| {
-            let obj = ModelLoss { target: &targets[i], model: m };
-            let grid = m.coarse_grid(cfg.alpha_max);
-            let o = minimise(&obj, &m.bounds(cfg.alpha_max), &grid, GRID_STARTS, &[]);
-            progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1, total);
-            o
+    // Global fits, parallel over diameters; at one diameter the models in order, each also
+    // started from the embeddings of the simpler models' optima (Model::nested_starts), so a
+    // model is never worse than a model it contains.
+    let mut best: Vec<Vec<Optimum>> = (0..diameters.len())
+        .into_par_iter()
+        .map(|i| {
+            let mut fitted: Vec<(Model, Optimum)> = Vec::with_capacity(models.len());
+            for &m in &models {
+                let obj = ModelLoss { target: &targets[i], model: m };
+                let nested: Vec<Vec<f64>> =
+                    fitted.iter().flat_map(|(inner, o)| m.nested_starts(*inner, &o.params)).collect();
+                let grid = m.coarse_grid(cfg.alpha_max);
+                let o = minimise(&obj, &m.bounds(cfg.alpha_max), &grid, GRID_STARTS, &nested);
+                progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1, total);
+                fitted.push((m, o));
+            }
+            fitted.into_iter().map(|(_, o)| o).collect()
         })
         .collect();
-    let mut best: Vec<Vec<Optimum>> = first.chunks(models.len()).map(|c| c.to_vec()).collect();
     let (sweeps, improved) = warm_start_sweeps(cfg, &models, &targets, &mut best);
     let fits = diameters
         .iter()
