@@ -26,8 +26,8 @@
 //! and small-droplets.json): the paper's forms on 5–50 µm, quintics (α = 250) on 0.1–1.5 µm and
 //! quartics on 1.5–5 µm in ln d, each polished on the total E_AS over its branch. On our Mie
 //! tables its total E_AS is 0.010 % above the per-diameter optima on 5–50 µm (the paper's curves:
-//! 0.025 %), 0.07 % on 1.5–5 µm (paper: 0.31 %) and 4.7 % on 0.1–1.5 µm (paper: 5.9 %); see
-//! docs/fit.md. Below 0.1 µm it is the paper's Rayleigh-limit branch (not refitted).
+//! 0.025 %), 1.3 % on 1.5–5 µm (paper: 1.5 %) and 6.7 % on 0.1–1.5 µm (paper: 7.6 %), where the
+//! optima jump between lobe shapes no smooth curve follows; see docs/fit.md. Below 0.1 µm it is the paper's Rayleigh-limit branch (not refitted).
 
 use crate::phase::HgDraine;
 use crate::real::Real;
