@@ -1,6 +1,7 @@
 //! nephele: light scattering by water droplets, from Mie theory to renderer-ready artefacts.
 //!
-//! Stages are modules with one job each: [`mie`] (phase-function tables), [`io`] (atomic
+//! Stages are modules with one job each: [`mie`] (phase-function tables), [`fit`] (analytic models
+//! fitted to them, diameter curves), [`io`] (atomic
 //! NumPy/JSON/CSV/PNG outputs). The evaluators renderers need live in `nephele-runtime`.
 
 pub mod fit;

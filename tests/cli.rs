@@ -255,8 +255,8 @@ fn fit_quick_config_writes_json_npz_and_figures() {
     let fits = doc["result"]["fits"].as_array().unwrap();
     assert_eq!(fits.len(), 6);
     for f in fits {
-        let blend = &f["models"]["hg_draine"]["optimum"];
-        let hg = &f["models"]["hg"]["optimum"];
+        let blend = &f["models"]["hg_draine"];
+        let hg = &f["models"]["hg"];
         // A 4-parameter blend that contains HG cannot fit worse than HG alone.
         assert!(blend["loss"].as_f64().unwrap() <= hg["loss"].as_f64().unwrap());
         assert!(blend["evaluations"].as_u64().unwrap() > 0);
@@ -266,6 +266,24 @@ fn fit_quick_config_writes_json_npz_and_figures() {
     assert!(doc["result"]["branches"][0]["curves"]["g_hg"]["expression"].is_string());
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(stdout.contains("paper curve"), "{stdout}");
+}
+
+#[test]
+fn fit_of_a_single_diameter_has_no_neighbours_and_still_works() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("one.json");
+    let text = r#"{"mie": {"diameter": "8", "wavelengths": "400:700:4", "sizes": 21},
+                   "fit": {"models": ["hg", "draine"], "figure_diameters_um": [8]}}"#;
+    std::fs::write(&cfg, text).unwrap();
+    let out = dir.path().join("fit");
+    succeeds(&["fit", "--config", cfg.to_str().unwrap(), "--out", out.to_str().unwrap(), "--no-plot"]);
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("fits.json")).unwrap()).unwrap();
+    let draine = &doc["result"]["fits"][0]["models"]["draine"];
+    let hg = &doc["result"]["fits"][0]["models"]["hg"];
+    assert!(draine["converged"].as_bool().unwrap());
+    // Draine contains HG (α → 0) and starts from its optimum: never worse.
+    assert!(draine["loss"].as_f64().unwrap() <= hg["loss"].as_f64().unwrap());
 }
 
 #[test]
@@ -290,6 +308,13 @@ fn bad_fit_configs_are_one_error_line_and_no_file() {
             "lo < hi",
         ),
         (format!(r#"{{{mie}, "fit": {{"alpha_max": -3}}}}"#), "alpha_max"),
+        (
+            format!(
+                r#"{{{mie}, "fit": {{"curves": [{{"range_um": [5, 10], "g_hg": "constant",
+                   "g_d": "constant", "alpha": "constant", "w_d": "poly_ln_d_2"}}]}}}}"#
+            ),
+            "need at least 4",
+        ),
         (r#"{"mie": {"diameter": "-5"}}"#.to_string(), "diameter"),
         (r#"{"mie": {"diameter": "5"}, "extra": 1}"#.to_string(), "unknown field"),
         ("{not json".to_string(), "config"),
@@ -307,4 +332,24 @@ fn bad_fit_configs_are_one_error_line_and_no_file() {
         );
         assert!(files_in(&out).is_empty(), "{text} left files: {:?}", files_in(&out));
     }
+}
+
+#[test]
+fn fit_outputs_are_bit_identical_for_any_thread_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let npz: Vec<Vec<u8>> = ["1", "2"]
+        .iter()
+        .map(|threads| {
+            let out = dir.path().join(format!("t{threads}"));
+            let o = Command::new(env!("CARGO_BIN_EXE_nephele"))
+                .args(["fit", "--config", concat!(env!("CARGO_MANIFEST_DIR"), "/fit-configs/quick.json")])
+                .args(["--out", out.to_str().unwrap(), "--no-plot"])
+                .env("RAYON_NUM_THREADS", threads)
+                .output()
+                .unwrap();
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            std::fs::read(out.join("fits.npz")).unwrap()
+        })
+        .collect();
+    assert!(npz[0] == npz[1], "fits.npz differs between 1 and 2 threads");
 }

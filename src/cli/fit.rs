@@ -50,7 +50,9 @@ impl FitFile {
         let file: FitFile =
             serde_json::from_str(&text).with_context(|| format!("config '{}'", path.display()))?;
         file.fit.validate().with_context(|| format!("config '{}'", path.display()))?;
-        file.mie.job().with_context(|| format!("config '{}': mie", path.display()))?;
+        let job = file.mie.job().with_context(|| format!("config '{}': mie", path.display()))?;
+        let diameters: Vec<f64> = job.distributions.iter().map(|d| d.nominal_diameter_um()).collect();
+        file.fit.check_branches(&diameters).with_context(|| format!("config '{}'", path.display()))?;
         Ok(file)
     }
 }

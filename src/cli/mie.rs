@@ -267,7 +267,6 @@ pub fn run(args: MieArgs) -> Result<()> {
     compute_and_write(&job, &args, &out)
 }
 
-
 /// Computes a job with a progress bar: the tables, their statistics and the seconds taken.
 pub(super) fn compute_with_bar(job: &MieJob) -> Result<(Vec<PhaseTable>, JobStats, f64)> {
     let bar = ProgressBar::new(0).with_style(

@@ -90,6 +90,20 @@ impl FitConfig {
         Ok(out)
     }
 
+    /// Checks that every curve branch holds more fitted diameters than its largest form has
+    /// coefficients (else the least squares would be exact or underdetermined).
+    pub fn check_branches(&self, diameters_um: &[f64]) -> Result<()> {
+        for b in &self.curves {
+            let [lo, hi] = b.range_um;
+            let n = diameters_um.iter().filter(|d| (lo..=hi).contains(*d)).count();
+            let need = b.forms()?.iter().map(|f| f.n_coef()).max().unwrap_or(1) + 1;
+            if n < need {
+                bail!("fit.curves range_um {:?} holds {n} of the fitted diameters; its forms need at least {need}", b.range_um);
+            }
+        }
+        Ok(())
+    }
+
     /// Checks everything that can be checked without the diameters.
     pub fn validate(&self) -> Result<()> {
         let models = self.models()?;

@@ -69,7 +69,7 @@ impl Form {
         }
     }
 
-    fn n_coef(self) -> usize {
+    pub(crate) fn n_coef(self) -> usize {
         match self {
             Form::ExpRational => 3,
             Form::ExpRationalNoOffset => 2,

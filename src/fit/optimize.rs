@@ -177,7 +177,9 @@ fn diverse_best<'a>(scored: &[(f64, &'a Vec<f64>)], bounds: &[Bound], n: usize) 
 const MIN_SEPARATION: f64 = 0.5;
 
 /// The global-ish minimum: the loss on every point of `grid`, L-BFGS from `n_best` mutually
-/// distant best of them and from every `warm` start, the best result kept (ties to the earliest: deterministic).
+/// distant best of them and from every `warm` start, the best result kept (ties to the
+/// earliest: deterministic). Needs at least one start (a non-empty grid with `n_best` ≥ 1, or a
+/// warm start).
 pub fn minimise<O: Objective>(
     objective: &O,
     bounds: &[Bound],

@@ -145,6 +145,7 @@ pub fn run(
     cfg.validate()?;
     let models = cfg.models()?;
     let diameters: Vec<f64> = tables.iter().map(|t| t.distribution.nominal_diameter_um()).collect();
+    cfg.check_branches(&diameters)?;
     if diameters.windows(2).any(|w| w[1] <= w[0]) {
         bail!("fit diameters must be strictly increasing");
     }
@@ -235,6 +236,9 @@ fn warm_start_sweeps(
                             .filter(|&j| j < n)
                             .map(|j| prev[j][k].params.clone())
                             .collect();
+                        if warm.is_empty() {
+                            return prev[i][k].clone(); // a single diameter has no neighbours
+                        }
                         let obj = ModelLoss { target: &targets[i], model: m };
                         let o = minimise(&obj, &m.bounds(cfg.alpha_max), &[], 0, &warm);
                         let mut kept = prev[i][k].clone();
@@ -277,10 +281,6 @@ fn fit_branch(
         .filter(|&i| (lo..=hi).contains(&report.diameters_um[i]))
         .collect();
     let forms = branch.forms()?;
-    let max_coef = 4;
-    if idx.len() < max_coef + 1 {
-        bail!("curve range {:?} µm holds {} fitted diameters; need at least {}", branch.range_um, idx.len(), max_coef + 1);
-    }
     let d: Vec<f64> = idx.iter().map(|&i| report.diameters_um[i]).collect();
     // Step 1 through our optima; the same forms through the paper's parameters as a second
     // start of step 2 (where the optima jump between modes, as below 1 µm, a curve through

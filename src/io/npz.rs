@@ -34,8 +34,10 @@ impl Npz {
     /// Writes the archive (uncompressed, like `numpy.savez`).
     pub fn write_to<W: Write + Seek>(&self, w: W) -> Result<()> {
         let mut npz = npyz::npz::NpzWriter::new(w);
-        let opts =
-            zip::write::FileOptions::default().compression_method(zip::CompressionMethod::Stored);
+        // A fixed time stamp (1980-01-01, zip's epoch): the same arrays give the same bytes.
+        let opts = zip::write::FileOptions::default()
+            .compression_method(zip::CompressionMethod::Stored)
+            .last_modified_time(zip::DateTime::default());
         for (name, shape, data) in &self.arrays {
             let mut arr = npz
                 .array::<f64>(name, opts)?
