@@ -7,6 +7,7 @@
 pub mod fit;
 pub mod io;
 pub mod mie;
+pub mod slab;
 pub mod stats;
 
 /// Tool version written into every JSON sidecar.

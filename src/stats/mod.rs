@@ -2,6 +2,7 @@
 //! the same way).
 
 pub mod chi2;
+pub mod gauss;
 
 /// ∫_a^b f by adaptive Simpson to absolute tolerance `tol` (never below what f64 resolves).
 pub fn adaptive_simpson(f: &dyn Fn(f64) -> f64, a: f64, b: f64, tol: f64) -> f64 {

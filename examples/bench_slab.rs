@@ -1,0 +1,35 @@
+//! Scattering events per second on one core of the slab walk with full tallies (default grid:
+//! 16 planes × 16 μ_V × 12 ψ_V × 9 order groups, collector moments), on the problem of
+//! ../shared/bench/slab_ref.c (τ = 4, HG g = 0.9, normal incidence), so that
+//! scripts/bench_slab.sh can print both side by side.
+//!
+//!     cargo run --release --example bench_slab [-- PHOTONS]
+
+use nephele::slab::walk::batch_rng;
+use nephele::slab::{SlabGrid, Slice};
+use nephele_runtime::phase::HenyeyGreenstein;
+use std::time::Instant;
+
+fn main() {
+    let photons: u64 = std::env::args().nth(1).and_then(|s| s.parse().ok()).unwrap_or(2_000_000);
+    let hg = HenyeyGreenstein::new(0.9);
+    let grid = SlabGrid::default_for(4.0).expect("default grid");
+    let slice = Slice { grid: &grid, mu_l: 1.0, albedo: 1.0, phase: &hg };
+    let t0 = Instant::now();
+    let tally = slice.run_batch(photons, &mut batch_rng(1, 0, 0));
+    let s = t0.elapsed().as_secs_f64();
+    let n = photons as f64;
+    println!(
+        "tau=4 g=0.9 N={photons}  R={:.6} T_diffuse={:.6} T_direct={:.6}",
+        tally.escaped_top / n,
+        tally.down[grid.depths.len() - 1] / n,
+        tally.direct[grid.depths.len() - 1] / n
+    );
+    println!(
+        "events={}  events/photon={:.2}  time={s:.2}s  => {:.1} M events/s/core, {:.2} M photons/s/core (full tallies)",
+        tally.events,
+        tally.events as f64 / n,
+        tally.events as f64 / s / 1e6,
+        n / s / 1e6
+    );
+}

@@ -1,0 +1,207 @@
+//! The cells of the canonical tables (spec 40): tally planes in depth, view-direction bins in
+//! (μ_V, ψ_V) and groups of scattering orders.
+//!
+//! - μ_V = cosine of the light's direction with the upward normal (> 0 going up).
+//! - ψ_V = azimuth of that direction from the sun beam's horizontal travel direction, folded to
+//!   [0, π] by mirror symmetry; a bin [ψ₁, ψ₂] therefore covers ±[ψ₁, ψ₂], solid angle
+//!   ΔΩ = 2 Δμ Δψ.
+//! - Planes are stretched toward the lit face for thick slabs: with s = d/t and u uniform on
+//!   [0, 1], s = (e^{βu} − 1)/(e^β − 1), β = 0.3 t^0.65 (0.3 at t = 1, 4.5 at t = 64): at t = 64
+//!   the orders 1–8 live within ~10 mfp of the lit face.
+
+use anyhow::{bail, Result};
+
+/// The default order groups: 1, 2, 3–4, 5–6, 7–8, 9–12, 13–18, 19–30, 31–∞ (inclusive bounds;
+/// `u32::MAX` is ∞).
+pub const DEFAULT_GROUPS: [(u32, u32); 9] =
+    [(1, 1), (2, 2), (3, 4), (5, 6), (7, 8), (9, 12), (13, 18), (19, 30), (31, u32::MAX)];
+
+/// Orders up to this are looked up in a table; higher orders fall in the last group.
+const ORDER_TABLE: usize = 256;
+
+/// Depth planes, direction bins and order groups of one slice (t, μ_L).
+#[derive(Clone, Debug)]
+pub struct SlabGrid {
+    /// Tally depths in mfp, increasing, from 0 (lit face) to t (far face).
+    pub depths: Vec<f64>,
+    /// μ_V bin edges, increasing, from −1 to 1.
+    pub mu_edges: Vec<f64>,
+    /// ψ_V bin edges (radians), increasing, from 0 to π.
+    pub psi_edges: Vec<f64>,
+    /// Order groups (first, last), consecutive from order 1.
+    pub groups: Vec<(u32, u32)>,
+    group_of_order: Vec<u8>,
+    psi_cos: Vec<f64>,
+    /// Bins per unit of μ when the μ_V bins are equal.
+    mu_uniform: Option<f64>,
+}
+
+impl SlabGrid {
+    /// A grid; errors name what is wrong.
+    pub fn new(depths: Vec<f64>, mu_edges: Vec<f64>, psi_edges: Vec<f64>, groups: Vec<(u32, u32)>) -> Result<Self> {
+        let increasing = |v: &[f64]| v.windows(2).all(|w| w[0] < w[1]) && v.iter().all(|x| x.is_finite());
+        if depths.len() < 2 || depths[0] != 0.0 || !increasing(&depths) {
+            bail!("depth planes must increase from 0 (the lit face) to t, at least two");
+        }
+        if mu_edges.len() < 2 || mu_edges[0] != -1.0 || mu_edges[mu_edges.len() - 1] != 1.0 || !increasing(&mu_edges) {
+            bail!("mu_V bin edges must increase from -1 to 1");
+        }
+        let pi = std::f64::consts::PI;
+        if psi_edges.len() < 2 || psi_edges[0] != 0.0 || psi_edges[psi_edges.len() - 1] != pi || !increasing(&psi_edges) {
+            bail!("psi_V bin edges must increase from 0 to pi");
+        }
+        if groups.is_empty() || groups.len() > 255 || groups[0].0 != 1 || groups[groups.len() - 1].1 != u32::MAX {
+            bail!("order groups must start at order 1 and end at infinity");
+        }
+        if groups.iter().any(|g| g.0 > g.1) || groups.windows(2).any(|w| w[1].0 != w[0].1 + 1) {
+            bail!("order groups must be consecutive, each first ≤ last");
+        }
+        let group_of_order = (0..=ORDER_TABLE as u32)
+            .map(|k| groups.iter().position(|g| g.0 <= k && k <= g.1).unwrap_or(0) as u8)
+            .collect();
+        let psi_cos = psi_edges.iter().map(|p| p.cos()).collect();
+        let n_mu = (mu_edges.len() - 1) as f64;
+        // Equal bins only if the edges are exactly where the multiplication puts them.
+        let uniform = mu_edges.iter().enumerate().all(|(i, e)| *e == -1.0 + 2.0 * i as f64 / n_mu);
+        let mu_uniform = uniform.then_some(0.5 * n_mu);
+        Ok(Self { depths, mu_edges, psi_edges, groups, group_of_order, psi_cos, mu_uniform })
+    }
+
+    /// The defaults of spec 40 for thickness `t`: 16 stretched planes, 16 μ_V bins, 12 ψ_V bins,
+    /// nine order groups.
+    pub fn default_for(t: f64) -> Result<Self> {
+        let pi = std::f64::consts::PI;
+        Self::new(
+            stretched_depths(t, 16),
+            (0..=16).map(|i| -1.0 + 2.0 * i as f64 / 16.0).collect(),
+            (0..=12).map(|i| pi * i as f64 / 12.0).collect(),
+            DEFAULT_GROUPS.to_vec(),
+        )
+    }
+
+    /// The slab thickness (mfp).
+    pub fn thickness(&self) -> f64 {
+        self.depths[self.depths.len() - 1]
+    }
+
+    /// Number of cells: groups × planes × μ_V bins × ψ_V bins.
+    pub fn n_cells(&self) -> usize {
+        self.groups.len() * self.depths.len() * self.n_mu() * self.n_psi()
+    }
+
+    /// Number of μ_V bins.
+    pub fn n_mu(&self) -> usize {
+        self.mu_edges.len() - 1
+    }
+
+    /// Number of ψ_V bins.
+    pub fn n_psi(&self) -> usize {
+        self.psi_edges.len() - 1
+    }
+
+    /// The group of scattering order `k` ≥ 1.
+    #[inline]
+    pub fn group(&self, k: u32) -> usize {
+        self.group_of_order[(k as usize).min(ORDER_TABLE)] as usize
+    }
+
+    /// The μ_V bin of `mu` (edges belong to the bin above; 1 to the last).
+    #[inline]
+    pub fn mu_bin(&self, mu: f64) -> usize {
+        match self.mu_uniform {
+            // Equal bins (the default): one multiplication instead of a search.
+            Some(per_unit) => (((mu + 1.0) * per_unit) as usize).min(self.n_mu() - 1),
+            None => bin(&self.mu_edges, mu),
+        }
+    }
+
+    /// The ψ_V bin of `psi` ∈ [0, π].
+    #[inline]
+    pub fn psi_bin(&self, psi: f64) -> usize {
+        bin(&self.psi_edges, psi)
+    }
+
+    /// Solid angle (sr) of direction bin (m, k), both mirror halves.
+    pub fn solid_angle(&self, m: usize, k: usize) -> f64 {
+        2.0 * (self.mu_edges[m + 1] - self.mu_edges[m]) * (self.psi_edges[k + 1] - self.psi_edges[k])
+    }
+
+    /// Flat index of cell (group, plane, μ bin, ψ bin). Planes are the fastest index: the
+    /// crossings of one flight share (group, μ, ψ) and land on neighbouring cells.
+    #[inline]
+    pub fn cell(&self, group: usize, plane: usize, m: usize, k: usize) -> usize {
+        ((group * self.n_mu() + m) * self.n_psi() + k) * self.depths.len() + plane
+    }
+
+    /// (group, plane, μ bin, ψ bin) of a flat cell index.
+    pub fn cell_parts(&self, cell: usize) -> (usize, usize, usize, usize) {
+        let planes = self.depths.len();
+        let (rest, plane) = (cell / planes, cell % planes);
+        let (rest, k) = (rest / self.n_psi(), rest % self.n_psi());
+        (rest / self.n_mu(), plane, rest % self.n_mu(), k)
+    }
+
+    /// The ψ_V bin of the horizontal direction (x, z) ≠ 0, without an arctangent: cos ψ_V =
+    /// z/√(x² + z²) decreases with ψ_V, so the bin is found among the edges' cosines.
+    #[inline]
+    pub fn psi_bin_of(&self, x: f64, z: f64) -> usize {
+        let r = (x * x + z * z).sqrt();
+        if r == 0.0 {
+            return 0;
+        }
+        let c = z / r;
+        // Bin k holds cos ψ ∈ (cos ψ_{k+1}, cos ψ_k]; edges inside (0, π) only.
+        let inner = &self.psi_cos[1..self.psi_cos.len() - 1];
+        inner.partition_point(|e| *e >= c)
+    }
+}
+
+fn bin(edges: &[f64], x: f64) -> usize {
+    edges[1..edges.len() - 1].partition_point(|e| *e <= x)
+}
+
+/// `n` ≥ 2 planes from 0 to t, stretched toward the lit face (module docs).
+pub fn stretched_depths(t: f64, n: usize) -> Vec<f64> {
+    let beta = 0.3 * t.powf(0.65);
+    (0..n)
+        .map(|j| {
+            let u = j as f64 / (n - 1) as f64;
+            match j {
+                0 => 0.0,
+                _ if j == n - 1 => t,
+                _ => t * (beta * u).exp_m1() / beta.exp_m1(),
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bins_groups_and_planes() {
+        let g = SlabGrid::default_for(64.0).unwrap();
+        assert_eq!((g.mu_bin(-1.0), g.mu_bin(-0.875), g.mu_bin(0.99), g.mu_bin(1.0)), (0, 1, 15, 15));
+        for i in 0..=2000 {
+            let mu = -1.0 + i as f64 / 1000.0;
+            assert_eq!(g.mu_bin(mu), bin(&g.mu_edges, mu), "μ = {mu}");
+        }
+        assert_eq!((g.psi_bin(0.0), g.psi_bin(std::f64::consts::PI)), (0, 11));
+        for psi in [0.0f64, 0.1, 0.3, 1.0, 1.5707, 2.0, 3.0, 3.14159] {
+            assert_eq!(g.psi_bin_of(psi.sin(), psi.cos()), g.psi_bin(psi), "ψ = {psi}");
+            assert_eq!(g.psi_bin_of(-psi.sin(), psi.cos()), g.psi_bin(psi), "ψ = −{psi}");
+        }
+        let c = g.cell(3, 7, 11, 5);
+        assert_eq!(g.cell_parts(c), (3, 7, 11, 5));
+        let groups: Vec<usize> = [1, 2, 3, 4, 5, 8, 9, 12, 13, 30, 31, 1000].iter().map(|&k| g.group(k)).collect();
+        assert_eq!(groups, [0, 1, 2, 2, 3, 4, 5, 5, 6, 7, 8, 8]);
+        // Stretched: at t = 64 half the planes lie within the first ~10 mfp.
+        assert_eq!(g.depths[0], 0.0);
+        assert_eq!(g.depths[15], 64.0);
+        assert!(g.depths[7] < 10.0, "{:?}", g.depths);
+        let total: f64 = (0..16).flat_map(|m| (0..12).map(move |k| (m, k))).map(|(m, k)| g.solid_angle(m, k)).sum();
+        assert!((total - 4.0 * std::f64::consts::PI).abs() < 1e-12);
+        assert!(SlabGrid::new(vec![0.0, 1.0], vec![-1.0, 1.0], vec![0.0, 3.0], DEFAULT_GROUPS.to_vec()).is_err());
+    }
+}

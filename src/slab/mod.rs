@@ -1,0 +1,18 @@
+//! Stage 4: slab Monte Carlo and the canonical transport tables ⟨T, c, σ⟩ of Bouthors et al.
+//! 2008 (spec 40).
+//!
+//! - [`grid`]: tally planes, view-direction bins, order groups.
+//! - [`walk`]: the photon walk of one slice (t, μ_L) and its per-batch random streams.
+//! - [`tally`]: per-batch sums, batch-means statistics, the tables of a slice.
+//! - [`run`]: a slice run to its stopping rule, deterministic for any thread count.
+//! - [`single`]: order 1 in closed form, for validation.
+
+pub mod grid;
+pub mod run;
+pub mod single;
+pub mod tally;
+pub mod walk;
+
+pub use grid::SlabGrid;
+pub use run::{run_slice, SliceRun, StopRule};
+pub use walk::Slice;

@@ -1,0 +1,199 @@
+//! Tallies of one slice (t, μ_L) and their statistics.
+//!
+//! A photon crossing tally plane j with direction ω contributes to its cell (group, j, μ_V bin,
+//! ψ_V bin) the vector w/|μ| · (1, x′, z, x′² + z²), where (x′, z) is the crossing point relative
+//! to the photon's entry point (x′ across the sun's horizontal direction, mirrored with ψ_V;
+//! z along it). With N photons, L/E⊥ = μ_L Σ w/|μ| / (N ΔΩ) (each photon carries E⊥ μ_L per unit
+//! area of the lit face, translation invariance turns the crossings of one photon column into a
+//! radiance), and the collector is minus the displacement: c = −(X, Z)/W,
+//! σ² = Q/W − |c|².
+//!
+//! Standard errors come from batch means: every batch of B photons gives a vector v_b = (W, X,
+//! Z, Q) per cell; the accumulator keeps Σ v_b and Σ v_b v_bᵀ, so a crossing-heavy photon counts
+//! once, in its batch, and every output f(v̄) has SE² = ∇fᵀ Cov(v̄) ∇f (the delta method for
+//! the ratios c and σ).
+
+use super::grid::SlabGrid;
+
+/// The sums of one batch.
+#[derive(Clone, Debug)]
+pub struct BatchTally {
+    /// Per cell: Σ w/|μ| · (1, x′, z, x′² + z²).
+    pub cells: Vec<[f64; 4]>,
+    /// Per plane: diffuse photons crossing upward / downward (flux in units of E⊥ μ_L per photon).
+    pub up: Vec<f64>,
+    /// See `up`.
+    pub down: Vec<f64>,
+    /// Per plane: unscattered photons crossing it.
+    pub direct: Vec<f64>,
+    /// Photons that left through the lit face / the far face (scattered or not).
+    pub escaped_top: f64,
+    /// See `escaped_top`.
+    pub escaped_bottom: f64,
+    /// Weight lost to absorption (albedo < 1).
+    pub absorbed: f64,
+    /// Scattering events.
+    pub events: u64,
+    /// Photons launched.
+    pub photons: u64,
+}
+
+impl BatchTally {
+    /// Empty sums for `grid`.
+    pub fn new(grid: &SlabGrid) -> Self {
+        let planes = grid.depths.len();
+        Self {
+            cells: vec![[0.0; 4]; grid.n_cells()],
+            up: vec![0.0; planes],
+            down: vec![0.0; planes],
+            direct: vec![0.0; planes],
+            escaped_top: 0.0,
+            escaped_bottom: 0.0,
+            absorbed: 0.0,
+            events: 0,
+            photons: 0,
+        }
+    }
+}
+
+/// Σ v_b and Σ v_b v_bᵀ over batches (all of the same size), plus plain totals.
+#[derive(Clone, Debug)]
+pub struct Accumulator {
+    /// Batches added.
+    pub batches: u64,
+    /// Totals of everything (cells included), summed in batch order.
+    pub total: BatchTally,
+    /// Per cell, the 10 entries of Σ v vᵀ (upper triangle, row-major).
+    second: Vec<[f64; 10]>,
+}
+
+/// Index pairs of the upper triangle of a 4×4 matrix, row-major.
+const PAIRS: [(usize, usize); 10] = [(0, 0), (0, 1), (0, 2), (0, 3), (1, 1), (1, 2), (1, 3), (2, 2), (2, 3), (3, 3)];
+
+impl Accumulator {
+    /// Nothing yet.
+    pub fn new(grid: &SlabGrid) -> Self {
+        Self { batches: 0, total: BatchTally::new(grid), second: vec![[0.0; 10]; grid.n_cells()] }
+    }
+
+    /// Adds one batch (call in batch order: the sums are then the same bits for any thread count).
+    pub fn add(&mut self, b: &BatchTally) {
+        self.batches += 1;
+        let t = &mut self.total;
+        for ((sum, sec), v) in t.cells.iter_mut().zip(&mut self.second).zip(&b.cells) {
+            if v[0] == 0.0 {
+                continue;
+            }
+            for i in 0..4 {
+                sum[i] += v[i];
+            }
+            for (s, (i, j)) in sec.iter_mut().zip(PAIRS) {
+                *s += v[i] * v[j];
+            }
+        }
+        for (a, x) in [(&mut t.up, &b.up), (&mut t.down, &b.down), (&mut t.direct, &b.direct)] {
+            a.iter_mut().zip(x).for_each(|(a, x)| *a += x);
+        }
+        t.escaped_top += b.escaped_top;
+        t.escaped_bottom += b.escaped_bottom;
+        t.absorbed += b.absorbed;
+        t.events += b.events;
+        t.photons += b.photons;
+    }
+
+    /// The tables of this slice so far (`mu_l`: the sun's cosine).
+    pub fn tables(&self, grid: &SlabGrid, mu_l: f64) -> SliceTables {
+        let n = self.batches.max(1) as f64;
+        let per_batch = self.total.photons as f64 / n;
+        let mut out = SliceTables::zeros(grid.n_cells());
+        for (c, (sum, sec)) in self.total.cells.iter().zip(&self.second).enumerate() {
+            if sum[0] == 0.0 {
+                continue;
+            }
+            let mean: [f64; 4] = std::array::from_fn(|i| sum[i] / n);
+            // Cov(v̄) = (Σ v vᵀ − n v̄ v̄ᵀ) / (n (n − 1)).
+            let cov = |i: usize, j: usize| -> f64 {
+                let k = PAIRS.iter().position(|p| *p == (i.min(j), i.max(j))).unwrap_or(0);
+                if n > 1.0 { (sec[k] - n * mean[i] * mean[j]) / (n * (n - 1.0)) } else { f64::NAN }
+            };
+            let se = |grad: [f64; 4]| -> f64 {
+                let mut s = 0.0;
+                for i in 0..4 {
+                    for j in 0..4 {
+                        s += grad[i] * grad[j] * cov(i, j);
+                    }
+                }
+                s.max(0.0).sqrt()
+            };
+            let (_, _, m, k) = grid.cell_parts(c);
+            let scale = mu_l / (per_batch * grid.solid_angle(m, k));
+            let [w, x, z, q] = mean;
+            out.t[c] = scale * w;
+            out.t_se[c] = se([scale, 0.0, 0.0, 0.0]);
+            out.cx[c] = -x / w;
+            out.cx_se[c] = se([x / (w * w), -1.0 / w, 0.0, 0.0]);
+            out.cz[c] = -z / w;
+            out.cz_se[c] = se([z / (w * w), 0.0, -1.0 / w, 0.0]);
+            let var = (q / w - (x / w).powi(2) - (z / w).powi(2)).max(0.0);
+            let sigma = var.sqrt();
+            out.sigma[c] = sigma;
+            let d_var = [
+                -q / (w * w) + 2.0 * (x * x + z * z) / (w * w * w),
+                -2.0 * x / (w * w),
+                -2.0 * z / (w * w),
+                1.0 / w,
+            ];
+            out.sigma_se[c] = if sigma > 0.0 { se(d_var) / (2.0 * sigma) } else { f64::NAN };
+        }
+        out
+    }
+}
+
+/// T, c_x, c_z, σ and their standard errors for every cell of one slice (flat, in
+/// [`SlabGrid::cell`] order). Cells no photon reached hold T = 0 and NaN elsewhere.
+#[derive(Clone, Debug)]
+pub struct SliceTables {
+    /// L/E⊥ (sr⁻¹).
+    pub t: Vec<f64>,
+    /// Standard error of `t`.
+    pub t_se: Vec<f64>,
+    /// Collector mean across the sun's horizontal direction (mfp).
+    pub cx: Vec<f64>,
+    /// Standard error of `cx`.
+    pub cx_se: Vec<f64>,
+    /// Collector mean along the sun's horizontal direction (mfp).
+    pub cz: Vec<f64>,
+    /// Standard error of `cz`.
+    pub cz_se: Vec<f64>,
+    /// Collector width (mfp).
+    pub sigma: Vec<f64>,
+    /// Standard error of `sigma`.
+    pub sigma_se: Vec<f64>,
+}
+
+impl SliceTables {
+    fn zeros(n: usize) -> Self {
+        let nan = vec![f64::NAN; n];
+        Self {
+            t: vec![0.0; n],
+            t_se: vec![0.0; n],
+            cx: nan.clone(),
+            cx_se: nan.clone(),
+            cz: nan.clone(),
+            cz_se: nan.clone(),
+            sigma: nan.clone(),
+            sigma_se: nan,
+        }
+    }
+
+    /// The largest relative standard error over cells with T ≥ `fraction` × the largest T.
+    pub fn worst_relative_error(&self, fraction: f64) -> f64 {
+        let max = self.t.iter().copied().fold(0.0, f64::max);
+        self.t
+            .iter()
+            .zip(&self.t_se)
+            .filter(|(t, _)| **t >= fraction * max && **t > 0.0)
+            .map(|(t, se)| se / t)
+            .fold(0.0, f64::max)
+    }
+}
