@@ -5,6 +5,7 @@
 mod fit;
 mod mie;
 mod phase;
+mod slab;
 mod sphere;
 
 use anyhow::Result;
@@ -27,6 +28,8 @@ enum Command {
     Mie(mie::MieArgs),
     /// Fit HG, two-term HG, Cornette–Shanks, Draine and HG+Draine to Mie tables; diameter curves.
     Fit(fit::FitArgs),
+    /// Slab Monte Carlo: the canonical transport tables ⟨T, c, σ⟩ per order group (spec 40).
+    Slab(slab::SlabArgs),
     /// Tabulate and sample a phase model of nephele-runtime (or a Mie table); renderer LUTs.
     Phase(phase::PhaseArgs),
     /// One sphere: Q_ext, Q_sca, Q_back, g and S1, S2 at given angles, as JSON on stdout.
@@ -46,6 +49,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Sphere(args)) => sphere::run(args),
         Some(Command::Phase(args)) => phase::run(args),
         Some(Command::Fit(args)) => fit::run(args),
+        Some(Command::Slab(args)) => slab::run(args),
         None => fit::run_main_job(),
     }
 }

@@ -285,13 +285,7 @@ pub fn run(args: PhaseArgs) -> Result<()> {
 
 /// theta_deg and phase of a `nephele mie` npz.
 fn read_table(path: &std::path::Path) -> Result<(Vec<f64>, Vec<f64>)> {
-    let mut npz = npyz::npz::NpzArchive::open(path)
-        .with_context(|| format!("cannot open '{}'", path.display()))?;
-    let mut get = |name: &str| -> Result<Vec<f64>> {
-        let arr = npz
-            .by_name(name)?
-            .with_context(|| format!("'{}' has no array '{name}'", path.display()))?;
-        Ok(arr.into_vec::<f64>()?)
-    };
-    Ok((get("theta_deg")?, get("phase")?))
+    let mut arrays = nephele::io::npz::read_arrays(path, &["theta_deg", "phase"])?;
+    let phase = arrays.pop().unwrap_or_default();
+    Ok((arrays.pop().unwrap_or_default(), phase))
 }

@@ -6,13 +6,17 @@
 //! - [`tally`]: per-batch sums, batch-means statistics, the tables of a slice.
 //! - [`run`]: a slice run to its stopping rule, deterministic for any thread count.
 //! - [`single`]: order 1 in closed form, for validation.
+//! - [`config`], [`tables`]: a whole run over (t, μ_L) from a config.
 
+pub mod config;
 pub mod grid;
 pub mod run;
 pub mod single;
+pub mod tables;
 pub mod tally;
 pub mod walk;
 
+pub use config::{PhaseSpec, SlabConfig};
 pub use grid::SlabGrid;
 pub use run::{run_slice, SliceRun, StopRule};
 pub use walk::Slice;

@@ -5,10 +5,11 @@
 use super::tally::{Accumulator, SliceTables};
 use super::walk::{batch_rng, Slice};
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// When a slice stops.
-#[derive(Clone, Copy, Debug, Serialize)]
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct StopRule {
     /// Photons per batch (the unit of the standard errors).
     pub batch_photons: u64,

@@ -1,0 +1,173 @@
+//! A slab run's config (fit-configs/slab-*.json): the grids of spec 40, the phase function,
+//! the seed and the stopping rule. Unknown keys and impossible values are errors.
+
+use super::grid::{stretched_depths, SlabGrid};
+use super::run::StopRule;
+use anyhow::{bail, Result};
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+use std::path::PathBuf;
+
+/// The phase function of the slab.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum PhaseSpec {
+    /// A stage-1 Mie table in the paper's setup (water, σ = 0.25, 400–700 nm) at this median
+    /// diameter (µm), sampled exactly by the tabulated model.
+    Mie {
+        /// Median diameter (µm).
+        diameter_um: f64,
+    },
+    /// Henyey–Greenstein (for validation against DISORT).
+    Hg {
+        /// Asymmetry g.
+        g: f64,
+    },
+    /// HG + Draine from a diameter preset: "jendersie_deon" (default) or "nephele".
+    HgDraine {
+        /// Median diameter (µm).
+        diameter_um: f64,
+        /// The preset.
+        #[serde(default = "default_preset")]
+        preset: String,
+    },
+    /// A `nephele mie` phase.npz (its `theta_deg` and `phase`).
+    Table {
+        /// Path of the npz.
+        path: PathBuf,
+    },
+}
+
+fn default_preset() -> String {
+    "jendersie_deon".into()
+}
+
+impl Default for PhaseSpec {
+    fn default() -> Self {
+        PhaseSpec::Mie { diameter_um: 10.0 }
+    }
+}
+
+/// Everything a slab run needs.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SlabConfig {
+    /// Free text.
+    #[serde(default)]
+    pub description: String,
+    /// Slab thicknesses t (mfp), increasing.
+    #[serde(default = "default_thicknesses")]
+    pub thicknesses: Vec<f64>,
+    /// Sun cosines μ_L in (0, 1], increasing.
+    #[serde(default = "default_mu_l")]
+    pub mu_l: Vec<f64>,
+    /// Depth planes per slab (stretched toward the lit face, both faces included).
+    #[serde(default = "sixteen")]
+    pub planes: usize,
+    /// Equal μ_V bins over [−1, 1].
+    #[serde(default = "sixteen")]
+    pub mu_v_bins: usize,
+    /// Equal ψ_V bins over [0, π].
+    #[serde(default = "twelve")]
+    pub psi_v_bins: usize,
+    /// First order of each group (the last group runs to ∞).
+    #[serde(default = "default_group_starts")]
+    pub group_starts: Vec<u32>,
+    /// The phase function.
+    #[serde(default)]
+    pub phase: PhaseSpec,
+    /// Single-scattering albedo in (0, 1].
+    #[serde(default = "one")]
+    pub albedo: f64,
+    /// Seed of every random stream.
+    #[serde(default = "one_u64")]
+    pub seed: u64,
+    /// When each slice stops.
+    #[serde(default)]
+    pub stop: StopRule,
+}
+
+fn default_thicknesses() -> Vec<f64> {
+    vec![0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0, 128.0]
+}
+fn default_mu_l() -> Vec<f64> {
+    (1..=8).map(|k| k as f64 / 8.0).collect()
+}
+fn default_group_starts() -> Vec<u32> {
+    vec![1, 2, 3, 5, 7, 9, 13, 19, 31]
+}
+fn sixteen() -> usize {
+    16
+}
+fn twelve() -> usize {
+    12
+}
+fn one() -> f64 {
+    1.0
+}
+fn one_u64() -> u64 {
+    1
+}
+
+impl Default for SlabConfig {
+    fn default() -> Self {
+        serde_json::from_str("{}").expect("every key has a default")
+    }
+}
+
+impl SlabConfig {
+    /// Checks every value; the message names the key.
+    pub fn validate(&self) -> Result<()> {
+        let increasing = |v: &[f64]| v.windows(2).all(|w| w[0] < w[1]);
+        if self.thicknesses.is_empty() || !increasing(&self.thicknesses) || self.thicknesses.iter().any(|t| !(t.is_finite() && *t > 0.0 && *t <= 1e4)) {
+            bail!("thicknesses must be increasing, each in (0, 10000] mfp");
+        }
+        if self.mu_l.is_empty() || !increasing(&self.mu_l) || self.mu_l.iter().any(|m| !(*m > 0.0 && *m <= 1.0)) {
+            bail!("mu_l must be increasing, each in (0, 1]");
+        }
+        if !(2..=1024).contains(&self.planes) || !(1..=1024).contains(&self.mu_v_bins) || !(1..=1024).contains(&self.psi_v_bins) {
+            bail!("planes must be in 2..=1024, mu_v_bins and psi_v_bins in 1..=1024");
+        }
+        if self.group_starts.first() != Some(&1) || self.group_starts.windows(2).any(|w| w[0] >= w[1]) || self.group_starts.len() > 255 {
+            bail!("group_starts must begin with 1 and increase (at most 255 groups)");
+        }
+        if !(self.albedo > 0.0 && self.albedo <= 1.0) {
+            bail!("albedo = {} must be in (0, 1]", self.albedo);
+        }
+        let s = &self.stop;
+        if s.batch_photons == 0 || s.round_batches < 2 || s.min_batches < 2 || s.max_photons < s.batch_photons * s.round_batches {
+            bail!("stop: batch_photons ≥ 1, round_batches ≥ 2, min_batches ≥ 2, max_photons ≥ one round of batches");
+        }
+        if !(s.target_rel_se >= 0.0 && (0.0..=1.0).contains(&s.cell_fraction)) {
+            bail!("stop: target_rel_se ≥ 0 and cell_fraction in [0, 1]");
+        }
+        match &self.phase {
+            PhaseSpec::Mie { diameter_um } | PhaseSpec::HgDraine { diameter_um, .. } if !(*diameter_um > 0.0 && *diameter_um <= 1e4) => {
+                bail!("phase.diameter_um = {diameter_um} must be in (0, 10000]")
+            }
+            PhaseSpec::Hg { g } if !(g.abs() < 1.0) => bail!("phase.g = {g} must be in (−1, 1)"),
+            PhaseSpec::HgDraine { preset, .. } if preset != "jendersie_deon" && preset != "nephele" => {
+                bail!("phase.preset `{preset}` is unknown (valid: jendersie_deon, nephele)")
+            }
+            _ => {}
+        }
+        self.grid(self.thicknesses[0]).map(|_| ())
+    }
+
+    /// The order groups as (first, last).
+    pub fn groups(&self) -> Vec<(u32, u32)> {
+        let s = &self.group_starts;
+        (0..s.len()).map(|i| (s[i], s.get(i + 1).map_or(u32::MAX, |n| n - 1))).collect()
+    }
+
+    /// The grid of the slab of thickness `t`.
+    pub fn grid(&self, t: f64) -> Result<SlabGrid> {
+        let (nm, np) = (self.mu_v_bins, self.psi_v_bins);
+        SlabGrid::new(
+            stretched_depths(t, self.planes),
+            (0..=nm).map(|i| -1.0 + 2.0 * i as f64 / nm as f64).collect(),
+            (0..=np).map(|i| if i == np { PI } else { PI * i as f64 / np as f64 }).collect(),
+            self.groups(),
+        )
+    }
+}
