@@ -19,6 +19,7 @@ CHECKS=(
     check_mie.py
     check_mitsuba.py
     check_fit.py
+    check_slab.py
 )
 
 BUILD=1

@@ -353,3 +353,42 @@ fn fit_outputs_are_bit_identical_for_any_thread_count() {
         .collect();
     assert!(npz[0] == npz[1], "fits.npz differs between 1 and 2 threads");
 }
+
+#[test]
+fn slab_quick_config_writes_tables_and_refuses_bad_configs() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("slab");
+    let cfg = concat!(env!("CARGO_MANIFEST_DIR"), "/fit-configs/slab-quick.json");
+    succeeds(&["slab", "--config", cfg, "--out", out.to_str().unwrap()]);
+    assert_eq!(files_in(&out), ["slab.png", "tables.json", "tables.npz"]);
+    let mut npz = npyz::npz::NpzArchive::open(out.join("tables.npz")).unwrap();
+    let t = npz.by_name("T").unwrap().unwrap();
+    // [group, t, mu_L, depth, mu_V, psi_V] of slab-quick.json.
+    assert_eq!(t.shape(), &[9, 2, 2, 6, 8, 4]);
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("tables.json")).unwrap()).unwrap();
+    for s in doc["slices"].as_array().unwrap() {
+        let r = s["reflected"].as_f64().unwrap() + s["transmitted"].as_f64().unwrap();
+        assert!((r - 1.0).abs() < 1e-12, "albedo 1: every photon leaves");
+    }
+    let cases = [
+        (r#"{"thicknesses": [4, 1]}"#, "thicknesses"),
+        (r#"{"mu_l": [0, 1]}"#, "mu_l"),
+        (r#"{"phase": {"kind": "hg", "g": 1.5}}"#, "phase.g"),
+        (r#"{"phase": {"kind": "rayleigh"}}"#, "unknown variant"),
+        (r#"{"phase": {"kind": "hg_draine", "diameter_um": 10, "preset": "x"}}"#, "preset"),
+        (r#"{"albedo": 0}"#, "albedo"),
+        (r#"{"stop": {"photons": 5}}"#, "unknown field"),
+        (r#"{"group_starts": [2, 3]}"#, "group_starts"),
+    ];
+    for (i, (text, expect)) in cases.iter().enumerate() {
+        let cfg = dir.path().join(format!("bad{i}.json"));
+        std::fs::write(&cfg, text).unwrap();
+        let out = dir.path().join(format!("out{i}"));
+        let o = nephele(&["slab", "--config", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{text} should fail");
+        assert!(err.trim().lines().count() == 1 && err.contains(expect), "{text}: {err}");
+        assert!(files_in(&out).is_empty(), "{text} left files");
+    }
+}
