@@ -127,3 +127,45 @@ fn tables_are_bit_identical_for_any_thread_count() {
     assert_eq!(bits(&a.tables.sigma_se), bits(&b.tables.sigma_se));
     assert_eq!(a.acc.total.events, b.acc.total.events);
 }
+
+#[test]
+fn order_one_collector_matches_the_closed_form() {
+    // The bookkeeping of the lateral moments: c_x, c_z and σ of order 1 against quadrature over
+    // the scattering depth (src/slab/single.rs), on cells holding ≥ 5 % of the largest T₁.
+    let hg = HenyeyGreenstein::new(0.7);
+    let (t_slab, mu_l) = (2.0, 0.5);
+    let grid = SlabGrid::new(
+        nephele::slab::grid::stretched_depths(t_slab, 5),
+        (0..=8).map(|i| -1.0 + 0.25 * i as f64).collect(),
+        (0..=4).map(|i| if i == 4 { PI } else { PI * i as f64 / 4.0 }).collect(),
+        vec![(1, 1), (2, u32::MAX)],
+    )
+    .unwrap();
+    let slice = Slice { grid: &grid, mu_l, albedo: 1.0, phase: &hg };
+    let run = run_slice(&slice, 17, 0, &rule(2_000_000), &|_, _| {});
+    let t = &run.tables;
+    let max = (0..grid.n_cells()).filter(|&c| grid.cell_parts(c).0 == 0).map(|c| t.t[c]).fold(0.0, f64::max);
+    let (mut chi2, mut n, mut worst) = (0.0, 0usize, 0.0f64);
+    for (j, &d) in grid.depths.iter().enumerate() {
+        for m in 0..grid.n_mu() {
+            for k in 0..grid.n_psi() {
+                let c = grid.cell(0, j, m, k);
+                if t.t[c] < 0.05 * max {
+                    continue;
+                }
+                let mu = (grid.mu_edges[m], grid.mu_edges[m + 1]);
+                let psi = (grid.psi_edges[k], grid.psi_edges[k + 1]);
+                let exact = nephele::slab::single::single_scattering_collector(&hg, mu_l, t_slab, d, mu, psi, 2);
+                for (mc, se, ex) in [(t.cx[c], t.cx_se[c], exact[0]), (t.cz[c], t.cz_se[c], exact[1]), (t.sigma[c], t.sigma_se[c], exact[2])] {
+                    let z = (mc - ex) / se;
+                    chi2 += z * z;
+                    n += 1;
+                    worst = worst.max(z.abs());
+                }
+            }
+        }
+    }
+    let p = 1.0 - ChiSquared::new(n as f64).unwrap().cdf(chi2);
+    println!("order-1 collector: {n} values, chi2 = {chi2:.1}, p = {p:.3}, worst |z| = {worst:.2}");
+    assert!(n > 30 && p > 1e-3 && worst < 5.0, "chi2 {chi2} over {n} (p = {p}), worst |z| {worst}");
+}

@@ -47,3 +47,54 @@ pub fn single_scattering_bin(
     let over_psi = |mu: f64| integrate(&|psi| single_scattering(phase, albedo, mu_l, t, d, mu, psi), psi_a, psi_b, &rule, pieces);
     integrate(&over_psi, mu_a, mu_b, &rule, pieces) / ((mu_b - mu_a) * (psi_b - psi_a))
 }
+
+/// Order-1 sums per unit solid angle at depth `d`, view (μ_V, ψ_V): the cell vector
+/// (W, X, Z, Q) of [`super::tally`] divided by N ΔΩ/μ_L, i.e. T₁ and T₁ times the mean of x′,
+/// z and x′² + z² over the depths d′ of the scattering. The photon entered at the origin, reached
+/// (0, d′ tan φ_L, d′) along the sun, and flew ℓ = (d − d′)/(−μ_V) to the plane:
+/// x′ = ℓ sin θ_V sin ψ_V, z = d′ tan φ_L + ℓ sin θ_V cos ψ_V. By quadrature over d′.
+pub fn single_scattering_moments(phase: &dyn PhaseFunction<f64>, mu_l: f64, t: f64, d: f64, mu_v: f64, psi_v: f64) -> [f64; 4] {
+    let sin_l = (1.0 - mu_l * mu_l).max(0.0).sqrt();
+    let sin_v = (1.0 - mu_v * mu_v).max(0.0).sqrt();
+    let cos_theta = sin_l * sin_v * psi_v.cos() - mu_l * mu_v;
+    let p = phase.eval(cos_theta.clamp(-1.0, 1.0));
+    let m = mu_v.abs();
+    let rule = gauss_legendre(8);
+    // Scattering depths: below d for light going up, above it for light going down.
+    let (a, b) = if mu_v > 0.0 { (d, t) } else { (0.0, d) };
+    let moment = |k: usize| {
+        let f = |dp: f64| {
+            let w = p * (-dp / mu_l - (d - dp).abs() / m).exp() / m;
+            let ell = (d - dp) / -mu_v;
+            let x = ell * sin_v * psi_v.sin();
+            let z = dp * sin_l / mu_l + ell * sin_v * psi_v.cos();
+            w * [1.0, x, z, x * x + z * z][k]
+        };
+        integrate(&f, a, b, &rule, 16)
+    };
+    [moment(0), moment(1), moment(2), moment(3)]
+}
+
+/// The order-1 collector of a bin: (c_x, c_z, σ) from the bin integrals of
+/// [`single_scattering_moments`].
+#[allow(clippy::too_many_arguments)]
+pub fn single_scattering_collector(
+    phase: &dyn PhaseFunction<f64>,
+    mu_l: f64,
+    t: f64,
+    d: f64,
+    (mu_a, mu_b): (f64, f64),
+    (psi_a, psi_b): (f64, f64),
+    pieces: usize,
+) -> [f64; 3] {
+    let rule = gauss_legendre(8);
+    let bin = |k: usize| {
+        let over_psi = |mu: f64| {
+            integrate(&|psi| single_scattering_moments(phase, mu_l, t, d, mu, psi)[k], psi_a, psi_b, &rule, pieces)
+        };
+        integrate(&over_psi, mu_a, mu_b, &rule, pieces)
+    };
+    let [w, x, z, q] = [bin(0), bin(1), bin(2), bin(3)];
+    let (cx, cz) = (-x / w, -z / w);
+    [cx, cz, (q / w - cx * cx - cz * cz).max(0.0).sqrt()]
+}
