@@ -392,3 +392,70 @@ fn slab_quick_config_writes_tables_and_refuses_bad_configs() {
         assert!(files_in(&out).is_empty(), "{text} left files");
     }
 }
+
+/// slab-quick.json with a larger budget, so that a run lasts long enough to be killed.
+fn slab_config(dir: &Path, max_photons: u64) -> std::path::PathBuf {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/fit-configs/slab-quick.json")).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    v["stop"]["max_photons"] = max_photons.into();
+    v["stop"]["target_rel_se"] = 0.0.into();
+    let path = dir.join(format!("slab-{max_photons}.json"));
+    std::fs::write(&path, v.to_string()).unwrap();
+    path
+}
+
+#[test]
+fn slab_shards_merge_to_the_same_bits_as_one_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = slab_config(dir.path(), 320_000);
+    let cfg = cfg.to_str().unwrap();
+    let one = dir.path().join("one");
+    succeeds(&["slab", "--config", cfg, "--out", one.to_str().unwrap(), "--no-plot"]);
+    assert!(!one.join("checkpoint").exists(), "a finished run removes its checkpoint");
+    let shards: Vec<String> = (1..=3).map(|k| dir.path().join(format!("shard{k}")).to_string_lossy().into()).collect();
+    for (k, d) in shards.iter().enumerate() {
+        succeeds(&["slab", "--config", cfg, "--out", d, "--shard", &format!("{}/3", k + 1), "--no-plot"]);
+    }
+    let merged = dir.path().join("merged");
+    let mut args = vec!["merge", "--config", cfg, "--out", merged.to_str().unwrap(), "--no-plot"];
+    args.extend(shards.iter().map(String::as_str));
+    succeeds(&args);
+    let a = std::fs::read(one.join("tables.npz")).unwrap();
+    let b = std::fs::read(merged.join("tables.npz")).unwrap();
+    assert!(a == b, "merged shards differ from one run");
+    // A missing shard is an error, not a partial table.
+    let incomplete = dir.path().join("incomplete");
+    let o = nephele(&["merge", "--config", cfg, "--out", incomplete.to_str().unwrap(), &shards[0], &shards[1]]);
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("in no shard"));
+    assert!(files_in(&incomplete).is_empty());
+}
+
+#[test]
+fn a_killed_slab_run_resumes_to_the_same_bits() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = slab_config(dir.path(), 3_200_000);
+    let cfg = cfg.to_str().unwrap();
+    let whole = dir.path().join("whole");
+    succeeds(&["slab", "--config", cfg, "--out", whole.to_str().unwrap(), "--no-plot"]);
+    let resumed = dir.path().join("resumed");
+    let checkpoint = resumed.join("checkpoint");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_nephele"))
+        .args(["slab", "--config", cfg, "--out", resumed.to_str().unwrap(), "--no-plot", "--save-every", "0"])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    // Kill it once a slice has finished and the next one has saved a round.
+    let t0 = std::time::Instant::now();
+    while !(checkpoint.join("slice-0000.json").exists() && checkpoint.join("current.json").exists()) {
+        assert!(t0.elapsed().as_secs() < 120, "no checkpoint appeared");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(!resumed.join("tables.npz").exists());
+    succeeds(&["slab", "--config", cfg, "--out", resumed.to_str().unwrap(), "--no-plot"]);
+    let a = std::fs::read(whole.join("tables.npz")).unwrap();
+    let b = std::fs::read(resumed.join("tables.npz")).unwrap();
+    assert!(a == b, "the resumed run differs from the uninterrupted one");
+}

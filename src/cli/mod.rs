@@ -30,6 +30,8 @@ enum Command {
     Fit(fit::FitArgs),
     /// Slab Monte Carlo: the canonical transport tables ⟨T, c, σ⟩ per order group (spec 40).
     Slab(slab::SlabArgs),
+    /// Merge the shards of a slab run (`nephele slab --shard K/N`) into its tables.
+    Merge(slab::MergeArgs),
     /// Tabulate and sample a phase model of nephele-runtime (or a Mie table); renderer LUTs.
     Phase(phase::PhaseArgs),
     /// One sphere: Q_ext, Q_sca, Q_back, g and S1, S2 at given angles, as JSON on stdout.
@@ -50,6 +52,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Phase(args)) => phase::run(args),
         Some(Command::Fit(args)) => fit::run(args),
         Some(Command::Slab(args)) => slab::run(args),
+        Some(Command::Merge(args)) => slab::merge_shards(args),
         None => fit::run_main_job(),
     }
 }

@@ -1,11 +1,12 @@
 //! `nephele slab`: the canonical transport tables of a slab config.
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use nephele::io::plot::{panels_plot, Panel, Series, Style};
 use nephele::io::{AtomicFiles, Npz};
-use nephele::slab::tables::{run_all, PhaseModel, SlabRun};
+use nephele::slab::checkpoint::Checkpoint;
+use nephele::slab::tables::{merge, run_all, Control, PhaseModel, SlabRun};
 use nephele::slab::SlabConfig;
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -18,55 +19,127 @@ pub struct SlabArgs {
     /// psi_v_bins, group_starts, phase, albedo, seed, stop.
     #[arg(long, value_name = "FILE")]
     config: PathBuf,
-    /// Output directory. [default: outputs/slab]
+    /// Output directory; its checkpoint/ subdirectory holds finished slices and the slice in
+    /// progress, and a rerun resumes from it. [default: outputs/slab]
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
+    /// Run only the slices s with s mod N = K-1 ("K/N", 1 ≤ K ≤ N) and keep their sums in
+    /// DIR/checkpoint for `nephele merge` (e.g. one Slurm array task per K).
+    #[arg(long, value_name = "K/N")]
+    shard: Option<String>,
+    /// Least seconds between two checkpoints of the slice in progress.
+    #[arg(long, value_name = "S", default_value_t = 30.0)]
+    save_every: f64,
     /// Do not draw the figure.
     #[arg(long)]
     no_plot: bool,
 }
 
+/// Options of `nephele merge`.
+#[derive(Args, Debug, Clone)]
+pub struct MergeArgs {
+    /// The slab config every shard ran.
+    #[arg(long, value_name = "FILE")]
+    config: PathBuf,
+    /// Where the merged tables go. [default: outputs/slab]
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// The shards' output directories (`nephele slab --shard K/N --out DIR`).
+    #[arg(value_name = "SHARD_DIR", required = true)]
+    shards: Vec<PathBuf>,
+    /// Do not draw the figure.
+    #[arg(long)]
+    no_plot: bool,
+}
+
+fn load_config(path: &Path) -> Result<SlabConfig> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read config '{}'", path.display()))?;
+    let cfg: SlabConfig = serde_json::from_str(&text).with_context(|| format!("config '{}'", path.display()))?;
+    cfg.validate().with_context(|| format!("config '{}'", path.display()))?;
+    Ok(cfg)
+}
+
+fn parse_shard(s: &str) -> Result<(usize, usize)> {
+    let parsed = s.split_once('/').and_then(|(k, n)| Some((k.trim().parse::<usize>().ok()?, n.trim().parse::<usize>().ok()?)));
+    match parsed {
+        Some((k, n)) if 1 <= k && k <= n => Ok((k - 1, n)),
+        _ => bail!("--shard '{s}' must be K/N with 1 ≤ K ≤ N"),
+    }
+}
+
 /// Runs `nephele slab`.
 pub fn run(args: SlabArgs) -> Result<()> {
-    let text = std::fs::read_to_string(&args.config)
-        .with_context(|| format!("cannot read config '{}'", args.config.display()))?;
-    let cfg: SlabConfig = serde_json::from_str(&text).with_context(|| format!("config '{}'", args.config.display()))?;
-    cfg.validate().with_context(|| format!("config '{}'", args.config.display()))?;
+    let cfg = load_config(&args.config)?;
+    let shard = args.shard.as_deref().map(parse_shard).transpose()?;
+    if !(args.save_every >= 0.0) {
+        bail!("--save-every must be ≥ 0 seconds");
+    }
     let out = args.out.unwrap_or_else(|| PathBuf::from("outputs/slab"));
     let t0 = Instant::now();
     let phase = PhaseModel::build(&cfg.phase)?;
     let phase_s = t0.elapsed().as_secs_f64();
+    let checkpoint = Checkpoint::open(&out.join("checkpoint"), &cfg)?;
+    let control = Control { shard, checkpoint: Some(&checkpoint), save_every_s: args.save_every };
     let total = cfg.thicknesses.len() * cfg.mu_l.len();
     let bar = ProgressBar::new(total as u64).with_style(
         ProgressStyle::with_template("slab [{bar:30}] {pos}/{len} slices ({elapsed}, eta {eta}) {msg}")
             .expect("static template"),
     );
     let t1 = Instant::now();
-    let run = run_all(&cfg, &phase, &|slice, _, photons, worst| {
+    let run = run_all(&cfg, &phase, &control, &|slice, _, photons, worst| {
         bar.set_position(slice as u64);
         let rate = photons as f64 / t1.elapsed().as_secs_f64().max(1e-9);
         bar.set_message(format!("slice {}: {photons} photons, worst rel. error {:.2} %, {:.2} M photons/s", slice + 1, 100.0 * worst, rate / 1e6));
     })?;
     bar.finish_and_clear();
     let mc_s = t1.elapsed().as_secs_f64();
-    std::fs::create_dir_all(&out).with_context(|| format!("cannot create '{}'", out.display()))?;
-    let mut set = AtomicFiles::new();
-    let timings = json!({"phase_s": phase_s, "monte_carlo_s": mc_s, "threads": rayon::current_num_threads()});
-    set.write(&out.join("tables.json"), |w| {
-        serde_json::to_writer_pretty(&mut *w, &report(&cfg, &run, timings))?;
-        Ok(())
-    })?;
-    set.write(&out.join("tables.npz"), |w| arrays(&cfg, &run).write_to(w))?;
-    if !args.no_plot {
-        set.write_via_path(&out.join("slab.png"), |p| figure(p, &cfg, &run))?;
+    if let Some((k, n)) = shard {
+        summary(&run, mc_s);
+        println!("shard {}/{n}: sums in {}; merge all shards with `nephele merge --config … SHARD_DIR…`", k + 1, out.join("checkpoint").display());
+        return Ok(());
     }
-    set.commit()?;
-    summary(&run, &out, mc_s);
+    let timings = json!({"phase_s": phase_s, "monte_carlo_s": mc_s, "threads": rayon::current_num_threads()});
+    write_tables(&cfg, &run, &out, !args.no_plot, timings)?;
+    checkpoint.remove()?;
+    summary(&run, mc_s);
+    println!("wrote {}/tables.npz, tables.json", out.display());
     Ok(())
 }
 
+/// Runs `nephele merge`.
+pub fn merge_shards(args: MergeArgs) -> Result<()> {
+    let cfg = load_config(&args.config)?;
+    let shards = args
+        .shards
+        .iter()
+        .map(|d| Checkpoint::existing(&d.join("checkpoint"), &cfg))
+        .collect::<Result<Vec<_>>>()?;
+    let run = merge(&cfg, &shards)?;
+    let out = args.out.unwrap_or_else(|| PathBuf::from("outputs/slab"));
+    let seconds: f64 = run.done().map(|(r, _)| r.seconds).sum();
+    let timings = json!({"monte_carlo_s_summed_over_shards": seconds, "shards": args.shards.len()});
+    write_tables(&cfg, &run, &out, !args.no_plot, timings)?;
+    summary(&run, seconds);
+    println!("merged {} shards into {}/tables.npz, tables.json", args.shards.len(), out.display());
+    Ok(())
+}
+
+fn write_tables(cfg: &SlabConfig, run: &SlabRun, out: &Path, plot: bool, timings: serde_json::Value) -> Result<()> {
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create '{}'", out.display()))?;
+    let mut set = AtomicFiles::new();
+    set.write(&out.join("tables.json"), |w| {
+        serde_json::to_writer_pretty(&mut *w, &report(cfg, run, timings))?;
+        Ok(())
+    })?;
+    set.write(&out.join("tables.npz"), |w| arrays(cfg, run).write_to(w))?;
+    if plot {
+        set.write_via_path(&out.join("slab.png"), |p| figure(p, cfg, run))?;
+    }
+    set.commit()
+}
+
 fn report(cfg: &SlabConfig, run: &SlabRun, timings: serde_json::Value) -> serde_json::Value {
-    let slices: Vec<_> = run.slices.iter().map(|(r, _)| r).collect();
+    let slices: Vec<_> = run.done().map(|(r, _)| r).collect();
     json!({
         "version": nephele::VERSION,
         "git_commit": option_env!("NEPHELE_GIT_COMMIT"),
@@ -90,7 +163,7 @@ fn arrays(cfg: &SlabConfig, run: &SlabRun) -> Npz {
     let names = ["T", "T_se", "cx", "cx_se", "cz", "cz_se", "sigma", "sigma_se"];
     let mut out: Vec<Vec<f64>> = vec![vec![f64::NAN; n]; names.len()];
     let mut flux = [vec![0.0; nt * nl * np], vec![0.0; nt * nl * np], vec![0.0; nt * nl * np], vec![0.0; nt * nl * np]];
-    for (s, (report, slice)) in run.slices.iter().enumerate() {
+    for (s, (report, slice)) in run.slices.iter().enumerate().filter_map(|(s, x)| Some((s, x.as_ref()?))) {
         let (it, il) = (s / nl, s % nl);
         let grid = cfg.grid(report.t).expect("validated");
         let t = &slice.tables;
@@ -140,7 +213,7 @@ fn arrays(cfg: &SlabConfig, run: &SlabRun) -> Npz {
 fn figure(path: &Path, cfg: &SlabConfig, run: &SlabRun) -> Result<()> {
     let nearest = |v: &[f64], x: f64| (0..v.len()).min_by(|&a, &b| (v[a] - x).abs().total_cmp(&(v[b] - x).abs())).unwrap_or(0);
     let (it, il) = (nearest(&cfg.thicknesses, 8.0), nearest(&cfg.mu_l, 0.5));
-    let (report, slice) = &run.slices[it * cfg.mu_l.len() + il];
+    let (report, slice) = run.slices[it * cfg.mu_l.len() + il].as_ref().context("slice not run")?;
     let grid = cfg.grid(report.t)?;
     let d = &grid.depths;
     let (up, down) = (grid.n_mu() - 1, 0);
@@ -184,14 +257,14 @@ fn figure(path: &Path, cfg: &SlabConfig, run: &SlabRun) -> Result<()> {
     panels_plot(path, (1600, 1200), 2, &panels)
 }
 
-fn summary(run: &SlabRun, out: &Path, seconds: f64) {
+fn summary(run: &SlabRun, seconds: f64) {
     println!("{:>8} {:>6} {:>12} {:>10} {:>10} {:>10} {:>10}", "t", "mu_L", "photons", "R", "T", "worst se", "converged");
-    for (r, _) in &run.slices {
+    for (r, _) in run.done() {
         println!(
             "{:>8} {:>6} {:>12} {:>10.5} {:>10.5} {:>9.2}% {:>10}",
             r.t, r.mu_l, r.photons, r.reflected, r.transmitted, 100.0 * r.worst_rel_se, r.converged
         );
     }
-    let events: u64 = run.slices.iter().map(|(r, _)| r.events).sum();
-    println!("{events} scattering events in {seconds:.1} s; wrote {}/tables.npz, tables.json", out.display());
+    let events: u64 = run.done().map(|(r, _)| r.events).sum();
+    println!("{events} scattering events in {seconds:.1} s");
 }

@@ -7,7 +7,9 @@
 //! - [`run`]: a slice run to its stopping rule, deterministic for any thread count.
 //! - [`single`]: order 1 in closed form, for validation.
 //! - [`config`], [`tables`]: a whole run over (t, μ_L) from a config.
+//! - [`checkpoint`]: exact sums of finished and running slices, for resuming and for shards.
 
+pub mod checkpoint;
 pub mod config;
 pub mod grid;
 pub mod run;
@@ -18,5 +20,5 @@ pub mod walk;
 
 pub use config::{PhaseSpec, SlabConfig};
 pub use grid::SlabGrid;
-pub use run::{run_slice, SliceRun, StopRule};
+pub use run::{run_slice, run_slice_from, SliceRun, StopRule};
 pub use walk::Slice;

@@ -53,7 +53,22 @@ pub struct SliceRun {
 /// Runs `slice` (index `slice_index` in its run, for the random streams) until `rule` stops it;
 /// `progress(photons, worst_rel_se)` after each round.
 pub fn run_slice(slice: &Slice, seed: u64, slice_index: u64, rule: &StopRule, progress: &dyn Fn(u64, f64)) -> SliceRun {
-    let mut acc = Accumulator::new(slice.grid);
+    run_slice_from(slice, seed, slice_index, rule, Accumulator::new(slice.grid), &mut |acc, worst| {
+        progress(acc.total.photons, worst)
+    })
+}
+
+/// As [`run_slice`], continuing from `acc` (the sums after some rounds, e.g. from a
+/// checkpoint: the result is the same bits as an uninterrupted run); `after_round` sees the
+/// sums after every round that does not end the slice.
+pub fn run_slice_from(
+    slice: &Slice,
+    seed: u64,
+    slice_index: u64,
+    rule: &StopRule,
+    mut acc: Accumulator,
+    after_round: &mut dyn FnMut(&Accumulator, f64),
+) -> SliceRun {
     loop {
         let first = acc.batches;
         let batches: Vec<_> = (first..first + rule.round_batches)
@@ -63,10 +78,10 @@ pub fn run_slice(slice: &Slice, seed: u64, slice_index: u64, rule: &StopRule, pr
         batches.iter().for_each(|b| acc.add(b));
         let tables = acc.tables(slice.grid, slice.mu_l);
         let worst = tables.worst_relative_error(rule.cell_fraction);
-        progress(acc.total.photons, worst);
         let converged = acc.batches >= rule.min_batches && worst <= rule.target_rel_se;
         if converged || acc.total.photons >= rule.max_photons {
             return SliceRun { acc, tables, worst_rel_se: worst, converged };
         }
+        after_round(&acc, worst);
     }
 }

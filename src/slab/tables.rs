@@ -3,7 +3,10 @@
 //! [group, t, μ_L, depth, μ_V, ψ_V].
 
 use super::config::{PhaseSpec, SlabConfig};
-use super::run::{run_slice, SliceRun};
+use super::checkpoint::Checkpoint;
+use super::grid::SlabGrid;
+use super::run::{run_slice_from, SliceRun};
+use super::tally::Accumulator;
 use super::walk::Slice;
 use crate::mie::polydisperse::{CONVERGED_DEFAULT, DEFAULT_WAVELENGTHS};
 use crate::mie::MieJob;
@@ -11,7 +14,7 @@ use anyhow::{anyhow, Context, Result};
 use nephele_runtime::phase::{HenyeyGreenstein, TabulatedTable};
 use nephele_runtime::presets::{jendersie_deon, nephele_refit};
 use nephele_runtime::PhaseFunction;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
 /// The phase function of a run, owned.
@@ -58,7 +61,7 @@ impl PhaseModel {
 }
 
 /// What one slice reports besides its tables.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct SliceReport {
     /// Thickness (mfp).
     pub t: f64,
@@ -82,17 +85,41 @@ pub struct SliceReport {
     pub seconds: f64,
 }
 
-/// The results of every slice, in (t, μ_L) order.
+/// The results of every slice, in (t, μ_L) order (`None`: another shard's).
 pub struct SlabRun {
     /// Per slice: its report and its run.
-    pub slices: Vec<(SliceReport, SliceRun)>,
+    pub slices: Vec<Option<(SliceReport, SliceRun)>>,
     /// Depth planes per thickness.
     pub depths: Vec<Vec<f64>>,
 }
 
-/// Runs every slice of `cfg`; `progress(slice_done, slices, photons, worst_rel_se)` after each
-/// round.
-pub fn run_all(cfg: &SlabConfig, phase: &PhaseModel, progress: &dyn Fn(usize, usize, u64, f64)) -> Result<SlabRun> {
+impl SlabRun {
+    /// The slices this run holds.
+    pub fn done(&self) -> impl Iterator<Item = &(SliceReport, SliceRun)> {
+        self.slices.iter().flatten()
+    }
+}
+
+/// How a run is split and made safe to interrupt.
+pub struct Control<'a> {
+    /// Run only slices s with s mod n = k: `Some((k, n))`.
+    pub shard: Option<(usize, usize)>,
+    /// Where finished slices and the slice in progress are saved (and resumed from).
+    pub checkpoint: Option<&'a Checkpoint>,
+    /// Least seconds between two saves of the slice in progress.
+    pub save_every_s: f64,
+}
+
+impl Control<'_> {
+    /// One process, no checkpoints.
+    pub fn plain() -> Self {
+        Control { shard: None, checkpoint: None, save_every_s: f64::INFINITY }
+    }
+}
+
+/// Runs the slices of `cfg` (this shard's, resuming from the checkpoint if any);
+/// `progress(slice, slices, photons, worst_rel_se)` after each round.
+pub fn run_all(cfg: &SlabConfig, phase: &PhaseModel, control: &Control, progress: &dyn Fn(usize, usize, u64, f64)) -> Result<SlabRun> {
     cfg.validate()?;
     let total = cfg.thicknesses.len() * cfg.mu_l.len();
     let mut slices = Vec::with_capacity(total);
@@ -101,27 +128,100 @@ pub fn run_all(cfg: &SlabConfig, phase: &PhaseModel, progress: &dyn Fn(usize, us
         let grid = cfg.grid(t)?;
         depths.push(grid.depths.clone());
         for (im, &mu_l) in cfg.mu_l.iter().enumerate() {
-            let index = (it * cfg.mu_l.len() + im) as u64;
-            let t0 = Instant::now();
-            let run = phase.with(|p| {
-                let slice = Slice { grid: &grid, mu_l, albedo: cfg.albedo, phase: p };
-                run_slice(&slice, cfg.seed, index, &cfg.stop, &|n, worst| progress(index as usize, total, n, worst))
-            });
-            let tot = &run.acc.total;
-            let n = tot.photons as f64;
-            let report = SliceReport {
-                t,
-                mu_l,
-                photons: tot.photons,
-                events: tot.events,
-                worst_rel_se: run.worst_rel_se,
-                converged: run.converged,
-                reflected: tot.escaped_top / n,
-                transmitted: tot.escaped_bottom / n,
-                absorbed: tot.absorbed / n,
-                seconds: t0.elapsed().as_secs_f64(),
-            };
-            slices.push((report, run));
+            let s = it * cfg.mu_l.len() + im;
+            let mine = control.shard.is_none_or(|(k, n)| s % n == k);
+            slices.push(if mine { Some(run_one(cfg, phase, control, &grid, s, mu_l, &|n, w| progress(s, total, n, w))?) } else { None });
+        }
+    }
+    Ok(SlabRun { slices, depths })
+}
+
+/// Slice `s`: from the checkpoint if finished there, else run (resuming its saved rounds).
+fn run_one(
+    cfg: &SlabConfig,
+    phase: &PhaseModel,
+    control: &Control,
+    grid: &SlabGrid,
+    s: usize,
+    mu_l: f64,
+    progress: &dyn Fn(u64, f64),
+) -> Result<(SliceReport, SliceRun)> {
+    let rebuild = |acc: Accumulator| {
+        let tables = acc.tables(grid, mu_l);
+        let worst = tables.worst_relative_error(cfg.stop.cell_fraction);
+        let converged = acc.batches >= cfg.stop.min_batches && worst <= cfg.stop.target_rel_se;
+        SliceRun { acc, tables, worst_rel_se: worst, converged }
+    };
+    if let Some(cp) = control.checkpoint {
+        if let Some((report, acc)) = cp.finished(s, grid)? {
+            return Ok((report, rebuild(acc)));
+        }
+    }
+    let (start, spent) = match control.checkpoint {
+        Some(cp) => cp.current(s, grid)?.unwrap_or((Accumulator::new(grid), 0.0)),
+        None => (Accumulator::new(grid), 0.0),
+    };
+    let t0 = Instant::now();
+    let mut last_save = Instant::now();
+    let mut save_error = None;
+    let run = phase.with(|p| {
+        let slice = Slice { grid, mu_l, albedo: cfg.albedo, phase: p };
+        run_slice_from(&slice, cfg.seed, s as u64, &cfg.stop, start, &mut |acc, worst| {
+            progress(acc.total.photons, worst);
+            if let Some(cp) = control.checkpoint {
+                if last_save.elapsed().as_secs_f64() >= control.save_every_s && save_error.is_none() {
+                    save_error = cp.save_current(s, acc, spent + t0.elapsed().as_secs_f64()).err();
+                    last_save = Instant::now();
+                }
+            }
+        })
+    });
+    if let Some(e) = save_error {
+        return Err(e.context("saving a checkpoint"));
+    }
+    let tot = &run.acc.total;
+    let n = tot.photons as f64;
+    let report = SliceReport {
+        t: grid.thickness(),
+        mu_l,
+        photons: tot.photons,
+        events: tot.events,
+        worst_rel_se: run.worst_rel_se,
+        converged: run.converged,
+        reflected: tot.escaped_top / n,
+        transmitted: tot.escaped_bottom / n,
+        absorbed: tot.absorbed / n,
+        seconds: spent + t0.elapsed().as_secs_f64(),
+    };
+    if let Some(cp) = control.checkpoint {
+        cp.finish(s, &report, &run.acc)?;
+    }
+    Ok((report, run))
+}
+
+/// Gathers the slices of several shards' directories into one run (every slice exactly once).
+pub fn merge(cfg: &SlabConfig, shards: &[Checkpoint]) -> Result<SlabRun> {
+    cfg.validate()?;
+    let mut slices = Vec::new();
+    let mut depths = Vec::new();
+    for (it, &t) in cfg.thicknesses.iter().enumerate() {
+        let grid = cfg.grid(t)?;
+        depths.push(grid.depths.clone());
+        for (im, &mu_l) in cfg.mu_l.iter().enumerate() {
+            let s = it * cfg.mu_l.len() + im;
+            let mut found = None;
+            for cp in shards {
+                if let Some((report, acc)) = cp.finished(s, &grid)? {
+                    if found.is_some() {
+                        anyhow::bail!("slice {s} (t = {t}, mu_L = {mu_l}) is in more than one shard");
+                    }
+                    let tables = acc.tables(&grid, mu_l);
+                    let worst = tables.worst_relative_error(cfg.stop.cell_fraction);
+                    found = Some((report.clone(), SliceRun { acc, tables, worst_rel_se: worst, converged: report.converged }));
+                }
+            }
+            let found = found.with_context(|| format!("slice {s} (t = {t}, mu_L = {mu_l}) is in no shard: did every shard finish?"))?;
+            slices.push(Some(found));
         }
     }
     Ok(SlabRun { slices, depths })

@@ -14,6 +14,9 @@
 //! the ratios c and σ).
 
 use super::grid::SlabGrid;
+use crate::io::npz::{read_arrays, Npz};
+use anyhow::{bail, Result};
+use std::path::Path;
 
 /// The sums of one batch.
 #[derive(Clone, Debug)]
@@ -99,6 +102,45 @@ impl Accumulator {
         t.absorbed += b.absorbed;
         t.events += b.events;
         t.photons += b.photons;
+    }
+
+    /// Adds the raw sums to `npz` under `prefix` (a checkpoint or a shard's result): the sums
+    /// are kept exactly, so a run resumed from them ends with the same bits.
+    pub fn save(&self, npz: &mut Npz, prefix: &str) {
+        let t = &self.total;
+        let n = t.cells.len();
+        npz.add(&format!("{prefix}cells"), &[n, 4], &t.cells.concat());
+        npz.add(&format!("{prefix}second"), &[n, 10], &self.second.concat());
+        let p = t.up.len();
+        npz.add(&format!("{prefix}planes"), &[3, p], &[t.up.clone(), t.down.clone(), t.direct.clone()].concat());
+        // Counts are below 2⁵³: exact in f64.
+        let scalars = [self.batches as f64, t.escaped_top, t.escaped_bottom, t.absorbed, t.events as f64, t.photons as f64];
+        npz.add(&format!("{prefix}scalars"), &[scalars.len()], &scalars);
+    }
+
+    /// Reads sums written by [`Self::save`] for `grid`.
+    pub fn load(path: &Path, prefix: &str, grid: &SlabGrid) -> Result<Self> {
+        let names = ["cells", "second", "planes", "scalars"].map(|n| format!("{prefix}{n}"));
+        let refs: Vec<&str> = names.iter().map(String::as_str).collect();
+        let a = read_arrays(path, &refs)?;
+        let (n, p) = (grid.n_cells(), grid.depths.len());
+        if a[0].len() != 4 * n || a[1].len() != 10 * n || a[2].len() != 3 * p || a[3].len() != 6 {
+            bail!("'{}': sums {prefix} do not fit this grid", path.display());
+        }
+        let mut acc = Self::new(grid);
+        acc.total.cells = a[0].chunks(4).map(|c| [c[0], c[1], c[2], c[3]]).collect();
+        acc.second = a[1].chunks(10).map(|c| std::array::from_fn(|i| c[i])).collect();
+        acc.total.up = a[2][..p].to_vec();
+        acc.total.down = a[2][p..2 * p].to_vec();
+        acc.total.direct = a[2][2 * p..].to_vec();
+        let s = &a[3];
+        acc.batches = s[0] as u64;
+        acc.total.escaped_top = s[1];
+        acc.total.escaped_bottom = s[2];
+        acc.total.absorbed = s[3];
+        acc.total.events = s[4] as u64;
+        acc.total.photons = s[5] as u64;
+        Ok(acc)
     }
 
     /// The tables of this slice so far (`mu_l`: the sun's cosine).
