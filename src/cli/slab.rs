@@ -258,11 +258,11 @@ fn figure(path: &Path, cfg: &SlabConfig, run: &SlabRun) -> Result<()> {
 }
 
 fn summary(run: &SlabRun, seconds: f64) {
-    println!("{:>8} {:>6} {:>12} {:>10} {:>10} {:>10} {:>10}", "t", "mu_L", "photons", "R", "T", "worst se", "converged");
+    println!("{:>8} {:>6} {:>12} {:>10} {:>10} {:>10} {:>10} {:>10}", "t", "mu_L", "photons", "R", "T", "worst se", "horizon", "converged");
     for (r, _) in run.done() {
         println!(
-            "{:>8} {:>6} {:>12} {:>10.5} {:>10.5} {:>9.2}% {:>10}",
-            r.t, r.mu_l, r.photons, r.reflected, r.transmitted, 100.0 * r.worst_rel_se, r.converged
+            "{:>8} {:>6} {:>12} {:>10.5} {:>10.5} {:>9.2}% {:>9.2}% {:>10}",
+            r.t, r.mu_l, r.photons, r.reflected, r.transmitted, 100.0 * r.worst_rel_se, 100.0 * r.worst_rel_se_horizon, r.converged
         );
     }
     let events: u64 = run.done().map(|(r, _)| r.events).sum();

@@ -121,6 +121,12 @@ impl SlabGrid {
         bin(&self.psi_edges, psi)
     }
 
+    /// Whether μ_V bin `m` touches the horizon μ_V = 0, where the 1/|μ| crossing estimator has
+    /// unbounded variance (its error shrinks only like √(ln N / N)).
+    pub fn is_horizon(&self, m: usize) -> bool {
+        self.mu_edges[m] <= 0.0 && self.mu_edges[m + 1] >= 0.0
+    }
+
     /// Solid angle (sr) of direction bin (m, k), both mirror halves.
     pub fn solid_angle(&self, m: usize, k: usize) -> f64 {
         2.0 * (self.mu_edges[m + 1] - self.mu_edges[m]) * (self.psi_edges[k + 1] - self.psi_edges[k])

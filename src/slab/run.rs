@@ -2,6 +2,7 @@
 //! its own random stream, folded into the accumulator in batch order — so the tables are the
 //! same bits for any thread count.
 
+use super::grid::SlabGrid;
 use super::tally::{Accumulator, SliceTables};
 use super::walk::{batch_rng, Slice};
 use rayon::prelude::*;
@@ -23,6 +24,21 @@ pub struct StopRule {
     pub cell_fraction: f64,
     /// … against this relative standard error.
     pub target_rel_se: f64,
+    /// Leave the μ_V bins touching the horizon out of the test (their error is reported apart):
+    /// the 1/|μ| estimator there has unbounded variance and would hold every slice to its budget.
+    pub exclude_horizon: bool,
+}
+
+impl StopRule {
+    /// The tables of `acc`, the worst relative errors (tested cells, horizon cells when not
+    /// tested) and whether the slice has converged.
+    pub fn judge(&self, acc: &Accumulator, grid: &SlabGrid, mu_l: f64) -> (SliceTables, f64, f64, bool) {
+        let tables = acc.tables(grid, mu_l);
+        let skip = |c: usize| self.exclude_horizon && grid.is_horizon(grid.cell_parts(c).2);
+        let (worst, horizon) = tables.worst_relative_error(self.cell_fraction, &skip);
+        let converged = acc.batches >= self.min_batches && worst <= self.target_rel_se;
+        (tables, worst, horizon, converged)
+    }
 }
 
 impl Default for StopRule {
@@ -34,6 +50,7 @@ impl Default for StopRule {
             max_photons: 100_000_000,
             cell_fraction: 0.01,
             target_rel_se: 0.02,
+            exclude_horizon: true,
         }
     }
 }
@@ -46,6 +63,8 @@ pub struct SliceRun {
     pub tables: SliceTables,
     /// Worst relative standard error over the tested cells.
     pub worst_rel_se: f64,
+    /// Worst relative standard error over the horizon bins when they are not tested (else 0).
+    pub worst_rel_se_horizon: f64,
     /// Whether the target was met (else the budget ended it).
     pub converged: bool,
 }
@@ -76,11 +95,9 @@ pub fn run_slice_from(
             .map(|b| slice.run_batch(rule.batch_photons, &mut batch_rng(seed, slice_index, b)))
             .collect();
         batches.iter().for_each(|b| acc.add(b));
-        let tables = acc.tables(slice.grid, slice.mu_l);
-        let worst = tables.worst_relative_error(rule.cell_fraction);
-        let converged = acc.batches >= rule.min_batches && worst <= rule.target_rel_se;
+        let (tables, worst, worst_horizon, converged) = rule.judge(&acc, slice.grid, slice.mu_l);
         if converged || acc.total.photons >= rule.max_photons {
-            return SliceRun { acc, tables, worst_rel_se: worst, converged };
+            return SliceRun { acc, tables, worst_rel_se: worst, worst_rel_se_horizon: worst_horizon, converged };
         }
         after_round(&acc, worst);
     }

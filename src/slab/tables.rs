@@ -73,6 +73,8 @@ pub struct SliceReport {
     pub events: u64,
     /// Worst relative standard error over the tested cells.
     pub worst_rel_se: f64,
+    /// Worst relative standard error over the horizon bins, when the test leaves them out.
+    pub worst_rel_se_horizon: f64,
     /// Whether the target was met (else the photon budget stopped it).
     pub converged: bool,
     /// Fractions of the incident photons leaving by the lit face / the far face, and absorbed.
@@ -147,10 +149,8 @@ fn run_one(
     progress: &dyn Fn(u64, f64),
 ) -> Result<(SliceReport, SliceRun)> {
     let rebuild = |acc: Accumulator| {
-        let tables = acc.tables(grid, mu_l);
-        let worst = tables.worst_relative_error(cfg.stop.cell_fraction);
-        let converged = acc.batches >= cfg.stop.min_batches && worst <= cfg.stop.target_rel_se;
-        SliceRun { acc, tables, worst_rel_se: worst, converged }
+        let (tables, worst, worst_horizon, converged) = cfg.stop.judge(&acc, grid, mu_l);
+        SliceRun { acc, tables, worst_rel_se: worst, worst_rel_se_horizon: worst_horizon, converged }
     };
     if let Some(cp) = control.checkpoint {
         if let Some((report, acc)) = cp.finished(s, grid)? {
@@ -187,6 +187,7 @@ fn run_one(
         photons: tot.photons,
         events: tot.events,
         worst_rel_se: run.worst_rel_se,
+        worst_rel_se_horizon: run.worst_rel_se_horizon,
         converged: run.converged,
         reflected: tot.escaped_top / n,
         transmitted: tot.escaped_bottom / n,
@@ -215,9 +216,9 @@ pub fn merge(cfg: &SlabConfig, shards: &[Checkpoint]) -> Result<SlabRun> {
                     if found.is_some() {
                         anyhow::bail!("slice {s} (t = {t}, mu_L = {mu_l}) is in more than one shard");
                     }
-                    let tables = acc.tables(&grid, mu_l);
-                    let worst = tables.worst_relative_error(cfg.stop.cell_fraction);
-                    found = Some((report.clone(), SliceRun { acc, tables, worst_rel_se: worst, converged: report.converged }));
+                    let (tables, worst, worst_horizon, _) = cfg.stop.judge(&acc, &grid, mu_l);
+                    let run = SliceRun { acc, tables, worst_rel_se: worst, worst_rel_se_horizon: worst_horizon, converged: report.converged };
+                    found = Some((report.clone(), run));
                 }
             }
             let found = found.with_context(|| format!("slice {s} (t = {t}, mu_L = {mu_l}) is in no shard: did every shard finish?"))?;

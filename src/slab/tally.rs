@@ -228,14 +228,21 @@ impl SliceTables {
         }
     }
 
-    /// The largest relative standard error over cells with T ≥ `fraction` × the largest T.
-    pub fn worst_relative_error(&self, fraction: f64) -> f64 {
+    /// The largest relative standard errors over cells with T ≥ `fraction` × the largest T:
+    /// (over the cells `skip` leaves, over the cells it skips).
+    pub fn worst_relative_error(&self, fraction: f64, skip: &dyn Fn(usize) -> bool) -> (f64, f64) {
         let max = self.t.iter().copied().fold(0.0, f64::max);
-        self.t
-            .iter()
-            .zip(&self.t_se)
-            .filter(|(t, _)| **t >= fraction * max && **t > 0.0)
-            .map(|(t, se)| se / t)
-            .fold(0.0, f64::max)
+        let mut worst = (0.0f64, 0.0f64);
+        for (c, (t, se)) in self.t.iter().zip(&self.t_se).enumerate() {
+            if *t >= fraction * max && *t > 0.0 {
+                let r = if se.is_finite() { se / t } else { f64::INFINITY };
+                if skip(c) {
+                    worst.1 = worst.1.max(r);
+                } else {
+                    worst.0 = worst.0.max(r);
+                }
+            }
+        }
+        worst
     }
 }
