@@ -131,9 +131,16 @@ fn tables_are_bit_identical_for_any_thread_count() {
 #[test]
 fn order_one_collector_matches_the_closed_form() {
     // The bookkeeping of the lateral moments: c_x, c_z and σ of order 1 against quadrature over
-    // the scattering depth (src/slab/single.rs), on cells holding ≥ 5 % of the largest T₁.
+    // the scattering depth (src/slab/single.rs), on cells holding ≥ 5 % of the largest T₁; at
+    // μ_L = 1 through the azimuth pooling of the walk.
+    for mu_l in [0.5, 1.0] {
+        collector_case(mu_l);
+    }
+}
+
+fn collector_case(mu_l: f64) {
     let hg = HenyeyGreenstein::new(0.7);
-    let (t_slab, mu_l) = (2.0, 0.5);
+    let t_slab = 2.0;
     let grid = SlabGrid::new(
         nephele::slab::grid::stretched_depths(t_slab, 5),
         (0..=8).map(|i| -1.0 + 0.25 * i as f64).collect(),
@@ -166,6 +173,6 @@ fn order_one_collector_matches_the_closed_form() {
         }
     }
     let p = 1.0 - ChiSquared::new(n as f64).unwrap().cdf(chi2);
-    println!("order-1 collector: {n} values, chi2 = {chi2:.1}, p = {p:.3}, worst |z| = {worst:.2}");
+    println!("order-1 collector, mu_L = {mu_l}: {n} values, chi2 = {chi2:.1}, p = {p:.3}, worst |z| = {worst:.2}");
     assert!(n > 30 && p > 1e-3 && worst < 5.0, "chi2 {chi2} over {n} (p = {p}), worst |z| {worst}");
 }

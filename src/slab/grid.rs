@@ -121,6 +121,17 @@ impl SlabGrid {
         bin(&self.psi_edges, psi)
     }
 
+    /// For each ψ_V bin k: (sin ψ, cos ψ, Δψ_k/π) at ψ = ψ_k,lo + u Δψ_k.
+    pub fn psi_targets(&self, u: f64) -> Vec<(f64, f64, f64)> {
+        self.psi_edges
+            .windows(2)
+            .map(|e| {
+                let (s, c) = (e[0] + u * (e[1] - e[0])).sin_cos();
+                (s, c, (e[1] - e[0]) / std::f64::consts::PI)
+            })
+            .collect()
+    }
+
     /// Whether μ_V bin `m` touches the horizon μ_V = 0, where the 1/|μ| crossing estimator has
     /// unbounded variance (its error shrinks only like √(ln N / N)).
     pub fn is_horizon(&self, m: usize) -> bool {

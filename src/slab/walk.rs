@@ -65,7 +65,7 @@ impl Slice<'_> {
             // Free path in mfp: −ln(1 − ξ), ξ ∈ [0, 1), never infinite.
             let s = -(1.0 - rng.random::<f64>()).ln();
             let d1 = pos[2] + s * dir[2];
-            above = self.cross_planes(&pos, &dir, d1, above, order, weight, tally);
+            above = self.cross_planes(&pos, &dir, d1, above, order, weight, rng, tally);
             if d1 <= 0.0 {
                 tally.escaped_top += weight;
                 return;
@@ -99,7 +99,17 @@ impl Slice<'_> {
     /// number `above` of planes at or above the start; returns that number at the end.
     #[allow(clippy::too_many_arguments)]
     #[inline]
-    fn cross_planes(&self, pos: &[f64; 3], dir: &[f64; 3], d1: f64, above: usize, order: u32, weight: f64, tally: &mut BatchTally) -> usize {
+    fn cross_planes(
+        &self,
+        pos: &[f64; 3],
+        dir: &[f64; 3],
+        d1: f64,
+        above: usize,
+        order: u32,
+        weight: f64,
+        rng: &mut Xoshiro256PlusPlus,
+        tally: &mut BatchTally,
+    ) -> usize {
         let depths = &self.grid.depths;
         let mut end = above;
         let planes = if dir[2] > 0.0 {
@@ -120,6 +130,10 @@ impl Slice<'_> {
             planes.for_each(|j| tally.direct[j] += weight);
             return end;
         }
+        if self.mu_l == 1.0 {
+            self.cross_pooled(pos, dir, planes, order, weight, rng.random::<f64>(), tally);
+            return end;
+        }
         let (m, k, mirror) = self.direction_bin(dir);
         let first = self.grid.cell(self.grid.group(order), 0, m, k);
         let inv_dz = 1.0 / dir[2];
@@ -137,6 +151,42 @@ impl Slice<'_> {
             cell[3] += inv_mu * (x * x + z * z);
         }
         end
+    }
+
+    /// The crossings of one flight at normal incidence (μ_L = 1), where nothing fixes an azimuth:
+    /// every crossing is copied into every ψ_V bin k, with weight Δψ_k/π, turned about the
+    /// vertical so that its azimuth lands at ψ_k,lo + u Δψ_k (one uniform u per flight, so each
+    /// copy is uniform within its bin), its displacement turned with it. The expectation is that
+    /// of the plain tally (the azimuth of a crossing is uniform and independent of everything
+    /// else in the frame of the flight), with all ψ_V bins sharing every crossing.
+    #[allow(clippy::too_many_arguments)]
+    fn cross_pooled(&self, pos: &[f64; 3], dir: &[f64; 3], planes: std::ops::Range<usize>, order: u32, weight: f64, u: f64, tally: &mut BatchTally) {
+        let g = self.grid;
+        let m = g.mu_bin(-dir[2]);
+        let group = g.group(order);
+        let r = (dir[0] * dir[0] + dir[1] * dir[1]).sqrt();
+        // (sin, cos) of the flight's own azimuth (any, for a vertical flight).
+        let (s_c, c_c) = if r > 0.0 { (dir[0] / r, dir[1] / r) } else { (0.0, 1.0) };
+        let inv_dz = 1.0 / dir[2];
+        let inv_mu = weight * inv_dz.abs();
+        let flux = if dir[2] > 0.0 { &mut tally.down } else { &mut tally.up };
+        let targets = g.psi_targets(u);
+        for j in planes {
+            flux[j] += weight;
+            let along = (g.depths[j] - pos[2]) * inv_dz;
+            let (x, z) = (pos[0] + along * dir[0], pos[1] + along * dir[1]);
+            let r2 = x * x + z * z;
+            for (k, &(s_t, c_t, share)) in targets.iter().enumerate() {
+                // Turn by α = ψ_target − ψ_flight.
+                let (ca, sa) = (c_t * c_c + s_t * s_c, s_t * c_c - c_t * s_c);
+                let w = inv_mu * share;
+                let cell = &mut tally.cells[g.cell(group, j, m, k)];
+                cell[0] += w;
+                cell[1] += w * (x * ca + z * sa);
+                cell[2] += w * (z * ca - x * sa);
+                cell[3] += w * r2;
+            }
+        }
     }
 
     /// A new direction: the cosine from the phase function's exact sampler, the azimuth as a
