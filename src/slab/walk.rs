@@ -27,7 +27,7 @@ pub struct Slice<'a> {
     pub mu_l: f64,
     /// Single-scattering albedo in (0, 1].
     pub albedo: f64,
-    /// The phase function (sampled exactly; `sample` gives the new direction).
+    /// The phase function (its exact `sample_cosine` gives the scattering angle).
     pub phase: &'a (dyn PhaseFunction<f64> + Sync),
 }
 
