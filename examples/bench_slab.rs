@@ -11,10 +11,18 @@ use nephele_runtime::phase::HenyeyGreenstein;
 use std::time::Instant;
 
 fn main() {
-    let photons: u64 = std::env::args().nth(1).and_then(|s| s.parse().ok()).unwrap_or(2_000_000);
+    let photons: u64 = std::env::args()
+        .nth(1)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(2_000_000);
     let hg = HenyeyGreenstein::new(0.9);
     let grid = SlabGrid::default_for(4.0).expect("default grid");
-    let slice = Slice { grid: &grid, mu_l: 1.0, albedo: 1.0, phase: &hg };
+    let slice = Slice {
+        grid: &grid,
+        mu_l: 1.0,
+        albedo: 1.0,
+        phase: &hg,
+    };
     let t0 = Instant::now();
     let tally = slice.run_batch(photons, &mut batch_rng(1, 0, 0));
     let s = t0.elapsed().as_secs_f64();

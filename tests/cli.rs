@@ -276,7 +276,14 @@ fn fit_of_a_single_diameter_has_no_neighbours_and_still_works() {
                    "fit": {"models": ["hg", "draine"], "figure_diameters_um": [8]}}"#;
     std::fs::write(&cfg, text).unwrap();
     let out = dir.path().join("fit");
-    succeeds(&["fit", "--config", cfg.to_str().unwrap(), "--out", out.to_str().unwrap(), "--no-plot"]);
+    succeeds(&[
+        "fit",
+        "--config",
+        cfg.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--no-plot",
+    ]);
     let doc: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("fits.json")).unwrap()).unwrap();
     let draine = &doc["result"]["fits"][0]["models"]["draine"];
@@ -291,8 +298,14 @@ fn bad_fit_configs_are_one_error_line_and_no_file() {
     let dir = tempfile::tempdir().unwrap();
     let mie = r#""mie": {"diameter": "5,10", "wavelengths": "400:700:4"}"#;
     let cases = [
-        (format!(r#"{{{mie}, "fit": {{"modles": ["hg"]}}}}"#), "unknown field"),
-        (format!(r#"{{{mie}, "fit": {{"models": ["hg", "gaussian"]}}}}"#), "hg_draine"),
+        (
+            format!(r#"{{{mie}, "fit": {{"modles": ["hg"]}}}}"#),
+            "unknown field",
+        ),
+        (
+            format!(r#"{{{mie}, "fit": {{"models": ["hg", "gaussian"]}}}}"#),
+            "hg_draine",
+        ),
         (
             format!(
                 r#"{{{mie}, "fit": {{"curves": [{{"range_um": [5, 10], "g_hg": "spline",
@@ -307,7 +320,10 @@ fn bad_fit_configs_are_one_error_line_and_no_file() {
             ),
             "lo < hi",
         ),
-        (format!(r#"{{{mie}, "fit": {{"alpha_max": -3}}}}"#), "alpha_max"),
+        (
+            format!(r#"{{{mie}, "fit": {{"alpha_max": -3}}}}"#),
+            "alpha_max",
+        ),
         (
             format!(
                 r#"{{{mie}, "fit": {{"curves": [{{"range_um": [5, 10], "g_hg": "constant",
@@ -316,21 +332,34 @@ fn bad_fit_configs_are_one_error_line_and_no_file() {
             "need at least 4",
         ),
         (r#"{"mie": {"diameter": "-5"}}"#.to_string(), "diameter"),
-        (r#"{"mie": {"diameter": "5"}, "extra": 1}"#.to_string(), "unknown field"),
+        (
+            r#"{"mie": {"diameter": "5"}, "extra": 1}"#.to_string(),
+            "unknown field",
+        ),
         ("{not json".to_string(), "config"),
     ];
     for (i, (text, expect)) in cases.iter().enumerate() {
         let cfg = dir.path().join(format!("cfg{i}.json"));
         std::fs::write(&cfg, text).unwrap();
         let out = dir.path().join(format!("out{i}"));
-        let o = nephele(&["fit", "--config", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+        let o = nephele(&[
+            "fit",
+            "--config",
+            cfg.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success(), "{text} should fail");
         assert!(
             err.trim().lines().count() == 1 && err.starts_with("error: ") && err.contains(expect),
             "{text}: {err}"
         );
-        assert!(files_in(&out).is_empty(), "{text} left files: {:?}", files_in(&out));
+        assert!(
+            files_in(&out).is_empty(),
+            "{text} left files: {:?}",
+            files_in(&out)
+        );
     }
 }
 
@@ -342,7 +371,11 @@ fn fit_outputs_are_bit_identical_for_any_thread_count() {
         .map(|threads| {
             let out = dir.path().join(format!("t{threads}"));
             let o = Command::new(env!("CARGO_BIN_EXE_nephele"))
-                .args(["fit", "--config", concat!(env!("CARGO_MANIFEST_DIR"), "/fit-configs/quick.json")])
+                .args([
+                    "fit",
+                    "--config",
+                    concat!(env!("CARGO_MANIFEST_DIR"), "/fit-configs/quick.json"),
+                ])
                 .args(["--out", out.to_str().unwrap(), "--no-plot"])
                 .env("RAYON_NUM_THREADS", threads)
                 .output()
@@ -376,7 +409,10 @@ fn slab_quick_config_writes_tables_and_refuses_bad_configs() {
         (r#"{"mu_l": [0, 1]}"#, "mu_l"),
         (r#"{"phase": {"kind": "hg", "g": 1.5}}"#, "phase.g"),
         (r#"{"phase": {"kind": "rayleigh"}}"#, "unknown variant"),
-        (r#"{"phase": {"kind": "hg_draine", "diameter_um": 10, "preset": "x"}}"#, "preset"),
+        (
+            r#"{"phase": {"kind": "hg_draine", "diameter_um": 10, "preset": "x"}}"#,
+            "preset",
+        ),
         (r#"{"albedo": 0}"#, "albedo"),
         (r#"{"stop": {"photons": 5}}"#, "unknown field"),
         (r#"{"group_starts": [2, 3]}"#, "group_starts"),
@@ -385,17 +421,30 @@ fn slab_quick_config_writes_tables_and_refuses_bad_configs() {
         let cfg = dir.path().join(format!("bad{i}.json"));
         std::fs::write(&cfg, text).unwrap();
         let out = dir.path().join(format!("out{i}"));
-        let o = nephele(&["slab", "--config", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+        let o = nephele(&[
+            "slab",
+            "--config",
+            cfg.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success(), "{text} should fail");
-        assert!(err.trim().lines().count() == 1 && err.contains(expect), "{text}: {err}");
+        assert!(
+            err.trim().lines().count() == 1 && err.contains(expect),
+            "{text}: {err}"
+        );
         assert!(files_in(&out).is_empty(), "{text} left files");
     }
 }
 
 /// slab-quick.json with a larger budget, so that a run lasts long enough to be killed.
 fn slab_config(dir: &Path, max_photons: u64) -> std::path::PathBuf {
-    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/fit-configs/slab-quick.json")).unwrap();
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/fit-configs/slab-quick.json"
+    ))
+    .unwrap();
     let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
     v["stop"]["max_photons"] = max_photons.into();
     v["stop"]["target_rel_se"] = 0.0.into();
@@ -410,14 +459,47 @@ fn slab_shards_merge_to_the_same_bits_as_one_run() {
     let cfg = slab_config(dir.path(), 320_000);
     let cfg = cfg.to_str().unwrap();
     let one = dir.path().join("one");
-    succeeds(&["slab", "--config", cfg, "--out", one.to_str().unwrap(), "--no-plot"]);
-    assert!(!one.join("checkpoint").exists(), "a finished run removes its checkpoint");
-    let shards: Vec<String> = (1..=3).map(|k| dir.path().join(format!("shard{k}")).to_string_lossy().into()).collect();
+    succeeds(&[
+        "slab",
+        "--config",
+        cfg,
+        "--out",
+        one.to_str().unwrap(),
+        "--no-plot",
+    ]);
+    assert!(
+        !one.join("checkpoint").exists(),
+        "a finished run removes its checkpoint"
+    );
+    let shards: Vec<String> = (1..=3)
+        .map(|k| {
+            dir.path()
+                .join(format!("shard{k}"))
+                .to_string_lossy()
+                .into()
+        })
+        .collect();
     for (k, d) in shards.iter().enumerate() {
-        succeeds(&["slab", "--config", cfg, "--out", d, "--shard", &format!("{}/3", k + 1), "--no-plot"]);
+        succeeds(&[
+            "slab",
+            "--config",
+            cfg,
+            "--out",
+            d,
+            "--shard",
+            &format!("{}/3", k + 1),
+            "--no-plot",
+        ]);
     }
     let merged = dir.path().join("merged");
-    let mut args = vec!["merge", "--config", cfg, "--out", merged.to_str().unwrap(), "--no-plot"];
+    let mut args = vec![
+        "merge",
+        "--config",
+        cfg,
+        "--out",
+        merged.to_str().unwrap(),
+        "--no-plot",
+    ];
     args.extend(shards.iter().map(String::as_str));
     succeeds(&args);
     let a = std::fs::read(one.join("tables.npz")).unwrap();
@@ -425,7 +507,15 @@ fn slab_shards_merge_to_the_same_bits_as_one_run() {
     assert!(a == b, "merged shards differ from one run");
     // A missing shard is an error, not a partial table.
     let incomplete = dir.path().join("incomplete");
-    let o = nephele(&["merge", "--config", cfg, "--out", incomplete.to_str().unwrap(), &shards[0], &shards[1]]);
+    let o = nephele(&[
+        "merge",
+        "--config",
+        cfg,
+        "--out",
+        incomplete.to_str().unwrap(),
+        &shards[0],
+        &shards[1],
+    ]);
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("in no shard"));
     assert!(files_in(&incomplete).is_empty());
 }
@@ -436,25 +526,49 @@ fn a_killed_slab_run_resumes_to_the_same_bits() {
     let cfg = slab_config(dir.path(), 3_200_000);
     let cfg = cfg.to_str().unwrap();
     let whole = dir.path().join("whole");
-    succeeds(&["slab", "--config", cfg, "--out", whole.to_str().unwrap(), "--no-plot"]);
+    succeeds(&[
+        "slab",
+        "--config",
+        cfg,
+        "--out",
+        whole.to_str().unwrap(),
+        "--no-plot",
+    ]);
     let resumed = dir.path().join("resumed");
     let checkpoint = resumed.join("checkpoint");
     let mut child = Command::new(env!("CARGO_BIN_EXE_nephele"))
-        .args(["slab", "--config", cfg, "--out", resumed.to_str().unwrap(), "--no-plot", "--save-every", "0"])
+        .args([
+            "slab",
+            "--config",
+            cfg,
+            "--out",
+            resumed.to_str().unwrap(),
+            "--no-plot",
+            "--save-every",
+            "0",
+        ])
         .stdout(std::process::Stdio::null())
         .stderr(std::process::Stdio::null())
         .spawn()
         .unwrap();
     // Kill it once a slice has finished and the next one has saved a round.
     let t0 = std::time::Instant::now();
-    while !(checkpoint.join("slice-0000.json").exists() && checkpoint.join("current.json").exists()) {
+    while !(checkpoint.join("slice-0000.json").exists() && checkpoint.join("current.json").exists())
+    {
         assert!(t0.elapsed().as_secs() < 120, "no checkpoint appeared");
         std::thread::sleep(std::time::Duration::from_millis(5));
     }
     child.kill().unwrap();
     child.wait().unwrap();
     assert!(!resumed.join("tables.npz").exists());
-    succeeds(&["slab", "--config", cfg, "--out", resumed.to_str().unwrap(), "--no-plot"]);
+    succeeds(&[
+        "slab",
+        "--config",
+        cfg,
+        "--out",
+        resumed.to_str().unwrap(),
+        "--no-plot",
+    ]);
     let a = std::fs::read(whole.join("tables.npz")).unwrap();
     let b = std::fs::read(resumed.join("tables.npz")).unwrap();
     assert!(a == b, "the resumed run differs from the uninterrupted one");

@@ -240,7 +240,9 @@ fn refit_preset_stays_inside_the_fit_bounds_and_near_the_paper_above_5_um() {
     let mut d = 0.01;
     while d < 200.0 {
         let p = nephele_refit(d);
-        let ok = p.g_hg.abs() < 1.0 && p.g_d.abs() < 1.0 && (0.0..=250.0).contains(&p.alpha)
+        let ok = p.g_hg.abs() < 1.0
+            && p.g_d.abs() < 1.0
+            && (0.0..=250.0).contains(&p.alpha)
             && (0.0..=1.0).contains(&p.w_d);
         assert!(ok, "d = {d}: {p:?}");
         if (5.0..=50.0).contains(&d) {
@@ -249,14 +251,22 @@ fn refit_preset_stays_inside_the_fit_bounds_and_near_the_paper_above_5_um() {
             let q = jendersie_deon(d);
             let dg = [p.g_hg - q.g_hg, p.g_d - q.g_d, p.w_d - q.w_d];
             assert!(dg.iter().all(|x| x.abs() <= 0.02), "d = {d}: {dg:?}");
-            assert!((p.alpha / q.alpha - 1.0).abs() <= 0.2, "d = {d}: α {} vs {}", p.alpha, q.alpha);
+            assert!(
+                (p.alpha / q.alpha - 1.0).abs() <= 0.2,
+                "d = {d}: α {} vs {}",
+                p.alpha,
+                q.alpha
+            );
         }
         d *= 1.01;
     }
     // Below 0.1 µm the refit is the paper's Rayleigh-limit branch.
     assert_eq!(nephele_refit(0.05), jendersie_deon(0.05));
     for edge in [0.1, 1.5, 5.0] {
-        let (below, above) = (nephele_refit(edge * (1.0 - 1e-9)), nephele_refit(edge * (1.0 + 1e-9)));
+        let (below, above) = (
+            nephele_refit(edge * (1.0 - 1e-9)),
+            nephele_refit(edge * (1.0 + 1e-9)),
+        );
         println!("{edge} µm: below {below:?}\n        above {above:?}");
     }
 }

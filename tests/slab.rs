@@ -4,13 +4,17 @@
 
 use nephele::slab::single::single_scattering_bin;
 use nephele::slab::tally::SliceTables;
-use nephele::slab::{run_slice, Slice, SlabGrid, StopRule};
+use nephele::slab::{run_slice, SlabGrid, Slice, StopRule};
 use nephele_runtime::phase::HenyeyGreenstein;
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 use std::f64::consts::PI;
 
 fn rule(photons: u64) -> StopRule {
-    StopRule { max_photons: photons, target_rel_se: 0.0, ..StopRule::default() }
+    StopRule {
+        max_photons: photons,
+        target_rel_se: 0.0,
+        ..StopRule::default()
+    }
 }
 
 #[test]
@@ -18,9 +22,16 @@ fn disort_problem_3a_fluxes_and_radiances() {
     // ../shared/reference/disort-benchmarks.json, problem 3a: HG g = 0.75, albedo 1, τ = 1,
     // μ₀ = 1, fbeam = π, so T = uu/π and a flux F/π is per unit incident flux.
     let hg = HenyeyGreenstein::new(0.75);
-    let mu_edges = vec![-1.0, -0.52, -0.48, -0.11, -0.09, 0.09, 0.11, 0.48, 0.52, 1.0];
+    let mu_edges = vec![
+        -1.0, -0.52, -0.48, -0.11, -0.09, 0.09, 0.11, 0.48, 0.52, 1.0,
+    ];
     let grid = SlabGrid::new(vec![0.0, 1.0], mu_edges, vec![0.0, PI], vec![(1, u32::MAX)]).unwrap();
-    let slice = Slice { grid: &grid, mu_l: 1.0, albedo: 1.0, phase: &hg };
+    let slice = Slice {
+        grid: &grid,
+        mu_l: 1.0,
+        albedo: 1.0,
+        phase: &hg,
+    };
     let run = run_slice(&slice, 7, 0, &rule(8_000_000), &|_, _| {});
     let n = run.acc.total.photons as f64;
     let tot = &run.acc.total;
@@ -39,18 +50,30 @@ fn disort_problem_3a_fluxes_and_radiances() {
     // O(Δμ²), far below the statistics here).
     let t = &run.tables;
     let cell = |plane: usize, m: usize| grid.cell(0, plane, m, 0);
-    for (plane, m, mu, uu) in [(0, 7, 0.5, 0.101103), (0, 5, 0.1, 0.151159), (1, 1, -0.5, 0.266648), (1, 3, -0.1, 0.21375)] {
+    for (plane, m, mu, uu) in [
+        (0, 7, 0.5, 0.101103),
+        (0, 5, 0.1, 0.151159),
+        (1, 1, -0.5, 0.266648),
+        (1, 3, -0.1, 0.21375),
+    ] {
         let c = cell(plane, m);
         let (mc, se, disort) = (t.t[c], t.t_se[c], uu / PI);
         println!("tau = {plane}, mu = {mu}: MC {mc:.5} ± {se:.5}, DISORT {disort:.5}");
-        assert!((mc - disort).abs() < 4.0 * se && se < 0.02 * disort, "mu = {mu}: {mc} ± {se} vs {disort}");
+        assert!(
+            (mc - disort).abs() < 4.0 * se && se < 0.02 * disort,
+            "mu = {mu}: {mc} ± {se} vs {disort}"
+        );
     }
 }
 
 /// Chi-square of (MC − exact)/SE over the cells holding ≥ 1 % of the largest exact value.
 fn compare(t: &SliceTables, exact: &[f64], cells: &[usize]) -> (f64, usize, f64) {
     let max = cells.iter().map(|&c| exact[c]).fold(0.0, f64::max);
-    let tested: Vec<usize> = cells.iter().copied().filter(|&c| exact[c] >= 0.01 * max).collect();
+    let tested: Vec<usize> = cells
+        .iter()
+        .copied()
+        .filter(|&c| exact[c] >= 0.01 * max)
+        .collect();
     let mut chi2 = 0.0;
     let mut worst: f64 = 0.0;
     for &c in &tested {
@@ -66,7 +89,12 @@ fn order_one_matches_the_closed_form_bin_by_bin() {
     let hg = HenyeyGreenstein::new(0.8);
     let (t_slab, mu_l) = (2.0, 0.6);
     let grid = SlabGrid::default_for(t_slab).unwrap();
-    let slice = Slice { grid: &grid, mu_l, albedo: 1.0, phase: &hg };
+    let slice = Slice {
+        grid: &grid,
+        mu_l,
+        albedo: 1.0,
+        phase: &hg,
+    };
     let run = run_slice(&slice, 11, 0, &rule(4_000_000), &|_, _| {});
     let mut exact = vec![0.0; grid.n_cells()];
     let mut cells = Vec::new();
@@ -84,7 +112,10 @@ fn order_one_matches_the_closed_form_bin_by_bin() {
     let (chi2, n, worst) = compare(&run.tables, &exact, &cells);
     let p = 1.0 - ChiSquared::new(n as f64).unwrap().cdf(chi2);
     println!("order 1: {n} cells, chi2 = {chi2:.1}, p = {p:.3}, worst |z| = {worst:.2}");
-    assert!(p > 1e-3 && worst < 5.0, "chi2 {chi2} over {n} cells (p = {p}), worst |z| {worst}");
+    assert!(
+        p > 1e-3 && worst < 5.0,
+        "chi2 {chi2} over {n} cells (p = {p}), worst |z| {worst}"
+    );
 }
 
 #[test]
@@ -92,12 +123,23 @@ fn energy_is_conserved_and_fluxes_add_up() {
     let hg = HenyeyGreenstein::new(0.9);
     for albedo in [1.0, 0.9] {
         let grid = SlabGrid::default_for(4.0).unwrap();
-        let slice = Slice { grid: &grid, mu_l: 0.7, albedo, phase: &hg };
+        let slice = Slice {
+            grid: &grid,
+            mu_l: 0.7,
+            albedo,
+            phase: &hg,
+        };
         let run = run_slice(&slice, 3, 0, &rule(320_000), &|_, _| {});
         let t = &run.acc.total;
         let n = t.photons as f64;
         let balance = (t.escaped_top + t.escaped_bottom + t.absorbed) / n;
-        println!("albedo {albedo}: R {:.5} T {:.5} A {:.5} sum - 1 = {:.1e}", t.escaped_top / n, t.escaped_bottom / n, t.absorbed / n, balance - 1.0);
+        println!(
+            "albedo {albedo}: R {:.5} T {:.5} A {:.5} sum - 1 = {:.1e}",
+            t.escaped_top / n,
+            t.escaped_bottom / n,
+            t.absorbed / n,
+            balance - 1.0
+        );
         assert!((balance - 1.0).abs() < 1e-9);
         let last = grid.depths.len() - 1;
         // Every photon leaving by a face crossed that face's plane exactly once.
@@ -116,9 +158,17 @@ fn energy_is_conserved_and_fluxes_add_up() {
 fn tables_are_bit_identical_for_any_thread_count() {
     let hg = HenyeyGreenstein::new(0.85);
     let grid = SlabGrid::default_for(1.0).unwrap();
-    let slice = Slice { grid: &grid, mu_l: 0.5, albedo: 1.0, phase: &hg };
+    let slice = Slice {
+        grid: &grid,
+        mu_l: 0.5,
+        albedo: 1.0,
+        phase: &hg,
+    };
     let run_with = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
         pool.install(|| run_slice(&slice, 5, 2, &rule(160_000), &|_, _| {}))
     };
     let (a, b) = (run_with(1), run_with(2));
@@ -144,14 +194,24 @@ fn collector_case(mu_l: f64) {
     let grid = SlabGrid::new(
         nephele::slab::grid::stretched_depths(t_slab, 5),
         (0..=8).map(|i| -1.0 + 0.25 * i as f64).collect(),
-        (0..=4).map(|i| if i == 4 { PI } else { PI * i as f64 / 4.0 }).collect(),
+        (0..=4)
+            .map(|i| if i == 4 { PI } else { PI * i as f64 / 4.0 })
+            .collect(),
         vec![(1, 1), (2, u32::MAX)],
     )
     .unwrap();
-    let slice = Slice { grid: &grid, mu_l, albedo: 1.0, phase: &hg };
+    let slice = Slice {
+        grid: &grid,
+        mu_l,
+        albedo: 1.0,
+        phase: &hg,
+    };
     let run = run_slice(&slice, 17, 0, &rule(2_000_000), &|_, _| {});
     let t = &run.tables;
-    let max = (0..grid.n_cells()).filter(|&c| grid.cell_parts(c).0 == 0).map(|c| t.t[c]).fold(0.0, f64::max);
+    let max = (0..grid.n_cells())
+        .filter(|&c| grid.cell_parts(c).0 == 0)
+        .map(|c| t.t[c])
+        .fold(0.0, f64::max);
     let (mut chi2, mut n, mut worst) = (0.0, 0usize, 0.0f64);
     for (j, &d) in grid.depths.iter().enumerate() {
         for m in 0..grid.n_mu() {
@@ -162,8 +222,14 @@ fn collector_case(mu_l: f64) {
                 }
                 let mu = (grid.mu_edges[m], grid.mu_edges[m + 1]);
                 let psi = (grid.psi_edges[k], grid.psi_edges[k + 1]);
-                let exact = nephele::slab::single::single_scattering_collector(&hg, mu_l, t_slab, d, mu, psi, 2);
-                for (mc, se, ex) in [(t.cx[c], t.cx_se[c], exact[0]), (t.cz[c], t.cz_se[c], exact[1]), (t.sigma[c], t.sigma_se[c], exact[2])] {
+                let exact = nephele::slab::single::single_scattering_collector(
+                    &hg, mu_l, t_slab, d, mu, psi, 2,
+                );
+                for (mc, se, ex) in [
+                    (t.cx[c], t.cx_se[c], exact[0]),
+                    (t.cz[c], t.cz_se[c], exact[1]),
+                    (t.sigma[c], t.sigma_se[c], exact[2]),
+                ] {
                     let z = (mc - ex) / se;
                     chi2 += z * z;
                     n += 1;
@@ -174,5 +240,8 @@ fn collector_case(mu_l: f64) {
     }
     let p = 1.0 - ChiSquared::new(n as f64).unwrap().cdf(chi2);
     println!("order-1 collector, mu_L = {mu_l}: {n} values, chi2 = {chi2:.1}, p = {p:.3}, worst |z| = {worst:.2}");
-    assert!(n > 30 && p > 1e-3 && worst < 5.0, "chi2 {chi2} over {n} (p = {p}), worst |z| {worst}");
+    assert!(
+        n > 30 && p > 1e-3 && worst < 5.0,
+        "chi2 {chi2} over {n} (p = {p}), worst |z| {worst}"
+    );
 }

@@ -97,18 +97,66 @@ macro_rules! impl_real {
 }
 
 #[cfg(feature = "std")]
-impl_real!(f32, f32::sqrt, f32::exp, f32::ln, f32::sin_cos, f32::cbrt, f32::asin);
+impl_real!(
+    f32,
+    f32::sqrt,
+    f32::exp,
+    f32::ln,
+    f32::sin_cos,
+    f32::cbrt,
+    f32::asin
+);
 #[cfg(feature = "std")]
-impl_real!(f64, f64::sqrt, f64::exp, f64::ln, f64::sin_cos, f64::cbrt, f64::asin);
+impl_real!(
+    f64,
+    f64::sqrt,
+    f64::exp,
+    f64::ln,
+    f64::sin_cos,
+    f64::cbrt,
+    f64::asin
+);
 
 #[cfg(all(not(feature = "std"), feature = "libm"))]
-impl_real!(f32, libm::sqrtf, libm::expf, libm::logf, libm::sincosf, libm::cbrtf, libm::asinf);
+impl_real!(
+    f32,
+    libm::sqrtf,
+    libm::expf,
+    libm::logf,
+    libm::sincosf,
+    libm::cbrtf,
+    libm::asinf
+);
 #[cfg(all(not(feature = "std"), feature = "libm"))]
-impl_real!(f64, libm::sqrt, libm::exp, libm::log, libm::sincos, libm::cbrt, libm::asin);
+impl_real!(
+    f64,
+    libm::sqrt,
+    libm::exp,
+    libm::log,
+    libm::sincos,
+    libm::cbrt,
+    libm::asin
+);
 
 #[cfg(not(any(feature = "std", feature = "libm")))]
 use crate::soft_math as soft;
 #[cfg(not(any(feature = "std", feature = "libm")))]
-impl_real!(f32, soft::sqrtf, soft::expf, soft::lnf, soft::sin_cosf, soft::cbrtf, soft::asinf);
+impl_real!(
+    f32,
+    soft::sqrtf,
+    soft::expf,
+    soft::lnf,
+    soft::sin_cosf,
+    soft::cbrtf,
+    soft::asinf
+);
 #[cfg(not(any(feature = "std", feature = "libm")))]
-impl_real!(f64, soft::sqrt, soft::exp, soft::ln, soft::sin_cos, soft::cbrt, soft::asin);
+impl_real!(
+    f64,
+    soft::sqrt,
+    soft::exp,
+    soft::ln,
+    soft::sin_cos,
+    soft::cbrt,
+    soft::asin
+);

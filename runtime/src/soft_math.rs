@@ -52,7 +52,11 @@ pub fn sqrt(x: f64) -> f64 {
         return x;
     }
     // Subnormals: scale by 2¹⁰⁸ so that the bit trick sees a normal number.
-    let (x, undo) = if x < f64::MIN_POSITIVE { (x * pow2(108), pow2(-54)) } else { (x, 1.0) };
+    let (x, undo) = if x < f64::MIN_POSITIVE {
+        (x * pow2(108), pow2(-54))
+    } else {
+        (x, 1.0)
+    };
     let mut y = f64::from_bits((x.to_bits() >> 1) + (1023 << 51));
     for _ in 0..5 {
         y = 0.5 * (y + x / y);
@@ -95,7 +99,11 @@ pub fn ln(x: f64) -> f64 {
     if x.is_infinite() {
         return x;
     }
-    let (x, mut e) = if x < f64::MIN_POSITIVE { (x * pow2(54), -54) } else { (x, 0) };
+    let (x, mut e) = if x < f64::MIN_POSITIVE {
+        (x * pow2(54), -54)
+    } else {
+        (x, 0)
+    };
     let bits = x.to_bits();
     e += ((bits >> 52) & 0x7ff) as i64 - 1023;
     let mut m = f64::from_bits((bits & 0x000f_ffff_ffff_ffff) | 0x3ff0_0000_0000_0000);
@@ -149,7 +157,11 @@ pub fn cbrt(x: f64) -> f64 {
         return x;
     }
     let a = if x < 0.0 { -x } else { x };
-    let (a, undo) = if a < f64::MIN_POSITIVE { (a * pow2(162), pow2(-54)) } else { (a, 1.0) };
+    let (a, undo) = if a < f64::MIN_POSITIVE {
+        (a * pow2(162), pow2(-54))
+    } else {
+        (a, 1.0)
+    };
     let mut y = f64::from_bits(a.to_bits() / 3 + (715_094_163u64 << 32));
     for _ in 0..6 {
         y = (2.0 * y + a / (y * y)) / 3.0;
@@ -234,7 +246,8 @@ mod tests {
 
     /// Largest ulp error of `f` against `g` over `xs`.
     fn worst(xs: impl Iterator<Item = f64>, f: fn(f64) -> f64, g: fn(f64) -> f64) -> (f64, f64) {
-        xs.map(|x| (ulps(f(x), g(x)), x)).fold((0.0, 0.0), |a, b| if b.0 > a.0 { b } else { a })
+        xs.map(|x| (ulps(f(x), g(x)), x))
+            .fold((0.0, 0.0), |a, b| if b.0 > a.0 { b } else { a })
     }
 
     /// Log-spaced positive sample, 10^lo … 10^hi, plus random-looking mantissas.
@@ -276,8 +289,14 @@ mod tests {
             let (s, c) = super::sin_cos(x);
             let (s0, c0) = x.sin_cos();
             // Near zeros of sin/cos the ulp of the result is tiny; absolute error is what counts.
-            assert!(ulps(s, s0) <= 2.0 || (s - s0).abs() <= 1e-16, "sin({x}) = {s} vs {s0}");
-            assert!(ulps(c, c0) <= 2.0 || (c - c0).abs() <= 1e-16, "cos({x}) = {c} vs {c0}");
+            assert!(
+                ulps(s, s0) <= 2.0 || (s - s0).abs() <= 1e-16,
+                "sin({x}) = {s} vs {s0}"
+            );
+            assert!(
+                ulps(c, c0) <= 2.0 || (c - c0).abs() <= 1e-16,
+                "cos({x}) = {c} vs {c0}"
+            );
         }
     }
 

@@ -49,10 +49,21 @@ impl FitFile {
             .with_context(|| format!("cannot read config '{}'", path.display()))?;
         let file: FitFile =
             serde_json::from_str(&text).with_context(|| format!("config '{}'", path.display()))?;
-        file.fit.validate().with_context(|| format!("config '{}'", path.display()))?;
-        let job = file.mie.job().with_context(|| format!("config '{}': mie", path.display()))?;
-        let diameters: Vec<f64> = job.distributions.iter().map(|d| d.nominal_diameter_um()).collect();
-        file.fit.check_branches(&diameters).with_context(|| format!("config '{}'", path.display()))?;
+        file.fit
+            .validate()
+            .with_context(|| format!("config '{}'", path.display()))?;
+        let job = file
+            .mie
+            .job()
+            .with_context(|| format!("config '{}': mie", path.display()))?;
+        let diameters: Vec<f64> = job
+            .distributions
+            .iter()
+            .map(|d| d.nominal_diameter_um())
+            .collect();
+        file.fit
+            .check_branches(&diameters)
+            .with_context(|| format!("config '{}'", path.display()))?;
         Ok(file)
     }
 }
@@ -77,7 +88,12 @@ pub fn run_main_job() -> Result<()> {
          → outputs/fit, outputs/mie",
         nephele::VERSION
     );
-    run_file(&file, Path::new("outputs/fit"), Path::new("outputs/mie"), true)
+    run_file(
+        &file,
+        Path::new("outputs/fit"),
+        Path::new("outputs/mie"),
+        true,
+    )
 }
 
 fn run_file(file: &FitFile, out: &Path, mie_out: &Path, plot: bool) -> Result<()> {
@@ -97,13 +113,17 @@ fn run_file(file: &FitFile, out: &Path, mie_out: &Path, plot: bool) -> Result<()
     bar.finish_and_clear();
     let fit_s = t1.elapsed().as_secs_f64();
     let t2 = Instant::now();
-    let timings = json!({ "mie_s": mie_s, "fit_s": fit_s, "threads": rayon::current_num_threads() });
+    let timings =
+        json!({ "mie_s": mie_s, "fit_s": fit_s, "threads": rayon::current_num_threads() });
     write_outputs(file, &tables, &report, timings, out, plot)?;
     // The Mie tables of the figure diameters, as `nephele mie` writes them.
     let mut shown: Vec<PhaseTable> = Vec::new();
     for &d in &file.fit.figure_diameters_um {
         let i = figures::nearest(&report, d);
-        if !shown.iter().any(|t| t.distribution == tables[i].distribution) {
+        if !shown
+            .iter()
+            .any(|t| t.distribution == tables[i].distribution)
+        {
             shown.push(tables[i].clone());
         }
     }
@@ -173,13 +193,21 @@ fn write_outputs(
     set.write(&out.join("fits.npz"), |w| npz(report).write_to(w))?;
     if plot {
         let fig = |name: &str| out.join(name);
-        let loss_name = if file.fit.loss == Loss::Eas { "E_AS" } else { "log L2" };
+        let loss_name = if file.fit.loss == Loss::Eas {
+            "E_AS"
+        } else {
+            "log L2"
+        };
         set.write_via_path(&fig("phase_fits.png"), |p| {
             figures::phase_figure(p, report, tables, &file.fit.figure_diameters_um)
         })?;
-        set.write_via_path(&fig("loss_vs_diameter.png"), |p| figures::loss_figure(p, report, loss_name))?;
+        set.write_via_path(&fig("loss_vs_diameter.png"), |p| {
+            figures::loss_figure(p, report, loss_name)
+        })?;
         if report.fits[0].models.contains_key("hg_draine") {
-            set.write_via_path(&fig("hg_draine_params.png"), |p| figures::params_figure(p, report))?;
+            set.write_via_path(&fig("hg_draine_params.png"), |p| {
+                figures::params_figure(p, report)
+            })?;
         }
     }
     set.commit()
@@ -195,9 +223,16 @@ fn npz(report: &FitReport) -> Npz {
             continue;
         }
         let k = m.param_names().len();
-        let loss: Vec<f64> = report.fits.iter().map(|f| f.models[m.name()].optimum.loss).collect();
-        let params: Vec<f64> =
-            report.fits.iter().flat_map(|f| f.models[m.name()].optimum.params.clone()).collect();
+        let loss: Vec<f64> = report
+            .fits
+            .iter()
+            .map(|f| f.models[m.name()].optimum.loss)
+            .collect();
+        let params: Vec<f64> = report
+            .fits
+            .iter()
+            .flat_map(|f| f.models[m.name()].optimum.params.clone())
+            .collect();
         z.add(&format!("loss_{}", m.name()), &[n], &loss);
         z.add(&format!("params_{}", m.name()), &[n, k], &params);
     }
@@ -261,7 +296,11 @@ fn print_summary(report: &FitReport, cfg: &FitConfig, out: &Path) {
         not_converged, report.sweeps, report.improved_by_warm_starts
     );
     for b in &report.branches {
-        let worst = b.points.iter().map(|p| p.extra_loss_relative).fold(0.0, f64::max);
+        let worst = b
+            .points
+            .iter()
+            .map(|p| p.extra_loss_relative)
+            .fold(0.0, f64::max);
         println!(
             "curves {:?} µm: loss ≤ the paper's curves at {}/{} diameters; largest extra loss over the optimum {:.1}%",
             b.range_um,

@@ -241,7 +241,11 @@ fn parse_list(s: &str, what: &str) -> Result<Vec<f64>> {
             bail!("{what}: 'log:{range}' needs MIN > 0");
         }
         let (lo, hi, n) = (v[0].ln(), v[v.len() - 1].ln(), v.len());
-        let step = if n > 1 { (hi - lo) / (n - 1) as f64 } else { 0.0 };
+        let step = if n > 1 {
+            (hi - lo) / (n - 1) as f64
+        } else {
+            0.0
+        };
         return Ok((0..n).map(|i| (lo + step * i as f64).exp()).collect());
     }
     if s.contains(':') {

@@ -53,14 +53,22 @@ pub struct MergeArgs {
 }
 
 fn load_config(path: &Path) -> Result<SlabConfig> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read config '{}'", path.display()))?;
-    let cfg: SlabConfig = serde_json::from_str(&text).with_context(|| format!("config '{}'", path.display()))?;
-    cfg.validate().with_context(|| format!("config '{}'", path.display()))?;
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("cannot read config '{}'", path.display()))?;
+    let cfg: SlabConfig =
+        serde_json::from_str(&text).with_context(|| format!("config '{}'", path.display()))?;
+    cfg.validate()
+        .with_context(|| format!("config '{}'", path.display()))?;
     Ok(cfg)
 }
 
 fn parse_shard(s: &str) -> Result<(usize, usize)> {
-    let parsed = s.split_once('/').and_then(|(k, n)| Some((k.trim().parse::<usize>().ok()?, n.trim().parse::<usize>().ok()?)));
+    let parsed = s.split_once('/').and_then(|(k, n)| {
+        Some((
+            k.trim().parse::<usize>().ok()?,
+            n.trim().parse::<usize>().ok()?,
+        ))
+    });
     match parsed {
         Some((k, n)) if 1 <= k && k <= n => Ok((k - 1, n)),
         _ => bail!("--shard '{s}' must be K/N with 1 ≤ K ≤ N"),
@@ -79,26 +87,42 @@ pub fn run(args: SlabArgs) -> Result<()> {
     let phase = PhaseModel::build(&cfg.phase)?;
     let phase_s = t0.elapsed().as_secs_f64();
     let checkpoint = Checkpoint::open(&out.join("checkpoint"), &cfg)?;
-    let control = Control { shard, checkpoint: Some(&checkpoint), save_every_s: args.save_every };
+    let control = Control {
+        shard,
+        checkpoint: Some(&checkpoint),
+        save_every_s: args.save_every,
+    };
     let total = cfg.thicknesses.len() * cfg.mu_l.len();
     let bar = ProgressBar::new(total as u64).with_style(
-        ProgressStyle::with_template("slab [{bar:30}] {pos}/{len} slices ({elapsed}, eta {eta}) {msg}")
-            .expect("static template"),
+        ProgressStyle::with_template(
+            "slab [{bar:30}] {pos}/{len} slices ({elapsed}, eta {eta}) {msg}",
+        )
+        .expect("static template"),
     );
     let t1 = Instant::now();
     let run = run_all(&cfg, &phase, &control, &|slice, _, photons, worst| {
         bar.set_position(slice as u64);
         let rate = photons as f64 / t1.elapsed().as_secs_f64().max(1e-9);
-        bar.set_message(format!("slice {}: {photons} photons, worst rel. error {:.2} %, {:.2} M photons/s", slice + 1, 100.0 * worst, rate / 1e6));
+        bar.set_message(format!(
+            "slice {}: {photons} photons, worst rel. error {:.2} %, {:.2} M photons/s",
+            slice + 1,
+            100.0 * worst,
+            rate / 1e6
+        ));
     })?;
     bar.finish_and_clear();
     let mc_s = t1.elapsed().as_secs_f64();
     if let Some((k, n)) = shard {
         summary(&run, mc_s);
-        println!("shard {}/{n}: sums in {}; merge all shards with `nephele merge --config … SHARD_DIR…`", k + 1, out.join("checkpoint").display());
+        println!(
+            "shard {}/{n}: sums in {}; merge all shards with `nephele merge --config … SHARD_DIR…`",
+            k + 1,
+            out.join("checkpoint").display()
+        );
         return Ok(());
     }
-    let timings = json!({"phase_s": phase_s, "monte_carlo_s": mc_s, "threads": rayon::current_num_threads()});
+    let timings =
+        json!({"phase_s": phase_s, "monte_carlo_s": mc_s, "threads": rayon::current_num_threads()});
     write_tables(&cfg, &run, &out, !args.no_plot, timings)?;
     checkpoint.remove()?;
     summary(&run, mc_s);
@@ -120,11 +144,21 @@ pub fn merge_shards(args: MergeArgs) -> Result<()> {
     let timings = json!({"monte_carlo_s_summed_over_shards": seconds, "shards": args.shards.len()});
     write_tables(&cfg, &run, &out, !args.no_plot, timings)?;
     summary(&run, seconds);
-    println!("merged {} shards into {}/tables.npz, tables.json", args.shards.len(), out.display());
+    println!(
+        "merged {} shards into {}/tables.npz, tables.json",
+        args.shards.len(),
+        out.display()
+    );
     Ok(())
 }
 
-fn write_tables(cfg: &SlabConfig, run: &SlabRun, out: &Path, plot: bool, timings: serde_json::Value) -> Result<()> {
+fn write_tables(
+    cfg: &SlabConfig,
+    run: &SlabRun,
+    out: &Path,
+    plot: bool,
+    timings: serde_json::Value,
+) -> Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("cannot create '{}'", out.display()))?;
     let mut set = AtomicFiles::new();
     set.write(&out.join("tables.json"), |w| {
@@ -160,14 +194,35 @@ fn arrays(cfg: &SlabConfig, run: &SlabRun) -> Npz {
     let (nt, nl, np) = (cfg.thicknesses.len(), cfg.mu_l.len(), cfg.planes);
     let (ng, nm, nk) = (cfg.group_starts.len(), cfg.mu_v_bins, cfg.psi_v_bins);
     let n = ng * nt * nl * np * nm * nk;
-    let names = ["T", "T_se", "cx", "cx_se", "cz", "cz_se", "sigma", "sigma_se"];
+    let names = [
+        "T", "T_se", "cx", "cx_se", "cz", "cz_se", "sigma", "sigma_se",
+    ];
     let mut out: Vec<Vec<f64>> = vec![vec![f64::NAN; n]; names.len()];
-    let mut flux = [vec![0.0; nt * nl * np], vec![0.0; nt * nl * np], vec![0.0; nt * nl * np], vec![0.0; nt * nl * np]];
-    for (s, (report, slice)) in run.slices.iter().enumerate().filter_map(|(s, x)| Some((s, x.as_ref()?))) {
+    let mut flux = [
+        vec![0.0; nt * nl * np],
+        vec![0.0; nt * nl * np],
+        vec![0.0; nt * nl * np],
+        vec![0.0; nt * nl * np],
+    ];
+    for (s, (report, slice)) in run
+        .slices
+        .iter()
+        .enumerate()
+        .filter_map(|(s, x)| Some((s, x.as_ref()?)))
+    {
         let (it, il) = (s / nl, s % nl);
         let grid = cfg.grid(report.t).expect("validated");
         let t = &slice.tables;
-        let src = [&t.t, &t.t_se, &t.cx, &t.cx_se, &t.cz, &t.cz_se, &t.sigma, &t.sigma_se];
+        let src = [
+            &t.t,
+            &t.t_se,
+            &t.cx,
+            &t.cx_se,
+            &t.cz,
+            &t.cz_se,
+            &t.sigma,
+            &t.sigma_se,
+        ];
         for c in 0..grid.n_cells() {
             let (g, j, m, k) = grid.cell_parts(c);
             let at = ((((g * nt + it) * nl + il) * np + j) * nm + m) * nk + k;
@@ -202,7 +257,16 @@ fn arrays(cfg: &SlabConfig, run: &SlabRun) -> Npz {
     z.add("psi_v_edges", &[nk + 1], &grid.psi_edges);
     let groups = cfg.groups();
     let first: Vec<f64> = groups.iter().map(|g| g.0 as f64).collect();
-    let last: Vec<f64> = groups.iter().map(|g| if g.1 == u32::MAX { f64::INFINITY } else { g.1 as f64 }).collect();
+    let last: Vec<f64> = groups
+        .iter()
+        .map(|g| {
+            if g.1 == u32::MAX {
+                f64::INFINITY
+            } else {
+                g.1 as f64
+            }
+        })
+        .collect();
     z.add("group_first", &[ng], &first);
     z.add("group_last", &[ng], &last);
     z
@@ -211,9 +275,15 @@ fn arrays(cfg: &SlabConfig, run: &SlabRun) -> Npz {
 /// T (up and down), c_z and σ against depth per order group, for the slice nearest t = 8,
 /// μ_L = 0.5, in the view bins nearest straight up / down and ψ_V = 0.
 fn figure(path: &Path, cfg: &SlabConfig, run: &SlabRun) -> Result<()> {
-    let nearest = |v: &[f64], x: f64| (0..v.len()).min_by(|&a, &b| (v[a] - x).abs().total_cmp(&(v[b] - x).abs())).unwrap_or(0);
+    let nearest = |v: &[f64], x: f64| {
+        (0..v.len())
+            .min_by(|&a, &b| (v[a] - x).abs().total_cmp(&(v[b] - x).abs()))
+            .unwrap_or(0)
+    };
     let (it, il) = (nearest(&cfg.thicknesses, 8.0), nearest(&cfg.mu_l, 0.5));
-    let (report, slice) = run.slices[it * cfg.mu_l.len() + il].as_ref().context("slice not run")?;
+    let (report, slice) = run.slices[it * cfg.mu_l.len() + il]
+        .as_ref()
+        .context("slice not run")?;
     let grid = cfg.grid(report.t)?;
     let d = &grid.depths;
     let (up, down) = (grid.n_mu() - 1, 0);
@@ -225,14 +295,24 @@ fn figure(path: &Path, cfg: &SlabConfig, run: &SlabRun) -> Result<()> {
             (a, b) => format!("orders {a}–{b}"),
         }
     };
-    let column = |v: &[f64], g: usize, m: usize| -> Vec<f64> { (0..d.len()).map(|j| v[grid.cell(g, j, m, 0)]).collect() };
+    let column = |v: &[f64], g: usize, m: usize| -> Vec<f64> {
+        (0..d.len()).map(|j| v[grid.cell(g, j, m, 0)]).collect()
+    };
     let t = &slice.tables;
-    let data: Vec<Vec<(String, Vec<f64>)>> = [(&t.t, up), (&t.t, down), (&t.cz, down), (&t.sigma, down)]
-        .iter()
-        .map(|(v, m)| (0..grid.groups.len()).map(|g| (label(g), column(v, g, *m))).collect())
-        .collect();
+    let data: Vec<Vec<(String, Vec<f64>)>> =
+        [(&t.t, up), (&t.t, down), (&t.cz, down), (&t.sigma, down)]
+            .iter()
+            .map(|(v, m)| {
+                (0..grid.groups.len())
+                    .map(|g| (label(g), column(v, g, *m)))
+                    .collect()
+            })
+            .collect();
     let titles = [
-        format!("T, light going up (μ_V bin nearest 1), t = {}, μ_L = {}", report.t, report.mu_l),
+        format!(
+            "T, light going up (μ_V bin nearest 1), t = {}, μ_L = {}",
+            report.t, report.mu_l
+        ),
         "T, light going down (μ_V bin nearest −1)".to_string(),
         "collector mean c_z, light going down".to_string(),
         "collector width σ, light going down".to_string(),
@@ -250,7 +330,13 @@ fn figure(path: &Path, cfg: &SlabConfig, run: &SlabRun) -> Result<()> {
             series: series
                 .iter()
                 .enumerate()
-                .map(|(g, (l, y))| Series { label: l.clone(), x: d, y, style: Style::Line, colour: g + 1 })
+                .map(|(g, (l, y))| Series {
+                    label: l.clone(),
+                    x: d,
+                    y,
+                    style: Style::Line,
+                    colour: g + 1,
+                })
                 .collect(),
         })
         .collect();
@@ -258,11 +344,21 @@ fn figure(path: &Path, cfg: &SlabConfig, run: &SlabRun) -> Result<()> {
 }
 
 fn summary(run: &SlabRun, seconds: f64) {
-    println!("{:>8} {:>6} {:>12} {:>10} {:>10} {:>10} {:>10} {:>10}", "t", "mu_L", "photons", "R", "T", "worst se", "horizon", "converged");
+    println!(
+        "{:>8} {:>6} {:>12} {:>10} {:>10} {:>10} {:>10} {:>10}",
+        "t", "mu_L", "photons", "R", "T", "worst se", "horizon", "converged"
+    );
     for (r, _) in run.done() {
         println!(
             "{:>8} {:>6} {:>12} {:>10.5} {:>10.5} {:>9.2}% {:>9.2}% {:>10}",
-            r.t, r.mu_l, r.photons, r.reflected, r.transmitted, 100.0 * r.worst_rel_se, 100.0 * r.worst_rel_se_horizon, r.converged
+            r.t,
+            r.mu_l,
+            r.photons,
+            r.reflected,
+            r.transmitted,
+            100.0 * r.worst_rel_se,
+            100.0 * r.worst_rel_se_horizon,
+            r.converged
         );
     }
     let events: u64 = run.done().map(|(r, _)| r.events).sum();

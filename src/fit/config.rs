@@ -72,9 +72,15 @@ impl BranchConfig {
     /// The four forms, in the order g_HG, g_D, α, w_D.
     pub fn forms(&self) -> Result<[Form; 4]> {
         let f = |name: &str, what: &str| {
-            Form::parse(name).with_context(|| format!("curve of {what} over {:?} µm", self.range_um))
+            Form::parse(name)
+                .with_context(|| format!("curve of {what} over {:?} µm", self.range_um))
         };
-        Ok([f(&self.g_hg, "g_hg")?, f(&self.g_d, "g_d")?, f(&self.alpha, "alpha")?, f(&self.w_d, "w_d")?])
+        Ok([
+            f(&self.g_hg, "g_hg")?,
+            f(&self.g_d, "g_d")?,
+            f(&self.alpha, "alpha")?,
+            f(&self.w_d, "w_d")?,
+        ])
     }
 }
 
@@ -82,9 +88,16 @@ impl FitConfig {
     /// The models, parsed, in report order, without repeats.
     pub fn models(&self) -> Result<Vec<Model>> {
         if self.models.is_empty() {
-            bail!("fit.models is empty (valid: {})", default_models().join(", "));
+            bail!(
+                "fit.models is empty (valid: {})",
+                default_models().join(", ")
+            );
         }
-        let mut out = self.models.iter().map(|n| Model::from_name(n)).collect::<Result<Vec<_>>>()?;
+        let mut out = self
+            .models
+            .iter()
+            .map(|n| Model::from_name(n))
+            .collect::<Result<Vec<_>>>()?;
         out.sort();
         out.dedup();
         Ok(out)
@@ -95,7 +108,10 @@ impl FitConfig {
     pub fn check_branches(&self, diameters_um: &[f64]) -> Result<()> {
         for b in &self.curves {
             let [lo, hi] = b.range_um;
-            let n = diameters_um.iter().filter(|d| (lo..=hi).contains(*d)).count();
+            let n = diameters_um
+                .iter()
+                .filter(|d| (lo..=hi).contains(*d))
+                .count();
             let need = b.forms()?.iter().map(|f| f.n_coef()).max().unwrap_or(1) + 1;
             if n < need {
                 bail!("fit.curves range_um {:?} holds {n} of the fitted diameters; its forms need at least {need}", b.range_um);
@@ -116,11 +132,18 @@ impl FitConfig {
         for b in &self.curves {
             let [lo, hi] = b.range_um;
             if !(lo.is_finite() && hi.is_finite() && 0.0 < lo && lo < hi) {
-                bail!("fit.curves range_um {:?} must be 0 < lo < hi (µm)", b.range_um);
+                bail!(
+                    "fit.curves range_um {:?} must be 0 < lo < hi (µm)",
+                    b.range_um
+                );
             }
             b.forms()?;
         }
-        if let Some(d) = self.figure_diameters_um.iter().find(|d| !(**d > 0.0 && d.is_finite())) {
+        if let Some(d) = self
+            .figure_diameters_um
+            .iter()
+            .find(|d| !(**d > 0.0 && d.is_finite()))
+        {
             bail!("fit.figure_diameters_um: {d} is not a positive diameter");
         }
         Ok(())

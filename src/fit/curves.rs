@@ -43,7 +43,8 @@ pub enum Form {
 }
 
 /// The form names a config may use, for error messages.
-pub const FORM_NAMES: &str = "exp_rational, exp_rational_no_offset, poly_ln_d_1 … poly_ln_d_5, constant";
+pub const FORM_NAMES: &str =
+    "exp_rational, exp_rational_no_offset, poly_ln_d_1 … poly_ln_d_5, constant";
 
 impl Form {
     /// Parses a config name.
@@ -162,11 +163,22 @@ impl Curve {
     pub fn expression(&self) -> String {
         let k = self.coefficients();
         // "x - c" written with the sign folded in: "x + 0.5" rather than "x - -0.5".
-        let minus = |x: &str, c: f64| if c < 0.0 { format!("{x} + {:.6}", -c) } else { format!("{x} - {c:.6}") };
+        let minus = |x: &str, c: f64| {
+            if c < 0.0 {
+                format!("{x} + {:.6}", -c)
+            } else {
+                format!("{x} - {c:.6}")
+            }
+        };
         match self.form {
             Form::ExpRational => {
                 let sign = if k["B"] < 0.0 { '+' } else { '-' };
-                format!("exp({:.6} {sign} {:.6}/({}))", k["A"], k["B"].abs(), minus("d", -k["C"]))
+                format!(
+                    "exp({:.6} {sign} {:.6}/({}))",
+                    k["A"],
+                    k["B"].abs(),
+                    minus("d", -k["C"])
+                )
             }
             Form::ExpRationalNoOffset => format!("exp(-{:.6}/({}))", k["B"], minus("d", -k["C"])),
             Form::PolyLnD(_) | Form::Constant => {
@@ -202,7 +214,11 @@ impl Objective for PointFit<'_> {
         for (&d, &y) in self.d.iter().zip(self.y) {
             let v = self.curve.eval_grad(c, d, &mut g);
             // ln θ for the exp forms: ∂ ln v = ∂v / v.
-            let (r, scale) = if self.curve.form.is_exp() { (v.ln() - y, 1.0 / v) } else { (v - y, 1.0) };
+            let (r, scale) = if self.curve.form.is_exp() {
+                (v.ln() - y, 1.0 / v)
+            } else {
+                (v - y, 1.0)
+            };
             sse += r * r;
             for k in 0..c.len() {
                 grad[k] += 2.0 * r * g[k] * scale;
@@ -219,10 +235,23 @@ pub fn fit_points(form: Form, d: &[f64], theta: &[f64]) -> Result<Curve> {
     if form.is_exp() && theta.iter().any(|t| *t <= 0.0) {
         bail!("form {} needs positive values", form.name());
     }
-    let y: Vec<f64> = if form.is_exp() { theta.iter().map(|t| t.ln()).collect() } else { theta.to_vec() };
-    let mut curve = Curve { form, d_min, ln_d0, coef: vec![0.0; form.n_coef()] };
+    let y: Vec<f64> = if form.is_exp() {
+        theta.iter().map(|t| t.ln()).collect()
+    } else {
+        theta.to_vec()
+    };
+    let mut curve = Curve {
+        form,
+        d_min,
+        ln_d0,
+        coef: vec![0.0; form.n_coef()],
+    };
     let starts = starts(form, d, &y, d_min);
-    let obj = PointFit { curve: &curve, d, y: &y };
+    let obj = PointFit {
+        curve: &curve,
+        d,
+        y: &y,
+    };
     let bounds = vec![Bound::Free; form.n_coef()];
     let best = minimise(&obj, &bounds, &starts, 3, &[]);
     curve.coef = best.params;
@@ -314,7 +343,12 @@ impl Objective for JointLoss<'_> {
                 let mut de = [0.0; 4];
                 let e = site.target.loss_grad(Model::HgDraine, &theta, &mut de);
                 let g: Vec<f64> = (0..4)
-                    .flat_map(|k| dtheta_dc[k].iter().map(move |x| x * de[k] * scale).collect::<Vec<_>>())
+                    .flat_map(|k| {
+                        dtheta_dc[k]
+                            .iter()
+                            .map(move |x| x * de[k] * scale)
+                            .collect::<Vec<_>>()
+                    })
                     .collect();
                 (e * scale, g)
             })
@@ -335,9 +369,17 @@ impl Objective for JointLoss<'_> {
 const CURVE_MAX_ITERS: u64 = 4000;
 
 /// Step 2 from the step-1 curves: returns the polished curves and the optimiser's report.
-pub fn polish_on_loss(curves: [Curve; 4], sites: &[Site<'_>], alpha_max: f64) -> ([Curve; 4], Optimum) {
+pub fn polish_on_loss(
+    curves: [Curve; 4],
+    sites: &[Site<'_>],
+    alpha_max: f64,
+) -> ([Curve; 4], Optimum) {
     let c0: Vec<f64> = curves.iter().flat_map(|c| c.coef.clone()).collect();
-    let joint = JointLoss { curves: &curves, sites, bounds: Model::HgDraine.bounds(alpha_max) };
+    let joint = JointLoss {
+        curves: &curves,
+        sites,
+        bounds: Model::HgDraine.bounds(alpha_max),
+    };
     let free = vec![Bound::Free; c0.len()];
     // 12–16 coefficients along narrow valleys: more iterations than a per-diameter fit.
     let best = polish_iters(&joint, &free, &c0, CURVE_MAX_ITERS);
@@ -364,7 +406,11 @@ pub struct CurveReport {
 
 impl From<&Curve> for CurveReport {
     fn from(c: &Curve) -> Self {
-        Self { form: c.form.name(), expression: c.expression(), coefficients: c.coefficients() }
+        Self {
+            form: c.form.name(),
+            expression: c.expression(),
+            coefficients: c.coefficients(),
+        }
     }
 }
 
@@ -377,26 +423,42 @@ mod tests {
         // The paper's α(d) sampled at 5…50 µm is an exp_rational with A, B, C = 3.62489,
         // 8.29288, 5.52825.
         let d: Vec<f64> = (5..=50).map(|d| d as f64).collect();
-        let a: Vec<f64> = d.iter().map(|d| (3.62489 - 8.29288 / (d + 5.52825)).exp()).collect();
+        let a: Vec<f64> = d
+            .iter()
+            .map(|d| (3.62489 - 8.29288 / (d + 5.52825)).exp())
+            .collect();
         let c = fit_points(Form::ExpRational, &d, &a).unwrap();
         let k = c.coefficients();
         assert!((k["A"] - 3.62489).abs() < 1e-4, "{k:?}");
         assert!((k["B"] - 8.29288).abs() < 1e-3, "{k:?}");
         assert!((k["C"] - 5.52825).abs() < 1e-3, "{k:?}");
-        let g: Vec<f64> = d.iter().map(|d| (-0.0990567 / (d - 1.67154)).exp()).collect();
+        let g: Vec<f64> = d
+            .iter()
+            .map(|d| (-0.0990567 / (d - 1.67154)).exp())
+            .collect();
         let c = fit_points(Form::ExpRationalNoOffset, &d, &g).unwrap();
-        assert!((c.coefficients()["C"] + 1.67154).abs() < 1e-3, "{:?}", c.coefficients());
+        assert!(
+            (c.coefficients()["C"] + 1.67154).abs() < 1e-3,
+            "{:?}",
+            c.coefficients()
+        );
     }
 
     #[test]
     fn polynomial_in_ln_d() {
         let d: Vec<f64> = (1..=20).map(|i| 0.1 * 1.2f64.powi(i)).collect();
-        let y: Vec<f64> = d.iter().map(|d| 0.3 + 0.1 * d.ln() - 0.02 * d.ln().powi(2)).collect();
+        let y: Vec<f64> = d
+            .iter()
+            .map(|d| 0.3 + 0.1 * d.ln() - 0.02 * d.ln().powi(2))
+            .collect();
         let c = fit_points(Form::PolyLnD(2), &d, &y).unwrap();
         for (d, y) in d.iter().zip(&y) {
             assert!((c.at(*d) - y).abs() < 1e-7, "{} vs {y}", c.at(*d));
         }
         assert!(Form::parse("poly_ln_d_9").is_err());
-        assert!(Form::parse("cubic").unwrap_err().to_string().contains("exp_rational"));
+        assert!(Form::parse("cubic")
+            .unwrap_err()
+            .to_string()
+            .contains("exp_rational"));
     }
 }

@@ -10,17 +10,26 @@ use std::path::Path;
 
 /// Diameters spanning more than a decade are drawn on a log axis.
 fn wide(d: &[f64]) -> bool {
-    d.first().zip(d.last()).is_some_and(|(lo, hi)| *lo > 0.0 && hi / lo > 10.0)
+    d.first()
+        .zip(d.last())
+        .is_some_and(|(lo, hi)| *lo > 0.0 && hi / lo > 10.0)
 }
 
 /// Index of the fitted diameter nearest to `d`.
 pub fn nearest(report: &FitReport, d: f64) -> usize {
     let dist = |i: usize| (report.diameters_um[i] - d).abs();
-    (0..report.diameters_um.len()).min_by(|&a, &b| dist(a).total_cmp(&dist(b))).unwrap_or(0)
+    (0..report.diameters_um.len())
+        .min_by(|&a, &b| dist(a).total_cmp(&dist(b)))
+        .unwrap_or(0)
 }
 
 /// Mie vs each fitted model at the diameters nearest to `wanted` (log-scale p(θ)).
-pub fn phase_figure(path: &Path, report: &FitReport, tables: &[PhaseTable], wanted: &[f64]) -> Result<()> {
+pub fn phase_figure(
+    path: &Path,
+    report: &FitReport,
+    tables: &[PhaseTable],
+    wanted: &[f64],
+) -> Result<()> {
     let mut idx: Vec<usize> = wanted.iter().map(|&d| nearest(report, d)).collect();
     idx.dedup();
     let curves: Vec<(usize, Vec<(String, Vec<f64>, Style, usize)>)> = idx
@@ -31,11 +40,21 @@ pub fn phase_figure(path: &Path, report: &FitReport, tables: &[PhaseTable], want
             for (k, m) in Model::ALL.iter().enumerate() {
                 if let Some(f) = report.fits[i].models.get(m.name()) {
                     let p = m.phase(&f.optimum.params);
-                    s.push((m.label().to_string(), t.mu.iter().map(|&mu| p.eval(mu)).collect(), Style::Line, k + 1));
+                    s.push((
+                        m.label().to_string(),
+                        t.mu.iter().map(|&mu| p.eval(mu)).collect(),
+                        Style::Line,
+                        k + 1,
+                    ));
                 }
             }
             let paper = Model::HgDraine.phase(&paper_theta(report.diameters_um[i]));
-            s.push(("HG+Draine, paper".into(), t.mu.iter().map(|&mu| paper.eval(mu)).collect(), Style::Dashed, 7));
+            s.push((
+                "HG+Draine, paper".into(),
+                t.mu.iter().map(|&mu| paper.eval(mu)).collect(),
+                Style::Dashed,
+                7,
+            ));
             (i, s)
         })
         .collect();
@@ -70,16 +89,32 @@ pub fn loss_figure(path: &Path, report: &FitReport, loss_name: &str) -> Result<(
     let mut series_data: Vec<(String, Vec<f64>, Vec<f64>, Style, usize)> = Vec::new();
     for (k, m) in Model::ALL.iter().enumerate() {
         if report.fits[0].models.contains_key(m.name()) {
-            let y = report.fits.iter().map(|f| f.models[m.name()].optimum.loss).collect();
+            let y = report
+                .fits
+                .iter()
+                .map(|f| f.models[m.name()].optimum.loss)
+                .collect();
             series_data.push((m.label().to_string(), d.clone(), y, Style::Line, k + 1));
         }
     }
     let paper: Vec<f64> = report.fits.iter().map(|f| f.paper.loss).collect();
-    series_data.push(("HG+Draine, paper's curves".into(), d.clone(), paper, Style::Dashed, 7));
+    series_data.push((
+        "HG+Draine, paper's curves".into(),
+        d.clone(),
+        paper,
+        Style::Dashed,
+        7,
+    ));
     for b in &report.branches {
         let x = b.points.iter().map(|p| p.d_um).collect();
         let y = b.points.iter().map(|p| p.loss_curve).collect();
-        series_data.push((format!("HG+Draine, our curves {:?} µm", b.range_um), x, y, Style::Points, 5));
+        series_data.push((
+            format!("HG+Draine, our curves {:?} µm", b.range_um),
+            x,
+            y,
+            Style::Points,
+            5,
+        ));
     }
     let panel = Panel {
         title: format!("{loss_name} of each model's best fit vs droplet diameter"),
@@ -89,7 +124,13 @@ pub fn loss_figure(path: &Path, report: &FitReport, loss_name: &str) -> Result<(
         log_x: wide(d),
         series: series_data
             .iter()
-            .map(|(l, x, y, s, c)| Series { label: l.clone(), x, y, style: *s, colour: *c })
+            .map(|(l, x, y, s, c)| Series {
+                label: l.clone(),
+                x,
+                y,
+                style: *s,
+                colour: *c,
+            })
             .collect(),
     };
     panels_plot(path, (1200, 800), 1, &[panel])
@@ -99,20 +140,53 @@ pub fn loss_figure(path: &Path, report: &FitReport, loss_name: &str) -> Result<(
 pub fn params_figure(path: &Path, report: &FitReport) -> Result<()> {
     let d = &report.diameters_um;
     let (lo, hi) = (d[0], d[d.len() - 1]);
-    let at = |t: f64| if wide(d) { lo * (hi / lo).powf(t) } else { lo + (hi - lo) * t };
+    let at = |t: f64| {
+        if wide(d) {
+            lo * (hi / lo).powf(t)
+        } else {
+            lo + (hi - lo) * t
+        }
+    };
     let dense: Vec<f64> = (0..=400).map(|i| at(i as f64 / 400.0)).collect();
     let mut data: Vec<Vec<(String, Vec<f64>, Vec<f64>, Style, usize)>> = Vec::new();
     for k in 0..HG_DRAINE_PARAMS.len() {
         let mut s = Vec::new();
-        let opt: Vec<f64> = report.fits.iter().map(|f| f.models["hg_draine"].optimum.params[k]).collect();
-        s.push(("per-diameter optimum".to_string(), d.clone(), opt, Style::Points, 0));
+        let opt: Vec<f64> = report
+            .fits
+            .iter()
+            .map(|f| f.models["hg_draine"].optimum.params[k])
+            .collect();
+        s.push((
+            "per-diameter optimum".to_string(),
+            d.clone(),
+            opt,
+            Style::Points,
+            0,
+        ));
         let paper: Vec<f64> = dense.iter().map(|&x| paper_theta(x)[k]).collect();
-        s.push(("paper's curve".into(), dense.clone(), paper, Style::Dashed, 7));
+        s.push((
+            "paper's curve".into(),
+            dense.clone(),
+            paper,
+            Style::Dashed,
+            7,
+        ));
         for (j, b) in report.branches.iter().enumerate() {
             let [a, z] = b.range_um;
-            let x: Vec<f64> = dense.iter().copied().filter(|x| (a..=z).contains(x)).collect();
+            let x: Vec<f64> = dense
+                .iter()
+                .copied()
+                .filter(|x| (a..=z).contains(x))
+                .collect();
             let y = x.iter().map(|&x| b.fitted[k].at(x)).collect();
-            let label = if j == 0 { format!("our curve{}", if report.branches.len() > 1 { "s" } else { "" }) } else { String::new() };
+            let label = if j == 0 {
+                format!(
+                    "our curve{}",
+                    if report.branches.len() > 1 { "s" } else { "" }
+                )
+            } else {
+                String::new()
+            };
             s.push((label, x, y, Style::Line, 1));
         }
         data.push(s);
@@ -128,7 +202,13 @@ pub fn params_figure(path: &Path, report: &FitReport) -> Result<()> {
             log_x: wide(d),
             series: s
                 .iter()
-                .map(|(l, x, y, st, c)| Series { label: l.clone(), x, y, style: *st, colour: *c })
+                .map(|(l, x, y, st, c)| Series {
+                    label: l.clone(),
+                    x,
+                    y,
+                    style: *st,
+                    colour: *c,
+                })
                 .collect(),
         })
         .collect();

@@ -40,7 +40,11 @@ impl Target {
             bail!("a Mie table needs ≥ 3 angles and one phase value per angle");
         }
         if let Some(i) = phase.iter().position(|p| !(*p > 0.0 && p.is_finite())) {
-            bail!("p_Mie({}°) = {} is not positive: ln p is undefined", theta_deg[i], phase[i]);
+            bail!(
+                "p_Mie({}°) = {} is not positive: ln p is undefined",
+                theta_deg[i],
+                phase[i]
+            );
         }
         let th: Vec<f64> = theta_deg.iter().map(|t| t.to_radians()).collect();
         let n = th.len();
@@ -104,15 +108,20 @@ mod tests {
         let hg = HenyeyGreenstein::new(0.8);
         let coarse: Vec<f64> = (0..=180).map(|i| i as f64).collect();
         let fine = reference_angles_deg();
-        let table = |th: &[f64]| -> Vec<f64> {
-            th.iter().map(|t| hg.eval(t.to_radians().cos())).collect()
-        };
+        let table =
+            |th: &[f64]| -> Vec<f64> { th.iter().map(|t| hg.eval(t.to_radians().cos())).collect() };
         let t_fine = Target::new(&fine, &table(&fine), Loss::Eas).unwrap();
         assert!(t_fine.loss(Model::Hg, &[0.8]) < 1e-28);
         // A smooth misfit integrates to the same value on a 1° grid and the reference grid.
         let t_coarse = Target::new(&coarse, &table(&coarse), Loss::Eas).unwrap();
-        let (a, b) = (t_coarse.loss(Model::Hg, &[0.7]), t_fine.loss(Model::Hg, &[0.7]));
-        assert!((a / b - 1.0).abs() < 1e-3, "1° grid {a} vs reference grid {b}");
+        let (a, b) = (
+            t_coarse.loss(Model::Hg, &[0.7]),
+            t_fine.loss(Model::Hg, &[0.7]),
+        );
+        assert!(
+            (a / b - 1.0).abs() < 1e-3,
+            "1° grid {a} vs reference grid {b}"
+        );
         // ∫|cos θ| sin θ dθ = 1: a constant log-misfit c gives c² (to the trapezoid's O(h²) with
         // h = 0.1° = 1.7e-3 rad, ~1e-6 of it from the kink of |cos θ| at 90°).
         let flat = Target::new(&fine, &vec![1.0; fine.len()], Loss::Eas).unwrap();
@@ -129,7 +138,8 @@ mod tests {
             .iter()
             .map(|t| {
                 let mu = t.to_radians().cos();
-                0.7 * HenyeyGreenstein::new(0.95).eval(mu) + 0.3 * HenyeyGreenstein::new(0.2).eval(mu)
+                0.7 * HenyeyGreenstein::new(0.95).eval(mu)
+                    + 0.3 * HenyeyGreenstein::new(0.2).eval(mu)
             })
             .collect();
         let target = Target::new(&th, &mie, Loss::Eas).unwrap();
@@ -141,8 +151,13 @@ mod tests {
             let (mut p, mut m) = (theta, theta);
             p[k] += h;
             m[k] -= h;
-            let fd = (target.loss(Model::HgDraine, &p) - target.loss(Model::HgDraine, &m)) / (2.0 * h);
-            assert!((fd - grad[k]).abs() < 1e-6 * fd.abs().max(1e-3), "θ{k}: {} vs {fd}", grad[k]);
+            let fd =
+                (target.loss(Model::HgDraine, &p) - target.loss(Model::HgDraine, &m)) / (2.0 * h);
+            assert!(
+                (fd - grad[k]).abs() < 1e-6 * fd.abs().max(1e-3),
+                "θ{k}: {} vs {fd}",
+                grad[k]
+            );
         }
     }
 }

@@ -185,7 +185,9 @@ impl Model {
     /// A coarse grid of θ covering droplet-like shapes, the global start of the fits.
     pub fn coarse_grid(self, alpha_max: f64) -> Vec<Vec<f64>> {
         let gs = |lo: f64, hi: f64, n: usize| -> Vec<f64> {
-            (0..n).map(|i| lo + (hi - lo) * i as f64 / (n - 1) as f64).collect()
+            (0..n)
+                .map(|i| lo + (hi - lo) * i as f64 / (n - 1) as f64)
+                .collect()
         };
         let alphas: Vec<f64> = [0.01, 0.3, 1.0, 3.0, 10.0, 30.0, 100.0, 250.0]
             .into_iter()
@@ -357,7 +359,11 @@ mod tests {
 
     #[test]
     fn bounds_round_trip() {
-        for b in [Bound::Symmetric, Bound::Interval(0.0, 250.0), Bound::Interval(0.0, 1.0)] {
+        for b in [
+            Bound::Symmetric,
+            Bound::Interval(0.0, 250.0),
+            Bound::Interval(0.0, 1.0),
+        ] {
             for u in [-5.0, -0.3, 0.0, 2.0, 7.0] {
                 let t = b.to_param(u);
                 assert!((b.to_free(t) - u).abs() < 1e-8, "{b:?} u = {u}");

@@ -52,7 +52,10 @@ struct Free<'a, O> {
 
 impl<O: Objective> Free<'_, O> {
     fn theta(&self, u: &[f64]) -> Vec<f64> {
-        u.iter().zip(self.bounds).map(|(u, b)| b.to_param(*u)).collect()
+        u.iter()
+            .zip(self.bounds)
+            .map(|(u, b)| b.to_param(*u))
+            .collect()
     }
 }
 
@@ -71,7 +74,10 @@ impl<O: Objective> Gradient for Free<'_, O> {
         let mut g = vec![0.0; u.len()];
         finite(self.objective.loss_grad(&self.theta(u), &mut g), u)?;
         finite(g.iter().sum(), u)?;
-        Ok(g.iter().zip(u.iter().zip(self.bounds)).map(|(g, (u, b))| g * b.slope(*u)).collect())
+        Ok(g.iter()
+            .zip(u.iter().zip(self.bounds))
+            .map(|(g, (u, b))| g * b.slope(*u))
+            .collect())
     }
 }
 
@@ -81,7 +87,9 @@ fn finite(loss: f64, u: &[f64]) -> Result<f64, argmin::core::Error> {
     if loss.is_finite() {
         Ok(loss)
     } else {
-        Err(argmin::core::Error::msg(format!("loss {loss} at u = {u:?}")))
+        Err(argmin::core::Error::msg(format!(
+            "loss {loss} at u = {u:?}"
+        )))
     }
 }
 
@@ -91,9 +99,18 @@ pub fn polish<O: Objective>(objective: &O, bounds: &[Bound], theta0: &[f64]) -> 
 }
 
 /// L-BFGS from θ₀ (moved inside its bounds), at most `max_iters` iterations.
-pub fn polish_iters<O: Objective>(objective: &O, bounds: &[Bound], theta0: &[f64], max_iters: u64) -> Optimum {
+pub fn polish_iters<O: Objective>(
+    objective: &O,
+    bounds: &[Bound],
+    theta0: &[f64],
+    max_iters: u64,
+) -> Optimum {
     let free = Free { objective, bounds };
-    let u0: Vec<f64> = theta0.iter().zip(bounds).map(|(t, b)| b.to_free(*t)).collect();
+    let u0: Vec<f64> = theta0
+        .iter()
+        .zip(bounds)
+        .map(|(t, b)| b.to_free(*t))
+        .collect();
     let solver = LBFGS::new(MoreThuenteLineSearch::new(), 8)
         .with_tolerance_grad(1e-10)
         .and_then(|s| s.with_tolerance_cost(1e-15));
@@ -157,15 +174,28 @@ fn finish<O: Objective>(
 /// The `n` lowest grid points that differ from every lower chosen one by at least
 /// [`MIN_SEPARATION`] in some unconstrained coordinate u: the best few points of a grid tend to
 /// sit in one basin, and a start in each of several basins is what finds the global minimum.
-fn diverse_best<'a>(scored: &[(f64, &'a Vec<f64>)], bounds: &[Bound], n: usize) -> Vec<&'a Vec<f64>> {
-    let free = |t: &[f64]| -> Vec<f64> { t.iter().zip(bounds).map(|(t, b)| b.to_free(b.clamp(*t))).collect() };
+fn diverse_best<'a>(
+    scored: &[(f64, &'a Vec<f64>)],
+    bounds: &[Bound],
+    n: usize,
+) -> Vec<&'a Vec<f64>> {
+    let free = |t: &[f64]| -> Vec<f64> {
+        t.iter()
+            .zip(bounds)
+            .map(|(t, b)| b.to_free(b.clamp(*t)))
+            .collect()
+    };
     let mut chosen: Vec<(&Vec<f64>, Vec<f64>)> = Vec::with_capacity(n);
     for (_, t) in scored {
         if chosen.len() == n {
             break;
         }
         let u = free(t);
-        let apart = |c: &Vec<f64>| c.iter().zip(&u).any(|(a, b)| (a - b).abs() >= MIN_SEPARATION);
+        let apart = |c: &Vec<f64>| {
+            c.iter()
+                .zip(&u)
+                .any(|(a, b)| (a - b).abs() >= MIN_SEPARATION)
+        };
         if chosen.iter().all(|(_, c)| apart(c)) {
             chosen.push((t, u));
         }
@@ -195,7 +225,9 @@ pub fn minimise<O: Objective>(
         })
         .collect();
     scored.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let starts = diverse_best(&scored, bounds, n_best).into_iter().chain(warm.iter());
+    let starts = diverse_best(&scored, bounds, n_best)
+        .into_iter()
+        .chain(warm.iter());
     let mut best: Option<Optimum> = None;
     let mut evaluations = grid.len() as u64;
     for start in starts {

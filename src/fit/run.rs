@@ -127,7 +127,12 @@ pub struct FitReport {
 pub const HG_DRAINE_PARAMS: [&str; 4] = ["g_hg", "g_d", "alpha", "w_d"];
 
 fn named(model: Model, theta: &[f64]) -> BTreeMap<String, f64> {
-    model.param_names().iter().map(|n| n.to_string()).zip(theta.iter().copied()).collect()
+    model
+        .param_names()
+        .iter()
+        .map(|n| n.to_string())
+        .zip(theta.iter().copied())
+        .collect()
 }
 
 /// The paper's blend at d as θ = [g_hg, g_d, α, w_d].
@@ -144,7 +149,10 @@ pub fn run(
 ) -> Result<(FitReport, Vec<Target>)> {
     cfg.validate()?;
     let models = cfg.models()?;
-    let diameters: Vec<f64> = tables.iter().map(|t| t.distribution.nominal_diameter_um()).collect();
+    let diameters: Vec<f64> = tables
+        .iter()
+        .map(|t| t.distribution.nominal_diameter_um())
+        .collect();
     cfg.check_branches(&diameters)?;
     if diameters.windows(2).any(|w| w[1] <= w[0]) {
         bail!("fit diameters must be strictly increasing");
@@ -163,12 +171,20 @@ pub fn run(
         .map(|i| {
             let mut fitted: Vec<(Model, Optimum)> = Vec::with_capacity(models.len());
             for &m in &models {
-                let obj = ModelLoss { target: &targets[i], model: m };
-                let nested: Vec<Vec<f64>> =
-                    fitted.iter().flat_map(|(inner, o)| m.nested_starts(*inner, &o.params)).collect();
+                let obj = ModelLoss {
+                    target: &targets[i],
+                    model: m,
+                };
+                let nested: Vec<Vec<f64>> = fitted
+                    .iter()
+                    .flat_map(|(inner, o)| m.nested_starts(*inner, &o.params))
+                    .collect();
                 let grid = m.coarse_grid(cfg.alpha_max);
                 let o = minimise(&obj, &m.bounds(cfg.alpha_max), &grid, GRID_STARTS, &nested);
-                progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1, total);
+                progress(
+                    done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1,
+                    total,
+                );
                 fitted.push((m, o));
             }
             fitted.into_iter().map(|(_, o)| o).collect()
@@ -187,7 +203,13 @@ pub fn run(
                     .iter()
                     .zip(opts)
                     .map(|(m, o)| {
-                        (m.name().to_string(), ModelFit { params: named(*m, &o.params), optimum: o.clone() })
+                        (
+                            m.name().to_string(),
+                            ModelFit {
+                                params: named(*m, &o.params),
+                                optimum: o.clone(),
+                            },
+                        )
                     })
                     .collect(),
                 paper: ParamsLoss {
@@ -207,7 +229,9 @@ pub fn run(
     let hgd = models.iter().position(|m| *m == Model::HgDraine);
     for branch in &cfg.curves {
         let hgd = hgd.expect("validated: curves need hg_draine");
-        report.branches.push(fit_branch(cfg, branch, &report, &targets, &best, hgd)?);
+        report
+            .branches
+            .push(fit_branch(cfg, branch, &report, &targets, &best, hgd)?);
     }
     Ok((report, targets))
 }
@@ -239,7 +263,10 @@ fn warm_start_sweeps(
                         if warm.is_empty() {
                             return prev[i][k].clone(); // a single diameter has no neighbours
                         }
-                        let obj = ModelLoss { target: &targets[i], model: m };
+                        let obj = ModelLoss {
+                            target: &targets[i],
+                            model: m,
+                        };
                         let o = minimise(&obj, &m.bounds(cfg.alpha_max), &[], 0, &warm);
                         let mut kept = prev[i][k].clone();
                         kept.evaluations += o.evaluations;
@@ -287,7 +314,13 @@ fn fit_branch(
     // them is a poor start and the paper's smoother path a better one).
     let through = |param: &dyn Fn(usize, usize) -> f64| -> Result<[Curve; 4]> {
         let curves: Vec<Curve> = (0..4)
-            .map(|k| fit_points(forms[k], &d, &idx.iter().map(|&i| param(i, k)).collect::<Vec<_>>()))
+            .map(|k| {
+                fit_points(
+                    forms[k],
+                    &d,
+                    &idx.iter().map(|&i| param(i, k)).collect::<Vec<_>>(),
+                )
+            })
             .collect::<Result<_>>()?;
         Ok(curves.try_into().expect("four curves"))
     };
@@ -295,7 +328,11 @@ fn fit_branch(
     let via_paper = through(&|i, k| paper_theta(report.diameters_um[i])[k])?;
     let sites: Vec<Site> = idx
         .iter()
-        .map(|&i| Site { d: report.diameters_um[i], target: &targets[i], e_opt: best[i][hgd].loss })
+        .map(|&i| Site {
+            d: report.diameters_um[i],
+            target: &targets[i],
+            e_opt: best[i][hgd].loss,
+        })
         .collect();
     let from_optima = polish_on_loss(step1.clone(), &sites, cfg.alpha_max);
     let from_paper = polish_on_loss(via_paper, &sites, cfg.alpha_max);
@@ -305,7 +342,9 @@ fn fit_branch(
         ("optima", from_optima)
     };
     let bounds = Model::HgDraine.bounds(cfg.alpha_max);
-    let at = |c: &[Curve; 4], d: f64| -> [f64; 4] { std::array::from_fn(|k| bounds[k].clamp(c[k].at(d))) };
+    let at = |c: &[Curve; 4], d: f64| -> [f64; 4] {
+        std::array::from_fn(|k| bounds[k].clamp(c[k].at(d)))
+    };
     let points: Vec<CurvePoint> = sites
         .iter()
         .map(|s| {
@@ -323,9 +362,16 @@ fn fit_branch(
             }
         })
         .collect();
-    let beats = points.iter().filter(|p| p.loss_curve <= p.loss_paper).count();
+    let beats = points
+        .iter()
+        .filter(|p| p.loss_curve <= p.loss_paper)
+        .count();
     let by_name = |c: &[Curve; 4]| -> BTreeMap<String, CurveReport> {
-        HG_DRAINE_PARAMS.iter().zip(c.iter()).map(|(n, c)| (n.to_string(), CurveReport::from(c))).collect()
+        HG_DRAINE_PARAMS
+            .iter()
+            .zip(c.iter())
+            .map(|(n, c)| (n.to_string(), CurveReport::from(c)))
+            .collect()
     };
     Ok(BranchReport {
         range_um: branch.range_um,

@@ -7,11 +7,14 @@ use std::path::Path;
 
 /// The named float64 arrays of an `.npz` file, flattened (errors name the file and the array).
 pub fn read_arrays(path: &Path, names: &[&str]) -> Result<Vec<Vec<f64>>> {
-    let mut npz = npyz::npz::NpzArchive::open(path).with_context(|| format!("cannot open '{}'", path.display()))?;
+    let mut npz = npyz::npz::NpzArchive::open(path)
+        .with_context(|| format!("cannot open '{}'", path.display()))?;
     names
         .iter()
         .map(|name| {
-            let arr = npz.by_name(name)?.with_context(|| format!("'{}' has no array '{name}'", path.display()))?;
+            let arr = npz
+                .by_name(name)?
+                .with_context(|| format!("'{}' has no array '{name}'", path.display()))?;
             Ok(arr.into_vec::<f64>()?)
         })
         .collect()

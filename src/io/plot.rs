@@ -78,7 +78,13 @@ pub fn log_y_plot(
     let series = curves
         .iter()
         .enumerate()
-        .map(|(i, c)| Series { label: c.label.clone(), x: c.x, y: c.y, style: Style::Line, colour: i + 1 })
+        .map(|(i, c)| Series {
+            label: c.label.clone(),
+            x: c.x,
+            y: c.y,
+            style: Style::Line,
+            colour: i + 1,
+        })
         .collect();
     let panel = Panel {
         title: title.to_string(),
@@ -116,7 +122,12 @@ pub fn panels_plot(path: &Path, size: (u32, u32), cols: usize, panels: &[Panel])
 
 /// The data range of a panel: (x0, x1, y0, y1), positive y only on a log axis.
 fn extent(panel: &Panel) -> (f64, f64, f64, f64) {
-    let mut r = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+    let mut r = (
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    );
     for s in &panel.series {
         for (&x, &y) in s.x.iter().zip(s.y) {
             if !(x.is_finite() && y.is_finite()) || (panel.log_y && y <= 0.0) {
@@ -129,7 +140,12 @@ fn extent(panel: &Panel) -> (f64, f64, f64, f64) {
         r = (r.0 - 1.0, r.0 + 1.0, r.2, r.3);
     }
     if r.2 >= r.3 {
-        r = (r.0, r.1, r.2 - 0.5 * r.2.abs().max(1e-3), r.3 + 0.5 * r.3.abs().max(1e-3));
+        r = (
+            r.0,
+            r.1,
+            r.2 - 0.5 * r.2.abs().max(1e-3),
+            r.3 + 0.5 * r.3.abs().max(1e-3),
+        );
     }
     r
 }
@@ -151,10 +167,22 @@ fn draw_panel<DB: DrawingBackend>(
     // plotters labels a log axis below 1 sparsely: ticks at 1-2-5 × 10^k instead.
     let lx = || (x0..x1).log_scale().with_key_points(ticks_125(x0, x1));
     match (panel.log_x && x0 > 0.0, panel.log_y) {
-        (false, false) => draw_chart(builder.build_cartesian_2d(x0..x1, (y0 - pad)..(y1 + pad))?, panel),
-        (false, true) => draw_chart(builder.build_cartesian_2d(x0..x1, (ly0..ly1).log_scale())?, panel),
-        (true, false) => draw_chart(builder.build_cartesian_2d(lx(), (y0 - pad)..(y1 + pad))?, panel),
-        (true, true) => draw_chart(builder.build_cartesian_2d(lx(), (ly0..ly1).log_scale())?, panel),
+        (false, false) => draw_chart(
+            builder.build_cartesian_2d(x0..x1, (y0 - pad)..(y1 + pad))?,
+            panel,
+        ),
+        (false, true) => draw_chart(
+            builder.build_cartesian_2d(x0..x1, (ly0..ly1).log_scale())?,
+            panel,
+        ),
+        (true, false) => draw_chart(
+            builder.build_cartesian_2d(lx(), (y0 - pad)..(y1 + pad))?,
+            panel,
+        ),
+        (true, true) => draw_chart(
+            builder.build_cartesian_2d(lx(), (ly0..ly1).log_scale())?,
+            panel,
+        ),
     }
 }
 
@@ -166,7 +194,12 @@ fn ticks_125(lo: f64, hi: f64) -> Vec<f64> {
     }
     let mut decade = 10f64.powi(lo.log10().floor() as i32);
     while decade <= hi {
-        out.extend([1.0, 2.0, 5.0].iter().map(|m| m * decade).filter(|v| (lo..=hi).contains(v)));
+        out.extend(
+            [1.0, 2.0, 5.0]
+                .iter()
+                .map(|m| m * decade)
+                .filter(|v| (lo..=hi).contains(v)),
+        );
         decade *= 10.0;
     }
     out
@@ -180,7 +213,11 @@ fn tick(v: &f64, span: f64) -> String {
     }
     let s = format!("{v:.4}");
     let s = s.trim_end_matches('0').trim_end_matches('.');
-    if s == "-0" { "0".into() } else { s.into() }
+    if s == "-0" {
+        "0".into()
+    } else {
+        s.into()
+    }
 }
 
 fn draw_chart<'a, DB: DrawingBackend + 'a, X, Y>(
@@ -193,7 +230,13 @@ where
 {
     let (x0, x1, y0, y1) = extent(panel);
     let x_fmt = |v: &f64| tick(v, if panel.log_x { 0.0 } else { x1 - x0 });
-    let y_fmt = |v: &f64| if panel.log_y { format!("{v:.0e}") } else { tick(v, y1 - y0) };
+    let y_fmt = |v: &f64| {
+        if panel.log_y {
+            format!("{v:.0e}")
+        } else {
+            tick(v, y1 - y0)
+        }
+    };
     chart
         .configure_mesh()
         .x_desc(&panel.x_label)
@@ -216,33 +259,32 @@ where
 {
     for s in &panel.series {
         let colour = colour_of(s.colour);
-        let points: Vec<(f64, f64)> = s
-            .x
-            .iter()
-            .zip(s.y)
-            .filter(|(x, y)| x.is_finite() && y.is_finite() && (!log_y || **y > 0.0))
-            .map(|(x, y)| (*x, *y))
-            .collect();
+        let points: Vec<(f64, f64)> =
+            s.x.iter()
+                .zip(s.y)
+                .filter(|(x, y)| x.is_finite() && y.is_finite() && (!log_y || **y > 0.0))
+                .map(|(x, y)| (*x, *y))
+                .collect();
         let anno = match s.style {
             Style::Line => chart.draw_series(LineSeries::new(points, colour.stroke_width(2)))?,
-            Style::Dashed => chart.draw_series(DashedLineSeries::new(
-                points,
-                8,
-                6,
-                colour.stroke_width(2),
-            ))?,
+            Style::Dashed => {
+                chart.draw_series(DashedLineSeries::new(points, 8, 6, colour.stroke_width(2)))?
+            }
             Style::Points => chart.draw_series(
-                points.into_iter().map(|p| Circle::new(p, 4, colour.filled())),
+                points
+                    .into_iter()
+                    .map(|p| Circle::new(p, 4, colour.filled())),
             )?,
         };
         if s.label.is_empty() {
             continue; // no legend entry
         }
         let style = s.style;
-        anno.label(s.label.clone()).legend(move |(x, y)| match style {
-            Style::Points => Circle::new((x + 10, y), 4, colour.filled()).into_dyn(),
-            _ => PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(3)).into_dyn(),
-        });
+        anno.label(s.label.clone())
+            .legend(move |(x, y)| match style {
+                Style::Points => Circle::new((x + 10, y), 4, colour.filled()).into_dyn(),
+                _ => PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(3)).into_dyn(),
+            });
     }
     chart
         .configure_series_labels()

@@ -31,8 +31,11 @@ pub fn config_hash(cfg: &SlabConfig) -> String {
 impl Checkpoint {
     /// Opens (creating) `dir` for `cfg`; refuses a directory holding another config's sums.
     pub fn open(dir: &Path, cfg: &SlabConfig) -> Result<Self> {
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot create '{}'", dir.display()))?;
-        let cp = Checkpoint { dir: dir.to_path_buf() };
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create '{}'", dir.display()))?;
+        let cp = Checkpoint {
+            dir: dir.to_path_buf(),
+        };
         let hash = config_hash(cfg);
         let stamp = dir.join("config.json");
         if stamp.exists() {
@@ -42,7 +45,10 @@ impl Checkpoint {
             }
         } else {
             crate::io::write_atomic(&stamp, |w| {
-                serde_json::to_writer_pretty(&mut *w, &serde_json::json!({"config_hash": hash, "config": cfg}))?;
+                serde_json::to_writer_pretty(
+                    &mut *w,
+                    &serde_json::json!({"config_hash": hash, "config": cfg}),
+                )?;
                 Ok(())
             })?;
         }
@@ -51,17 +57,24 @@ impl Checkpoint {
 
     /// Opens an existing directory (a shard's) for reading, checking it belongs to `cfg`.
     pub fn existing(dir: &Path, cfg: &SlabConfig) -> Result<Self> {
-        let cp = Checkpoint { dir: dir.to_path_buf() };
+        let cp = Checkpoint {
+            dir: dir.to_path_buf(),
+        };
         let found = cp.hash_in(&dir.join("config.json"))?;
         if found != config_hash(cfg) {
-            bail!("'{}' holds sums of another config (hash {found})", dir.display());
+            bail!(
+                "'{}' holds sums of another config (hash {found})",
+                dir.display()
+            );
         }
         Ok(cp)
     }
 
     fn hash_in(&self, stamp: &Path) -> Result<String> {
-        let text = std::fs::read_to_string(stamp).with_context(|| format!("cannot read '{}'", stamp.display()))?;
-        let v: serde_json::Value = serde_json::from_str(&text).with_context(|| format!("'{}'", stamp.display()))?;
+        let text = std::fs::read_to_string(stamp)
+            .with_context(|| format!("cannot read '{}'", stamp.display()))?;
+        let v: serde_json::Value =
+            serde_json::from_str(&text).with_context(|| format!("'{}'", stamp.display()))?;
         Ok(v["config_hash"].as_str().unwrap_or_default().to_string())
     }
 
@@ -70,7 +83,11 @@ impl Checkpoint {
     }
 
     /// A finished slice, if this directory holds it.
-    pub fn finished(&self, s: usize, grid: &SlabGrid) -> Result<Option<(SliceReport, Accumulator)>> {
+    pub fn finished(
+        &self,
+        s: usize,
+        grid: &SlabGrid,
+    ) -> Result<Option<(SliceReport, Accumulator)>> {
         let (npz, json) = (self.slice_path(s, "npz"), self.slice_path(s, "json"));
         if !npz.exists() || !json.exists() {
             return Ok(None);
@@ -122,7 +139,10 @@ impl Checkpoint {
             z.write_to(w)
         })?;
         set.write(&self.dir.join("current.json"), |w| {
-            serde_json::to_writer(&mut *w, &serde_json::json!({"slice": s, "batches": acc.batches, "seconds": seconds}))?;
+            serde_json::to_writer(
+                &mut *w,
+                &serde_json::json!({"slice": s, "batches": acc.batches, "seconds": seconds}),
+            )?;
             Ok(())
         })?;
         set.commit()
@@ -130,6 +150,7 @@ impl Checkpoint {
 
     /// Deletes the directory (after the tables are written).
     pub fn remove(self) -> Result<()> {
-        std::fs::remove_dir_all(&self.dir).with_context(|| format!("cannot remove '{}'", self.dir.display()))
+        std::fs::remove_dir_all(&self.dir)
+            .with_context(|| format!("cannot remove '{}'", self.dir.display()))
     }
 }

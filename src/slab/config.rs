@@ -119,34 +119,57 @@ impl SlabConfig {
     /// Checks every value; the message names the key.
     pub fn validate(&self) -> Result<()> {
         let increasing = |v: &[f64]| v.windows(2).all(|w| w[0] < w[1]);
-        if self.thicknesses.is_empty() || !increasing(&self.thicknesses) || self.thicknesses.iter().any(|t| !(t.is_finite() && *t > 0.0 && *t <= 1e4)) {
+        if self.thicknesses.is_empty()
+            || !increasing(&self.thicknesses)
+            || self
+                .thicknesses
+                .iter()
+                .any(|t| !(t.is_finite() && *t > 0.0 && *t <= 1e4))
+        {
             bail!("thicknesses must be increasing, each in (0, 10000] mfp");
         }
-        if self.mu_l.is_empty() || !increasing(&self.mu_l) || self.mu_l.iter().any(|m| !(*m > 0.0 && *m <= 1.0)) {
+        if self.mu_l.is_empty()
+            || !increasing(&self.mu_l)
+            || self.mu_l.iter().any(|m| !(*m > 0.0 && *m <= 1.0))
+        {
             bail!("mu_l must be increasing, each in (0, 1]");
         }
-        if !(2..=1024).contains(&self.planes) || !(1..=1024).contains(&self.mu_v_bins) || !(1..=1024).contains(&self.psi_v_bins) {
+        if !(2..=1024).contains(&self.planes)
+            || !(1..=1024).contains(&self.mu_v_bins)
+            || !(1..=1024).contains(&self.psi_v_bins)
+        {
             bail!("planes must be in 2..=1024, mu_v_bins and psi_v_bins in 1..=1024");
         }
-        if self.group_starts.first() != Some(&1) || self.group_starts.windows(2).any(|w| w[0] >= w[1]) || self.group_starts.len() > 255 {
+        if self.group_starts.first() != Some(&1)
+            || self.group_starts.windows(2).any(|w| w[0] >= w[1])
+            || self.group_starts.len() > 255
+        {
             bail!("group_starts must begin with 1 and increase (at most 255 groups)");
         }
         if !(self.albedo > 0.0 && self.albedo <= 1.0) {
             bail!("albedo = {} must be in (0, 1]", self.albedo);
         }
         let s = &self.stop;
-        if s.batch_photons == 0 || s.round_batches < 2 || s.min_batches < 2 || s.max_photons < s.batch_photons * s.round_batches {
+        if s.batch_photons == 0
+            || s.round_batches < 2
+            || s.min_batches < 2
+            || s.max_photons < s.batch_photons * s.round_batches
+        {
             bail!("stop: batch_photons ≥ 1, round_batches ≥ 2, min_batches ≥ 2, max_photons ≥ one round of batches");
         }
         if !(s.target_rel_se >= 0.0 && (0.0..=1.0).contains(&s.cell_fraction)) {
             bail!("stop: target_rel_se ≥ 0 and cell_fraction in [0, 1]");
         }
         match &self.phase {
-            PhaseSpec::Mie { diameter_um } | PhaseSpec::HgDraine { diameter_um, .. } if !(*diameter_um > 0.0 && *diameter_um <= 1e4) => {
+            PhaseSpec::Mie { diameter_um } | PhaseSpec::HgDraine { diameter_um, .. }
+                if !(*diameter_um > 0.0 && *diameter_um <= 1e4) =>
+            {
                 bail!("phase.diameter_um = {diameter_um} must be in (0, 10000]")
             }
             PhaseSpec::Hg { g } if !(g.abs() < 1.0) => bail!("phase.g = {g} must be in (−1, 1)"),
-            PhaseSpec::HgDraine { preset, .. } if preset != "jendersie_deon" && preset != "nephele" => {
+            PhaseSpec::HgDraine { preset, .. }
+                if preset != "jendersie_deon" && preset != "nephele" =>
+            {
                 bail!("phase.preset `{preset}` is unknown (valid: jendersie_deon, nephele)")
             }
             _ => {}
@@ -157,7 +180,9 @@ impl SlabConfig {
     /// The order groups as (first, last).
     pub fn groups(&self) -> Vec<(u32, u32)> {
         let s = &self.group_starts;
-        (0..s.len()).map(|i| (s[i], s.get(i + 1).map_or(u32::MAX, |n| n - 1))).collect()
+        (0..s.len())
+            .map(|i| (s[i], s.get(i + 1).map_or(u32::MAX, |n| n - 1)))
+            .collect()
     }
 
     /// The grid of the slab of thickness `t`.
@@ -165,8 +190,18 @@ impl SlabConfig {
         let (nm, np) = (self.mu_v_bins, self.psi_v_bins);
         SlabGrid::new(
             stretched_depths(t, self.planes),
-            (0..=nm).map(|i| -1.0 + 2.0 * i as f64 / nm as f64).collect(),
-            (0..=np).map(|i| if i == np { PI } else { PI * i as f64 / np as f64 }).collect(),
+            (0..=nm)
+                .map(|i| -1.0 + 2.0 * i as f64 / nm as f64)
+                .collect(),
+            (0..=np)
+                .map(|i| {
+                    if i == np {
+                        PI
+                    } else {
+                        PI * i as f64 / np as f64
+                    }
+                })
+                .collect(),
             self.groups(),
         )
     }

@@ -13,8 +13,17 @@ use anyhow::{bail, Result};
 
 /// The default order groups: 1, 2, 3–4, 5–6, 7–8, 9–12, 13–18, 19–30, 31–∞ (inclusive bounds;
 /// `u32::MAX` is ∞).
-pub const DEFAULT_GROUPS: [(u32, u32); 9] =
-    [(1, 1), (2, 2), (3, 4), (5, 6), (7, 8), (9, 12), (13, 18), (19, 30), (31, u32::MAX)];
+pub const DEFAULT_GROUPS: [(u32, u32); 9] = [
+    (1, 1),
+    (2, 2),
+    (3, 4),
+    (5, 6),
+    (7, 8),
+    (9, 12),
+    (13, 18),
+    (19, 30),
+    (31, u32::MAX),
+];
 
 /// Orders up to this are looked up in a table; higher orders fall in the last group.
 const ORDER_TABLE: usize = 256;
@@ -38,33 +47,67 @@ pub struct SlabGrid {
 
 impl SlabGrid {
     /// A grid; errors name what is wrong.
-    pub fn new(depths: Vec<f64>, mu_edges: Vec<f64>, psi_edges: Vec<f64>, groups: Vec<(u32, u32)>) -> Result<Self> {
-        let increasing = |v: &[f64]| v.windows(2).all(|w| w[0] < w[1]) && v.iter().all(|x| x.is_finite());
+    pub fn new(
+        depths: Vec<f64>,
+        mu_edges: Vec<f64>,
+        psi_edges: Vec<f64>,
+        groups: Vec<(u32, u32)>,
+    ) -> Result<Self> {
+        let increasing =
+            |v: &[f64]| v.windows(2).all(|w| w[0] < w[1]) && v.iter().all(|x| x.is_finite());
         if depths.len() < 2 || depths[0] != 0.0 || !increasing(&depths) {
             bail!("depth planes must increase from 0 (the lit face) to t, at least two");
         }
-        if mu_edges.len() < 2 || mu_edges[0] != -1.0 || mu_edges[mu_edges.len() - 1] != 1.0 || !increasing(&mu_edges) {
+        if mu_edges.len() < 2
+            || mu_edges[0] != -1.0
+            || mu_edges[mu_edges.len() - 1] != 1.0
+            || !increasing(&mu_edges)
+        {
             bail!("mu_V bin edges must increase from -1 to 1");
         }
         let pi = std::f64::consts::PI;
-        if psi_edges.len() < 2 || psi_edges[0] != 0.0 || psi_edges[psi_edges.len() - 1] != pi || !increasing(&psi_edges) {
+        if psi_edges.len() < 2
+            || psi_edges[0] != 0.0
+            || psi_edges[psi_edges.len() - 1] != pi
+            || !increasing(&psi_edges)
+        {
             bail!("psi_V bin edges must increase from 0 to pi");
         }
-        if groups.is_empty() || groups.len() > 255 || groups[0].0 != 1 || groups[groups.len() - 1].1 != u32::MAX {
+        if groups.is_empty()
+            || groups.len() > 255
+            || groups[0].0 != 1
+            || groups[groups.len() - 1].1 != u32::MAX
+        {
             bail!("order groups must start at order 1 and end at infinity");
         }
         if groups.iter().any(|g| g.0 > g.1) || groups.windows(2).any(|w| w[1].0 != w[0].1 + 1) {
             bail!("order groups must be consecutive, each first ≤ last");
         }
         let group_of_order = (0..=ORDER_TABLE as u32)
-            .map(|k| groups.iter().position(|g| g.0 <= k && k <= g.1).unwrap_or(0) as u8)
+            .map(|k| {
+                groups
+                    .iter()
+                    .position(|g| g.0 <= k && k <= g.1)
+                    .unwrap_or(0) as u8
+            })
             .collect();
         let psi_cos = psi_edges.iter().map(|p| p.cos()).collect();
         let n_mu = (mu_edges.len() - 1) as f64;
         // Equal bins only if the edges are exactly where the multiplication puts them.
-        let uniform = mu_edges.iter().enumerate().all(|(i, e)| *e == -1.0 + 2.0 * i as f64 / n_mu);
+        let uniform = mu_edges
+            .iter()
+            .enumerate()
+            .all(|(i, e)| *e == -1.0 + 2.0 * i as f64 / n_mu);
         let mu_uniform = uniform.then_some(0.5 * n_mu);
-        Ok(Self { depths, mu_edges, psi_edges, groups, group_of_order, psi_cos, mu_uniform })
+        Ok(Self {
+            depths,
+            mu_edges,
+            psi_edges,
+            groups,
+            group_of_order,
+            psi_cos,
+            mu_uniform,
+        })
     }
 
     /// The defaults of spec 40 for thickness `t`: 16 stretched planes, 16 μ_V bins, 12 ψ_V bins,
@@ -140,7 +183,8 @@ impl SlabGrid {
 
     /// Solid angle (sr) of direction bin (m, k), both mirror halves.
     pub fn solid_angle(&self, m: usize, k: usize) -> f64 {
-        2.0 * (self.mu_edges[m + 1] - self.mu_edges[m]) * (self.psi_edges[k + 1] - self.psi_edges[k])
+        2.0 * (self.mu_edges[m + 1] - self.mu_edges[m])
+            * (self.psi_edges[k + 1] - self.psi_edges[k])
     }
 
     /// Flat index of cell (group, plane, μ bin, ψ bin). Planes are the fastest index: the
@@ -199,26 +243,54 @@ mod tests {
     #[test]
     fn bins_groups_and_planes() {
         let g = SlabGrid::default_for(64.0).unwrap();
-        assert_eq!((g.mu_bin(-1.0), g.mu_bin(-0.875), g.mu_bin(0.99), g.mu_bin(1.0)), (0, 1, 15, 15));
+        assert_eq!(
+            (
+                g.mu_bin(-1.0),
+                g.mu_bin(-0.875),
+                g.mu_bin(0.99),
+                g.mu_bin(1.0)
+            ),
+            (0, 1, 15, 15)
+        );
         for i in 0..=2000 {
             let mu = -1.0 + i as f64 / 1000.0;
             assert_eq!(g.mu_bin(mu), bin(&g.mu_edges, mu), "μ = {mu}");
         }
         assert_eq!((g.psi_bin(0.0), g.psi_bin(std::f64::consts::PI)), (0, 11));
         for psi in [0.0f64, 0.1, 0.3, 1.0, 1.5707, 2.0, 3.0, 3.14159] {
-            assert_eq!(g.psi_bin_of(psi.sin(), psi.cos()), g.psi_bin(psi), "ψ = {psi}");
-            assert_eq!(g.psi_bin_of(-psi.sin(), psi.cos()), g.psi_bin(psi), "ψ = −{psi}");
+            assert_eq!(
+                g.psi_bin_of(psi.sin(), psi.cos()),
+                g.psi_bin(psi),
+                "ψ = {psi}"
+            );
+            assert_eq!(
+                g.psi_bin_of(-psi.sin(), psi.cos()),
+                g.psi_bin(psi),
+                "ψ = −{psi}"
+            );
         }
         let c = g.cell(3, 7, 11, 5);
         assert_eq!(g.cell_parts(c), (3, 7, 11, 5));
-        let groups: Vec<usize> = [1, 2, 3, 4, 5, 8, 9, 12, 13, 30, 31, 1000].iter().map(|&k| g.group(k)).collect();
+        let groups: Vec<usize> = [1, 2, 3, 4, 5, 8, 9, 12, 13, 30, 31, 1000]
+            .iter()
+            .map(|&k| g.group(k))
+            .collect();
         assert_eq!(groups, [0, 1, 2, 2, 3, 4, 5, 5, 6, 7, 8, 8]);
         // Stretched: at t = 64 half the planes lie within the first ~10 mfp.
         assert_eq!(g.depths[0], 0.0);
         assert_eq!(g.depths[15], 64.0);
         assert!(g.depths[7] < 10.0, "{:?}", g.depths);
-        let total: f64 = (0..16).flat_map(|m| (0..12).map(move |k| (m, k))).map(|(m, k)| g.solid_angle(m, k)).sum();
+        let total: f64 = (0..16)
+            .flat_map(|m| (0..12).map(move |k| (m, k)))
+            .map(|(m, k)| g.solid_angle(m, k))
+            .sum();
         assert!((total - 4.0 * std::f64::consts::PI).abs() < 1e-12);
-        assert!(SlabGrid::new(vec![0.0, 1.0], vec![-1.0, 1.0], vec![0.0, 3.0], DEFAULT_GROUPS.to_vec()).is_err());
+        assert!(SlabGrid::new(
+            vec![0.0, 1.0],
+            vec![-1.0, 1.0],
+            vec![0.0, 3.0],
+            DEFAULT_GROUPS.to_vec()
+        )
+        .is_err());
     }
 }

@@ -32,7 +32,12 @@ pub struct StopRule {
 impl StopRule {
     /// The tables of `acc`, the worst relative errors (tested cells, horizon cells when not
     /// tested) and whether the slice has converged.
-    pub fn judge(&self, acc: &Accumulator, grid: &SlabGrid, mu_l: f64) -> (SliceTables, f64, f64, bool) {
+    pub fn judge(
+        &self,
+        acc: &Accumulator,
+        grid: &SlabGrid,
+        mu_l: f64,
+    ) -> (SliceTables, f64, f64, bool) {
         let tables = acc.tables(grid, mu_l);
         let skip = |c: usize| self.exclude_horizon && grid.is_horizon(grid.cell_parts(c).2);
         let (worst, horizon) = tables.worst_relative_error(self.cell_fraction, &skip);
@@ -71,10 +76,21 @@ pub struct SliceRun {
 
 /// Runs `slice` (index `slice_index` in its run, for the random streams) until `rule` stops it;
 /// `progress(photons, worst_rel_se)` after each round.
-pub fn run_slice(slice: &Slice, seed: u64, slice_index: u64, rule: &StopRule, progress: &dyn Fn(u64, f64)) -> SliceRun {
-    run_slice_from(slice, seed, slice_index, rule, Accumulator::new(slice.grid), &mut |acc, worst| {
-        progress(acc.total.photons, worst)
-    })
+pub fn run_slice(
+    slice: &Slice,
+    seed: u64,
+    slice_index: u64,
+    rule: &StopRule,
+    progress: &dyn Fn(u64, f64),
+) -> SliceRun {
+    run_slice_from(
+        slice,
+        seed,
+        slice_index,
+        rule,
+        Accumulator::new(slice.grid),
+        &mut |acc, worst| progress(acc.total.photons, worst),
+    )
 }
 
 /// As [`run_slice`], continuing from `acc` (the sums after some rounds, e.g. from a
@@ -97,7 +113,13 @@ pub fn run_slice_from(
         batches.iter().for_each(|b| acc.add(b));
         let (tables, worst, worst_horizon, converged) = rule.judge(&acc, slice.grid, slice.mu_l);
         if converged || acc.total.photons >= rule.max_photons {
-            return SliceRun { acc, tables, worst_rel_se: worst, worst_rel_se_horizon: worst_horizon, converged };
+            return SliceRun {
+                acc,
+                tables,
+                worst_rel_se: worst,
+                worst_rel_se_horizon: worst_horizon,
+                converged,
+            };
         }
         after_round(&acc, worst);
     }

@@ -15,7 +15,15 @@ use crate::stats::gauss::{gauss_legendre, integrate};
 use nephele_runtime::PhaseFunction;
 
 /// T₁ (sr⁻¹) at depth `d` of a slab of thickness `t`, view (μ_V, ψ_V), sun `mu_l`.
-pub fn single_scattering(phase: &dyn PhaseFunction<f64>, albedo: f64, mu_l: f64, t: f64, d: f64, mu_v: f64, psi_v: f64) -> f64 {
+pub fn single_scattering(
+    phase: &dyn PhaseFunction<f64>,
+    albedo: f64,
+    mu_l: f64,
+    t: f64,
+    d: f64,
+    mu_v: f64,
+    psi_v: f64,
+) -> f64 {
     let sin_l = (1.0 - mu_l * mu_l).max(0.0).sqrt();
     let cos_theta = sin_l * (1.0 - mu_v * mu_v).max(0.0).sqrt() * psi_v.cos() - mu_l * mu_v;
     let p = albedo * phase.eval(cos_theta.clamp(-1.0, 1.0));
@@ -26,7 +34,11 @@ pub fn single_scattering(phase: &dyn PhaseFunction<f64>, albedo: f64, mu_l: f64,
     } else {
         let m = -mu_v;
         let b = 1.0 / mu_l - 1.0 / m;
-        let path = if (b * d).abs() < 1e-12 { d } else { -(-b * d).exp_m1() / b };
+        let path = if (b * d).abs() < 1e-12 {
+            d
+        } else {
+            -(-b * d).exp_m1() / b
+        };
         p * (-d / m).exp() * path / m
     }
 }
@@ -44,7 +56,15 @@ pub fn single_scattering_bin(
     pieces: usize,
 ) -> f64 {
     let rule = gauss_legendre(8);
-    let over_psi = |mu: f64| integrate(&|psi| single_scattering(phase, albedo, mu_l, t, d, mu, psi), psi_a, psi_b, &rule, pieces);
+    let over_psi = |mu: f64| {
+        integrate(
+            &|psi| single_scattering(phase, albedo, mu_l, t, d, mu, psi),
+            psi_a,
+            psi_b,
+            &rule,
+            pieces,
+        )
+    };
     integrate(&over_psi, mu_a, mu_b, &rule, pieces) / ((mu_b - mu_a) * (psi_b - psi_a))
 }
 
@@ -53,7 +73,14 @@ pub fn single_scattering_bin(
 /// z and x′² + z² over the depths d′ of the scattering. The photon entered at the origin, reached
 /// (0, d′ tan φ_L, d′) along the sun, and flew ℓ = (d − d′)/(−μ_V) to the plane:
 /// x′ = ℓ sin θ_V sin ψ_V, z = d′ tan φ_L + ℓ sin θ_V cos ψ_V. By quadrature over d′.
-pub fn single_scattering_moments(phase: &dyn PhaseFunction<f64>, mu_l: f64, t: f64, d: f64, mu_v: f64, psi_v: f64) -> [f64; 4] {
+pub fn single_scattering_moments(
+    phase: &dyn PhaseFunction<f64>,
+    mu_l: f64,
+    t: f64,
+    d: f64,
+    mu_v: f64,
+    psi_v: f64,
+) -> [f64; 4] {
     let sin_l = (1.0 - mu_l * mu_l).max(0.0).sqrt();
     let sin_v = (1.0 - mu_v * mu_v).max(0.0).sqrt();
     let cos_theta = sin_l * sin_v * psi_v.cos() - mu_l * mu_v;
@@ -90,7 +117,13 @@ pub fn single_scattering_collector(
     let rule = gauss_legendre(8);
     let bin = |k: usize| {
         let over_psi = |mu: f64| {
-            integrate(&|psi| single_scattering_moments(phase, mu_l, t, d, mu, psi)[k], psi_a, psi_b, &rule, pieces)
+            integrate(
+                &|psi| single_scattering_moments(phase, mu_l, t, d, mu, psi)[k],
+                psi_a,
+                psi_b,
+                &rule,
+                pieces,
+            )
         };
         integrate(&over_psi, mu_a, mu_b, &rule, pieces)
     };

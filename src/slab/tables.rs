@@ -2,8 +2,8 @@
 //! its batches), gathered into the 5D tables of spec 40 with shape
 //! [group, t, μ_L, depth, μ_V, ψ_V].
 
-use super::config::{PhaseSpec, SlabConfig};
 use super::checkpoint::Checkpoint;
+use super::config::{PhaseSpec, SlabConfig};
 use super::grid::SlabGrid;
 use super::run::{run_slice_from, SliceRun};
 use super::tally::Accumulator;
@@ -29,7 +29,8 @@ impl PhaseModel {
     /// Builds the phase function of `spec` (a Mie table is computed here, a few seconds).
     pub fn build(spec: &PhaseSpec) -> Result<Self> {
         let table = |th: &[f64], p: &[f64]| -> Result<Self> {
-            let t = TabulatedTable::<f64>::from_phase(th, p).map_err(|e| anyhow!("tabulated phase function: {e:?}"))?;
+            let t = TabulatedTable::<f64>::from_phase(th, p)
+                .map_err(|e| anyhow!("tabulated phase function: {e:?}"))?;
             Ok(PhaseModel::Table(t))
         };
         match spec {
@@ -44,8 +45,15 @@ impl PhaseModel {
                 table(&a[0], &a[1]).with_context(|| format!("'{}'", path.display()))
             }
             PhaseSpec::Hg { g } => Ok(PhaseModel::Analytic(Box::new(HenyeyGreenstein::new(*g)))),
-            PhaseSpec::HgDraine { diameter_um, preset } => {
-                let p = if preset == "nephele" { nephele_refit(*diameter_um) } else { jendersie_deon(*diameter_um) };
+            PhaseSpec::HgDraine {
+                diameter_um,
+                preset,
+            } => {
+                let p = if preset == "nephele" {
+                    nephele_refit(*diameter_um)
+                } else {
+                    jendersie_deon(*diameter_um)
+                };
                 Ok(PhaseModel::Analytic(Box::new(p.phase::<f64>())))
             }
         }
@@ -115,13 +123,22 @@ pub struct Control<'a> {
 impl Control<'_> {
     /// One process, no checkpoints.
     pub fn plain() -> Self {
-        Control { shard: None, checkpoint: None, save_every_s: f64::INFINITY }
+        Control {
+            shard: None,
+            checkpoint: None,
+            save_every_s: f64::INFINITY,
+        }
     }
 }
 
 /// Runs the slices of `cfg` (this shard's, resuming from the checkpoint if any);
 /// `progress(slice, slices, photons, worst_rel_se)` after each round.
-pub fn run_all(cfg: &SlabConfig, phase: &PhaseModel, control: &Control, progress: &dyn Fn(usize, usize, u64, f64)) -> Result<SlabRun> {
+pub fn run_all(
+    cfg: &SlabConfig,
+    phase: &PhaseModel,
+    control: &Control,
+    progress: &dyn Fn(usize, usize, u64, f64),
+) -> Result<SlabRun> {
     cfg.validate()?;
     let total = cfg.thicknesses.len() * cfg.mu_l.len();
     let mut slices = Vec::with_capacity(total);
@@ -132,7 +149,13 @@ pub fn run_all(cfg: &SlabConfig, phase: &PhaseModel, control: &Control, progress
         for (im, &mu_l) in cfg.mu_l.iter().enumerate() {
             let s = it * cfg.mu_l.len() + im;
             let mine = control.shard.is_none_or(|(k, n)| s % n == k);
-            slices.push(if mine { Some(run_one(cfg, phase, control, &grid, s, mu_l, &|n, w| progress(s, total, n, w))?) } else { None });
+            slices.push(if mine {
+                Some(run_one(cfg, phase, control, &grid, s, mu_l, &|n, w| {
+                    progress(s, total, n, w)
+                })?)
+            } else {
+                None
+            });
         }
     }
     Ok(SlabRun { slices, depths })
@@ -150,7 +173,13 @@ fn run_one(
 ) -> Result<(SliceReport, SliceRun)> {
     let rebuild = |acc: Accumulator| {
         let (tables, worst, worst_horizon, converged) = cfg.stop.judge(&acc, grid, mu_l);
-        SliceRun { acc, tables, worst_rel_se: worst, worst_rel_se_horizon: worst_horizon, converged }
+        SliceRun {
+            acc,
+            tables,
+            worst_rel_se: worst,
+            worst_rel_se_horizon: worst_horizon,
+            converged,
+        }
     };
     if let Some(cp) = control.checkpoint {
         if let Some((report, acc)) = cp.finished(s, grid)? {
@@ -158,23 +187,41 @@ fn run_one(
         }
     }
     let (start, spent) = match control.checkpoint {
-        Some(cp) => cp.current(s, grid)?.unwrap_or((Accumulator::new(grid), 0.0)),
+        Some(cp) => cp
+            .current(s, grid)?
+            .unwrap_or((Accumulator::new(grid), 0.0)),
         None => (Accumulator::new(grid), 0.0),
     };
     let t0 = Instant::now();
     let mut last_save = Instant::now();
     let mut save_error = None;
     let run = phase.with(|p| {
-        let slice = Slice { grid, mu_l, albedo: cfg.albedo, phase: p };
-        run_slice_from(&slice, cfg.seed, s as u64, &cfg.stop, start, &mut |acc, worst| {
-            progress(acc.total.photons, worst);
-            if let Some(cp) = control.checkpoint {
-                if last_save.elapsed().as_secs_f64() >= control.save_every_s && save_error.is_none() {
-                    save_error = cp.save_current(s, acc, spent + t0.elapsed().as_secs_f64()).err();
-                    last_save = Instant::now();
+        let slice = Slice {
+            grid,
+            mu_l,
+            albedo: cfg.albedo,
+            phase: p,
+        };
+        run_slice_from(
+            &slice,
+            cfg.seed,
+            s as u64,
+            &cfg.stop,
+            start,
+            &mut |acc, worst| {
+                progress(acc.total.photons, worst);
+                if let Some(cp) = control.checkpoint {
+                    if last_save.elapsed().as_secs_f64() >= control.save_every_s
+                        && save_error.is_none()
+                    {
+                        save_error = cp
+                            .save_current(s, acc, spent + t0.elapsed().as_secs_f64())
+                            .err();
+                        last_save = Instant::now();
+                    }
                 }
-            }
-        })
+            },
+        )
     });
     if let Some(e) = save_error {
         return Err(e.context("saving a checkpoint"));
@@ -214,14 +261,26 @@ pub fn merge(cfg: &SlabConfig, shards: &[Checkpoint]) -> Result<SlabRun> {
             for cp in shards {
                 if let Some((report, acc)) = cp.finished(s, &grid)? {
                     if found.is_some() {
-                        anyhow::bail!("slice {s} (t = {t}, mu_L = {mu_l}) is in more than one shard");
+                        anyhow::bail!(
+                            "slice {s} (t = {t}, mu_L = {mu_l}) is in more than one shard"
+                        );
                     }
                     let (tables, worst, worst_horizon, _) = cfg.stop.judge(&acc, &grid, mu_l);
-                    let run = SliceRun { acc, tables, worst_rel_se: worst, worst_rel_se_horizon: worst_horizon, converged: report.converged };
+                    let run = SliceRun {
+                        acc,
+                        tables,
+                        worst_rel_se: worst,
+                        worst_rel_se_horizon: worst_horizon,
+                        converged: report.converged,
+                    };
                     found = Some((report.clone(), run));
                 }
             }
-            let found = found.with_context(|| format!("slice {s} (t = {t}, mu_L = {mu_l}) is in no shard: did every shard finish?"))?;
+            let found = found.with_context(|| {
+                format!(
+                    "slice {s} (t = {t}, mu_L = {mu_l}) is in no shard: did every shard finish?"
+                )
+            })?;
             slices.push(Some(found));
         }
     }

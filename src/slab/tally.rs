@@ -71,12 +71,27 @@ pub struct Accumulator {
 }
 
 /// Index pairs of the upper triangle of a 4×4 matrix, row-major.
-const PAIRS: [(usize, usize); 10] = [(0, 0), (0, 1), (0, 2), (0, 3), (1, 1), (1, 2), (1, 3), (2, 2), (2, 3), (3, 3)];
+const PAIRS: [(usize, usize); 10] = [
+    (0, 0),
+    (0, 1),
+    (0, 2),
+    (0, 3),
+    (1, 1),
+    (1, 2),
+    (1, 3),
+    (2, 2),
+    (2, 3),
+    (3, 3),
+];
 
 impl Accumulator {
     /// Nothing yet.
     pub fn new(grid: &SlabGrid) -> Self {
-        Self { batches: 0, total: BatchTally::new(grid), second: vec![[0.0; 10]; grid.n_cells()] }
+        Self {
+            batches: 0,
+            total: BatchTally::new(grid),
+            second: vec![[0.0; 10]; grid.n_cells()],
+        }
     }
 
     /// Adds one batch (call in batch order: the sums are then the same bits for any thread count).
@@ -94,7 +109,11 @@ impl Accumulator {
                 *s += v[i] * v[j];
             }
         }
-        for (a, x) in [(&mut t.up, &b.up), (&mut t.down, &b.down), (&mut t.direct, &b.direct)] {
+        for (a, x) in [
+            (&mut t.up, &b.up),
+            (&mut t.down, &b.down),
+            (&mut t.direct, &b.direct),
+        ] {
             a.iter_mut().zip(x).for_each(|(a, x)| *a += x);
         }
         t.escaped_top += b.escaped_top;
@@ -112,9 +131,20 @@ impl Accumulator {
         npz.add(&format!("{prefix}cells"), &[n, 4], &t.cells.concat());
         npz.add(&format!("{prefix}second"), &[n, 10], &self.second.concat());
         let p = t.up.len();
-        npz.add(&format!("{prefix}planes"), &[3, p], &[t.up.clone(), t.down.clone(), t.direct.clone()].concat());
+        npz.add(
+            &format!("{prefix}planes"),
+            &[3, p],
+            &[t.up.clone(), t.down.clone(), t.direct.clone()].concat(),
+        );
         // Counts are below 2⁵³: exact in f64.
-        let scalars = [self.batches as f64, t.escaped_top, t.escaped_bottom, t.absorbed, t.events as f64, t.photons as f64];
+        let scalars = [
+            self.batches as f64,
+            t.escaped_top,
+            t.escaped_bottom,
+            t.absorbed,
+            t.events as f64,
+            t.photons as f64,
+        ];
         npz.add(&format!("{prefix}scalars"), &[scalars.len()], &scalars);
     }
 
@@ -129,7 +159,10 @@ impl Accumulator {
         }
         let mut acc = Self::new(grid);
         acc.total.cells = a[0].chunks(4).map(|c| [c[0], c[1], c[2], c[3]]).collect();
-        acc.second = a[1].chunks(10).map(|c| std::array::from_fn(|i| c[i])).collect();
+        acc.second = a[1]
+            .chunks(10)
+            .map(|c| std::array::from_fn(|i| c[i]))
+            .collect();
         acc.total.up = a[2][..p].to_vec();
         acc.total.down = a[2][p..2 * p].to_vec();
         acc.total.direct = a[2][2 * p..].to_vec();
@@ -155,8 +188,15 @@ impl Accumulator {
             let mean: [f64; 4] = std::array::from_fn(|i| sum[i] / n);
             // Cov(v̄) = (Σ v vᵀ − n v̄ v̄ᵀ) / (n (n − 1)).
             let cov = |i: usize, j: usize| -> f64 {
-                let k = PAIRS.iter().position(|p| *p == (i.min(j), i.max(j))).unwrap_or(0);
-                if n > 1.0 { (sec[k] - n * mean[i] * mean[j]) / (n * (n - 1.0)) } else { f64::NAN }
+                let k = PAIRS
+                    .iter()
+                    .position(|p| *p == (i.min(j), i.max(j)))
+                    .unwrap_or(0);
+                if n > 1.0 {
+                    (sec[k] - n * mean[i] * mean[j]) / (n * (n - 1.0))
+                } else {
+                    f64::NAN
+                }
             };
             let se = |grad: [f64; 4]| -> f64 {
                 let mut s = 0.0;
@@ -185,7 +225,11 @@ impl Accumulator {
                 -2.0 * z / (w * w),
                 1.0 / w,
             ];
-            out.sigma_se[c] = if sigma > 0.0 { se(d_var) / (2.0 * sigma) } else { f64::NAN };
+            out.sigma_se[c] = if sigma > 0.0 {
+                se(d_var) / (2.0 * sigma)
+            } else {
+                f64::NAN
+            };
         }
         out
     }
@@ -235,7 +279,11 @@ impl SliceTables {
         let mut worst = (0.0f64, 0.0f64);
         for (c, (t, se)) in self.t.iter().zip(&self.t_se).enumerate() {
             if *t >= fraction * max && *t > 0.0 {
-                let r = if se.is_finite() { se / t } else { f64::INFINITY };
+                let r = if se.is_finite() {
+                    se / t
+                } else {
+                    f64::INFINITY
+                };
                 if skip(c) {
                     worst.1 = worst.1.max(r);
                 } else {

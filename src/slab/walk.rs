@@ -35,7 +35,9 @@ pub struct Slice<'a> {
 /// whichever thread runs it.
 pub fn batch_rng(seed: u64, slice: u64, batch: u64) -> Xoshiro256PlusPlus {
     // SplitMix64 finaliser of a combination of the three: distinct inputs → unrelated seeds.
-    let mut z = seed ^ slice.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ batch.wrapping_mul(0xD1B5_4A32_D192_ED03);
+    let mut z = seed
+        ^ slice.wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        ^ batch.wrapping_mul(0xD1B5_4A32_D192_ED03);
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     Xoshiro256PlusPlus::seed_from_u64(z ^ (z >> 31))
@@ -55,7 +57,11 @@ impl Slice<'_> {
     fn walk(&self, rng: &mut Xoshiro256PlusPlus, tally: &mut BatchTally) {
         let t = self.grid.thickness();
         let mut pos = [0.0f64; 3];
-        let mut dir = [0.0, (1.0 - self.mu_l * self.mu_l).max(0.0).sqrt(), self.mu_l];
+        let mut dir = [
+            0.0,
+            (1.0 - self.mu_l * self.mu_l).max(0.0).sqrt(),
+            self.mu_l,
+        ];
         let mut order: u32 = 0;
         let mut weight = 1.0;
         // Planes at or above the photon's depth (plane 0, the lit face, holds the start): the
@@ -138,7 +144,11 @@ impl Slice<'_> {
         let first = self.grid.cell(self.grid.group(order), 0, m, k);
         let inv_dz = 1.0 / dir[2];
         let inv_mu = weight * inv_dz.abs();
-        let flux = if dir[2] > 0.0 { &mut tally.down } else { &mut tally.up };
+        let flux = if dir[2] > 0.0 {
+            &mut tally.down
+        } else {
+            &mut tally.up
+        };
         for j in planes {
             flux[j] += weight;
             let along = (depths[j] - pos[2]) * inv_dz;
@@ -160,16 +170,33 @@ impl Slice<'_> {
     /// of the plain tally (the azimuth of a crossing is uniform and independent of everything
     /// else in the frame of the flight), with all ψ_V bins sharing every crossing.
     #[allow(clippy::too_many_arguments)]
-    fn cross_pooled(&self, pos: &[f64; 3], dir: &[f64; 3], planes: std::ops::Range<usize>, order: u32, weight: f64, u: f64, tally: &mut BatchTally) {
+    fn cross_pooled(
+        &self,
+        pos: &[f64; 3],
+        dir: &[f64; 3],
+        planes: std::ops::Range<usize>,
+        order: u32,
+        weight: f64,
+        u: f64,
+        tally: &mut BatchTally,
+    ) {
         let g = self.grid;
         let m = g.mu_bin(-dir[2]);
         let group = g.group(order);
         let r = (dir[0] * dir[0] + dir[1] * dir[1]).sqrt();
         // (sin, cos) of the flight's own azimuth (any, for a vertical flight).
-        let (s_c, c_c) = if r > 0.0 { (dir[0] / r, dir[1] / r) } else { (0.0, 1.0) };
+        let (s_c, c_c) = if r > 0.0 {
+            (dir[0] / r, dir[1] / r)
+        } else {
+            (0.0, 1.0)
+        };
         let inv_dz = 1.0 / dir[2];
         let inv_mu = weight * inv_dz.abs();
-        let flux = if dir[2] > 0.0 { &mut tally.down } else { &mut tally.up };
+        let flux = if dir[2] > 0.0 {
+            &mut tally.down
+        } else {
+            &mut tally.up
+        };
         let targets = g.psi_targets(u);
         for j in planes {
             flux[j] += weight;
@@ -196,13 +223,20 @@ impl Slice<'_> {
     fn scatter(&self, dir: [f64; 3], rng: &mut Xoshiro256PlusPlus) -> [f64; 3] {
         let c = self.phase.sample_cosine(rng.random::<f64>());
         let (a, b, r2) = loop {
-            let (a, b) = (2.0 * rng.random::<f64>() - 1.0, 2.0 * rng.random::<f64>() - 1.0);
+            let (a, b) = (
+                2.0 * rng.random::<f64>() - 1.0,
+                2.0 * rng.random::<f64>() - 1.0,
+            );
             let r2 = a * a + b * b;
             if r2 <= 1.0 && r2 > 0.0 {
                 break (a, b, r2);
             }
         };
-        let sin2 = if c.mu > 0.0 { c.one_minus_mu * (2.0 - c.one_minus_mu) } else { 1.0 - c.mu * c.mu };
+        let sin2 = if c.mu > 0.0 {
+            c.one_minus_mu * (2.0 - c.one_minus_mu)
+        } else {
+            1.0 - c.mu * c.mu
+        };
         let scale = (sin2.max(0.0) / r2).sqrt();
         let (t, s) = orthonormal_basis(dir);
         let (u, v) = (a * scale, b * scale);
@@ -216,7 +250,11 @@ impl Slice<'_> {
     /// (μ_V bin, ψ_V bin, ±1 for the mirror of x) of a propagation direction.
     fn direction_bin(&self, dir: &[f64; 3]) -> (usize, usize, f64) {
         let mirror = if dir[0] < 0.0 { -1.0 } else { 1.0 };
-        (self.grid.mu_bin(-dir[2]), self.grid.psi_bin_of(dir[0], dir[1]), mirror)
+        (
+            self.grid.mu_bin(-dir[2]),
+            self.grid.psi_bin_of(dir[0], dir[1]),
+            mirror,
+        )
     }
 }
 

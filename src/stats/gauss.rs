@@ -43,7 +43,13 @@ fn legendre_and_derivative(n: usize, x: f64) -> (f64, f64) {
 }
 
 /// ∫_a^b f by `pieces` equal sub-intervals, each with the n-point rule.
-pub fn integrate(f: &dyn Fn(f64) -> f64, a: f64, b: f64, rule: &(Vec<f64>, Vec<f64>), pieces: usize) -> f64 {
+pub fn integrate(
+    f: &dyn Fn(f64) -> f64,
+    a: f64,
+    b: f64,
+    rule: &(Vec<f64>, Vec<f64>),
+    pieces: usize,
+) -> f64 {
     let h = (b - a) / pieces as f64;
     let mut total = 0.0;
     for j in 0..pieces {
