@@ -11,7 +11,7 @@
 //!
 //! cos Θ = sin φ_L √(1 − μ_V²) cos ψ_V − μ_L μ_V, then averaged over the bin by Gauss–Legendre.
 
-use crate::stats::gauss::{gauss_legendre, integrate};
+use crate::stats::gauss::{gauss_legendre, integrate_n};
 use nephele_runtime::PhaseFunction;
 
 /// T₁ (sr⁻¹) at depth `d` of a slab of thickness `t`, view (μ_V, ψ_V), sun `mu_l`.
@@ -24,9 +24,7 @@ pub fn single_scattering(
     mu_v: f64,
     psi_v: f64,
 ) -> f64 {
-    let sin_l = (1.0 - mu_l * mu_l).max(0.0).sqrt();
-    let cos_theta = sin_l * (1.0 - mu_v * mu_v).max(0.0).sqrt() * psi_v.cos() - mu_l * mu_v;
-    let p = albedo * phase.eval(cos_theta.clamp(-1.0, 1.0));
+    let p = albedo * phase_at(phase, mu_l, mu_v, psi_v);
     if mu_v > 0.0 {
         let a = 1.0 / mu_l + 1.0 / mu_v;
         // e^{d/μ_V}(e^{−ad} − e^{−at}) = e^{−d/μ_L}(1 − e^{−a(t − d)}).
@@ -55,17 +53,34 @@ pub fn single_scattering_bin(
     (psi_a, psi_b): (f64, f64),
     pieces: usize,
 ) -> f64 {
+    let [sum] = bin_integral(
+        &|mu, psi| [single_scattering(phase, albedo, mu_l, t, d, mu, psi)],
+        (mu_a, mu_b),
+        (psi_a, psi_b),
+        pieces,
+    );
+    sum / ((mu_b - mu_a) * (psi_b - psi_a))
+}
+
+/// p(Θ) between the sun (μ_L) and the view (μ_V, ψ_V):
+/// cos Θ = sin φ_L √(1 − μ_V²) cos ψ_V − μ_L μ_V.
+fn phase_at(phase: &dyn PhaseFunction<f64>, mu_l: f64, mu_v: f64, psi_v: f64) -> f64 {
+    let sin_l = (1.0 - mu_l * mu_l).max(0.0).sqrt();
+    let cos_theta = sin_l * (1.0 - mu_v * mu_v).max(0.0).sqrt() * psi_v.cos() - mu_l * mu_v;
+    phase.eval(cos_theta.clamp(-1.0, 1.0))
+}
+
+/// ∫∫ f over μ ∈ [mu_a, mu_b], ψ ∈ [psi_a, psi_b] (8-point Gauss–Legendre on `pieces` pieces
+/// per dimension).
+fn bin_integral<const N: usize>(
+    f: &dyn Fn(f64, f64) -> [f64; N],
+    (mu_a, mu_b): (f64, f64),
+    (psi_a, psi_b): (f64, f64),
+    pieces: usize,
+) -> [f64; N] {
     let rule = gauss_legendre(8);
-    let over_psi = |mu: f64| {
-        integrate(
-            &|psi| single_scattering(phase, albedo, mu_l, t, d, mu, psi),
-            psi_a,
-            psi_b,
-            &rule,
-            pieces,
-        )
-    };
-    integrate(&over_psi, mu_a, mu_b, &rule, pieces) / ((mu_b - mu_a) * (psi_b - psi_a))
+    let over_psi = |mu: f64| integrate_n(&|psi| f(mu, psi), psi_a, psi_b, &rule, pieces);
+    integrate_n(&over_psi, mu_a, mu_b, &rule, pieces)
 }
 
 /// Order-1 sums per unit solid angle at depth `d`, view (μ_V, ψ_V): the cell vector
@@ -83,23 +98,18 @@ pub fn single_scattering_moments(
 ) -> [f64; 4] {
     let sin_l = (1.0 - mu_l * mu_l).max(0.0).sqrt();
     let sin_v = (1.0 - mu_v * mu_v).max(0.0).sqrt();
-    let cos_theta = sin_l * sin_v * psi_v.cos() - mu_l * mu_v;
-    let p = phase.eval(cos_theta.clamp(-1.0, 1.0));
+    let p = phase_at(phase, mu_l, mu_v, psi_v);
     let m = mu_v.abs();
-    let rule = gauss_legendre(8);
     // Scattering depths: below d for light going up, above it for light going down.
     let (a, b) = if mu_v > 0.0 { (d, t) } else { (0.0, d) };
-    let moment = |k: usize| {
-        let f = |dp: f64| {
-            let w = p * (-dp / mu_l - (d - dp).abs() / m).exp() / m;
-            let ell = (d - dp) / -mu_v;
-            let x = ell * sin_v * psi_v.sin();
-            let z = dp * sin_l / mu_l + ell * sin_v * psi_v.cos();
-            w * [1.0, x, z, x * x + z * z][k]
-        };
-        integrate(&f, a, b, &rule, 16)
+    let f = |dp: f64| {
+        let w = p * (-dp / mu_l - (d - dp).abs() / m).exp() / m;
+        let ell = (d - dp) / -mu_v;
+        let x = ell * sin_v * psi_v.sin();
+        let z = dp * sin_l / mu_l + ell * sin_v * psi_v.cos();
+        [w, w * x, w * z, w * (x * x + z * z)]
     };
-    [moment(0), moment(1), moment(2), moment(3)]
+    integrate_n(&f, a, b, &gauss_legendre(8), 16)
 }
 
 /// The order-1 collector of a bin: (c_x, c_z, σ) from the bin integrals of
@@ -114,20 +124,12 @@ pub fn single_scattering_collector(
     (psi_a, psi_b): (f64, f64),
     pieces: usize,
 ) -> [f64; 3] {
-    let rule = gauss_legendre(8);
-    let bin = |k: usize| {
-        let over_psi = |mu: f64| {
-            integrate(
-                &|psi| single_scattering_moments(phase, mu_l, t, d, mu, psi)[k],
-                psi_a,
-                psi_b,
-                &rule,
-                pieces,
-            )
-        };
-        integrate(&over_psi, mu_a, mu_b, &rule, pieces)
-    };
-    let [w, x, z, q] = [bin(0), bin(1), bin(2), bin(3)];
+    let [w, x, z, q] = bin_integral(
+        &|mu, psi| single_scattering_moments(phase, mu_l, t, d, mu, psi),
+        (mu_a, mu_b),
+        (psi_a, psi_b),
+        pieces,
+    );
     let (cx, cz) = (-x / w, -z / w);
     [cx, cz, (q / w - cx * cx - cz * cz).max(0.0).sqrt()]
 }

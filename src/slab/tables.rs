@@ -120,17 +120,6 @@ pub struct Control<'a> {
     pub save_every_s: f64,
 }
 
-impl Control<'_> {
-    /// One process, no checkpoints.
-    pub fn plain() -> Self {
-        Control {
-            shard: None,
-            checkpoint: None,
-            save_every_s: f64::INFINITY,
-        }
-    }
-}
-
 /// Runs the slices of `cfg` (this shard's, resuming from the checkpoint if any);
 /// `progress(slice, slices, photons, worst_rel_se)` after each round.
 pub fn run_all(
@@ -139,26 +128,47 @@ pub fn run_all(
     control: &Control,
     progress: &dyn Fn(usize, usize, u64, f64),
 ) -> Result<SlabRun> {
-    cfg.validate()?;
     let total = cfg.thicknesses.len() * cfg.mu_l.len();
-    let mut slices = Vec::with_capacity(total);
+    for_each_slice(cfg, |s, grid, mu_l| {
+        let mine = control.shard.is_none_or(|(k, n)| s % n == k);
+        if !mine {
+            return Ok(None);
+        }
+        let run = run_one(cfg, phase, control, grid, s, mu_l, &|n, w| {
+            progress(s, total, n, w)
+        })?;
+        Ok(Some(run))
+    })
+}
+
+/// Calls `f(s, grid, mu_l)` for every slice s of `cfg` in (t, μ_L) order and gathers the results.
+fn for_each_slice(
+    cfg: &SlabConfig,
+    mut f: impl FnMut(usize, &SlabGrid, f64) -> Result<Option<(SliceReport, SliceRun)>>,
+) -> Result<SlabRun> {
+    cfg.validate()?;
+    let mut slices = Vec::new();
     let mut depths = Vec::new();
     for (it, &t) in cfg.thicknesses.iter().enumerate() {
         let grid = cfg.grid(t)?;
         depths.push(grid.depths.clone());
         for (im, &mu_l) in cfg.mu_l.iter().enumerate() {
-            let s = it * cfg.mu_l.len() + im;
-            let mine = control.shard.is_none_or(|(k, n)| s % n == k);
-            slices.push(if mine {
-                Some(run_one(cfg, phase, control, &grid, s, mu_l, &|n, w| {
-                    progress(s, total, n, w)
-                })?)
-            } else {
-                None
-            });
+            slices.push(f(it * cfg.mu_l.len() + im, &grid, mu_l)?);
         }
     }
     Ok(SlabRun { slices, depths })
+}
+
+/// The tables and verdict of a slice from its sums.
+fn judged(cfg: &SlabConfig, grid: &SlabGrid, mu_l: f64, acc: Accumulator) -> SliceRun {
+    let (tables, worst, worst_horizon, converged) = cfg.stop.judge(&acc, grid, mu_l);
+    SliceRun {
+        acc,
+        tables,
+        worst_rel_se: worst,
+        worst_rel_se_horizon: worst_horizon,
+        converged,
+    }
 }
 
 /// Slice `s`: from the checkpoint if finished there, else run (resuming its saved rounds).
@@ -171,19 +181,9 @@ fn run_one(
     mu_l: f64,
     progress: &dyn Fn(u64, f64),
 ) -> Result<(SliceReport, SliceRun)> {
-    let rebuild = |acc: Accumulator| {
-        let (tables, worst, worst_horizon, converged) = cfg.stop.judge(&acc, grid, mu_l);
-        SliceRun {
-            acc,
-            tables,
-            worst_rel_se: worst,
-            worst_rel_se_horizon: worst_horizon,
-            converged,
-        }
-    };
     if let Some(cp) = control.checkpoint {
         if let Some((report, acc)) = cp.finished(s, grid)? {
-            return Ok((report, rebuild(acc)));
+            return Ok((report, judged(cfg, grid, mu_l, acc)));
         }
     }
     let (start, spent) = match control.checkpoint {
@@ -249,40 +249,19 @@ fn run_one(
 
 /// Gathers the slices of several shards' directories into one run (every slice exactly once).
 pub fn merge(cfg: &SlabConfig, shards: &[Checkpoint]) -> Result<SlabRun> {
-    cfg.validate()?;
-    let mut slices = Vec::new();
-    let mut depths = Vec::new();
-    for (it, &t) in cfg.thicknesses.iter().enumerate() {
-        let grid = cfg.grid(t)?;
-        depths.push(grid.depths.clone());
-        for (im, &mu_l) in cfg.mu_l.iter().enumerate() {
-            let s = it * cfg.mu_l.len() + im;
-            let mut found = None;
-            for cp in shards {
-                if let Some((report, acc)) = cp.finished(s, &grid)? {
-                    if found.is_some() {
-                        anyhow::bail!(
-                            "slice {s} (t = {t}, mu_L = {mu_l}) is in more than one shard"
-                        );
-                    }
-                    let (tables, worst, worst_horizon, _) = cfg.stop.judge(&acc, &grid, mu_l);
-                    let run = SliceRun {
-                        acc,
-                        tables,
-                        worst_rel_se: worst,
-                        worst_rel_se_horizon: worst_horizon,
-                        converged: report.converged,
-                    };
-                    found = Some((report.clone(), run));
+    for_each_slice(cfg, |s, grid, mu_l| {
+        let where_ = || format!("slice {s} (t = {}, mu_L = {mu_l})", grid.thickness());
+        let mut found = None;
+        for cp in shards {
+            if let Some((report, acc)) = cp.finished(s, grid)? {
+                if found.is_some() {
+                    anyhow::bail!("{} is in more than one shard", where_());
                 }
+                found = Some((report, judged(cfg, grid, mu_l, acc)));
             }
-            let found = found.with_context(|| {
-                format!(
-                    "slice {s} (t = {t}, mu_L = {mu_l}) is in no shard: did every shard finish?"
-                )
-            })?;
-            slices.push(Some(found));
         }
-    }
-    Ok(SlabRun { slices, depths })
+        let found = found
+            .with_context(|| format!("{} is in no shard: did every shard finish?", where_()))?;
+        Ok(Some(found))
+    })
 }

@@ -50,15 +50,28 @@ pub fn integrate(
     rule: &(Vec<f64>, Vec<f64>),
     pieces: usize,
 ) -> f64 {
+    integrate_n(&|x| [f(x)], a, b, rule, pieces)[0]
+}
+
+/// [`integrate`] of N functions at once (sharing their evaluations).
+pub fn integrate_n<const N: usize>(
+    f: &dyn Fn(f64) -> [f64; N],
+    a: f64,
+    b: f64,
+    rule: &(Vec<f64>, Vec<f64>),
+    pieces: usize,
+) -> [f64; N] {
     let h = (b - a) / pieces as f64;
-    let mut total = 0.0;
+    let mut total = [0.0; N];
     for j in 0..pieces {
         let mid = a + h * (j as f64 + 0.5);
         for (x, w) in rule.0.iter().zip(&rule.1) {
-            total += w * f(mid + 0.5 * h * x);
+            for (t, v) in total.iter_mut().zip(f(mid + 0.5 * h * x)) {
+                *t += w * v;
+            }
         }
     }
-    0.5 * h * total
+    total.map(|t| 0.5 * h * t)
 }
 
 #[cfg(test)]
