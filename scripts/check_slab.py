@@ -9,8 +9,9 @@ diffuse light), and compares
   a. the diffuse fluxes leaving by the two faces with DISORT's (binomial standard errors);
   b. every bin-averaged radiance T = L/E_perp holding >= 1 % of its slice's largest value with
      DISORT's intensity averaged over the same bin (composite Gauss-Legendre, 96 x 24 points):
-     |MC - DISORT| <= 3 standard errors for at least 97 % of the cells, none beyond 5, and the
-     relative differences are printed.
+     the number of cells beyond 3 standard errors within the 99.9 % quantile of its binomial law
+     for normal errors, none beyond 5, and the relative differences printed. At mu_L = 1 one
+     psi_V bin is tested: the walk feeds every psi_V bin from every crossing there.
 
 DISORT runs with 64 streams and the first 64 Legendre moments g^l of HG (g^64 = 1e-3: no
 delta-M or intensity corrections needed), albedo 1 - 1e-8 (PythonicDISORT refuses 1),
@@ -26,6 +27,7 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+from scipy.stats import binom, norm
 
 REPO = Path(__file__).resolve().parent.parent
 DEFAULT_BIN = REPO / "target" / "release" / "nephele"
@@ -111,10 +113,16 @@ def main(argv=None) -> int:
                         ref[j, m, k] = bin_average(ui, d, mu_e[m], mu_e[m + 1], psi_e[k], psi_e[k + 1])
             mc, s = T[it, il], se[it, il]
             mask = ref >= 0.01 * ref.max()
+            if mu_l == 1.0:
+                # At normal incidence every crossing feeds every psi_V bin (docs/slab.md): the
+                # bins are copies, not independent cells; test one of them.
+                mask[:, :, 1:] = False
             zz = np.abs(mc[mask] - ref[mask]) / s[mask]
             rel = np.abs(mc[mask] - ref[mask]) / ref[mask]
             frac3 = float(np.mean(zz > 3))
-            ok = frac3 <= 0.03 and zz.max() < 5
+            # Beyond 3 SE: at most the 99.9 % quantile of the binomial count for n normal cells.
+            allowed = int(binom.ppf(0.999, len(zz), 2 * norm.sf(3)))
+            ok = int(np.sum(zz > 3)) <= allowed and zz.max() < 5
             print(f"   radiance: {mask.sum()} cells, |z| > 3 in {100 * frac3:.1f} %, max |z| {zz.max():.2f}, "
                   f"median |rel| {100 * np.median(rel):.2f} %, 90th percentile {100 * np.percentile(rel, 90):.2f} %, "
                   f"median rel SE {100 * np.median(s[mask] / mc[mask]):.2f} %  {'ok' if ok else 'FAIL'}")
