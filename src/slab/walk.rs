@@ -68,8 +68,7 @@ impl Slice<'_> {
         // planes a flight crosses are found by stepping from here, not by searching.
         let mut above = 1;
         loop {
-            // Free path in mfp: −ln(1 − ξ), ξ ∈ [0, 1), never infinite.
-            let s = -(1.0 - rng.random::<f64>()).ln();
+            let s = free_path(rng);
             let d1 = pos[2] + s * dir[2];
             above = self.cross_planes(&pos, &dir, d1, above, order, weight, rng, tally);
             if d1 <= 0.0 {
@@ -85,7 +84,7 @@ impl Slice<'_> {
             }
             order = order.saturating_add(1);
             tally.events += 1;
-            dir = self.scatter(dir, rng);
+            dir = scatter(self.phase, dir, rng);
             if self.albedo < 1.0 {
                 tally.absorbed += weight * (1.0 - self.albedo);
                 weight *= self.albedo;
@@ -216,37 +215,6 @@ impl Slice<'_> {
         }
     }
 
-    /// A new direction: the cosine from the phase function's exact sampler, the azimuth as a
-    /// uniform point of the unit disk by rejection (cos φ, sin φ without trigonometry, 4/π
-    /// tries on average), in the frame of Duff et al. around the old direction.
-    #[inline]
-    fn scatter(&self, dir: [f64; 3], rng: &mut Xoshiro256PlusPlus) -> [f64; 3] {
-        let c = self.phase.sample_cosine(rng.random::<f64>());
-        let (a, b, r2) = loop {
-            let (a, b) = (
-                2.0 * rng.random::<f64>() - 1.0,
-                2.0 * rng.random::<f64>() - 1.0,
-            );
-            let r2 = a * a + b * b;
-            if r2 <= 1.0 && r2 > 0.0 {
-                break (a, b, r2);
-            }
-        };
-        let sin2 = if c.mu > 0.0 {
-            c.one_minus_mu * (2.0 - c.one_minus_mu)
-        } else {
-            1.0 - c.mu * c.mu
-        };
-        let scale = (sin2.max(0.0) / r2).sqrt();
-        let (t, s) = orthonormal_basis(dir);
-        let (u, v) = (a * scale, b * scale);
-        normalised([
-            u * t[0] + v * s[0] + c.mu * dir[0],
-            u * t[1] + v * s[1] + c.mu * dir[1],
-            u * t[2] + v * s[2] + c.mu * dir[2],
-        ])
-    }
-
     /// (μ_V bin, ψ_V bin, ±1 for the mirror of x) of a propagation direction.
     fn direction_bin(&self, dir: &[f64; 3]) -> (usize, usize, f64) {
         let mirror = if dir[0] < 0.0 { -1.0 } else { 1.0 };
@@ -256,6 +224,47 @@ impl Slice<'_> {
             mirror,
         )
     }
+}
+
+/// A free path in mean free paths: −ln(1 − ξ), ξ ∈ [0, 1), never infinite.
+#[inline]
+pub fn free_path(rng: &mut Xoshiro256PlusPlus) -> f64 {
+    -(1.0 - rng.random::<f64>()).ln()
+}
+
+/// A new direction: the cosine from the phase function's exact sampler, the azimuth as a
+/// uniform point of the unit disk by rejection (cos φ, sin φ without trigonometry, 4/π
+/// tries on average), in the frame of Duff et al. around the old direction.
+#[inline]
+pub fn scatter(
+    phase: &(dyn PhaseFunction<f64> + Sync),
+    dir: [f64; 3],
+    rng: &mut Xoshiro256PlusPlus,
+) -> [f64; 3] {
+    let c = phase.sample_cosine(rng.random::<f64>());
+    let (a, b, r2) = loop {
+        let (a, b) = (
+            2.0 * rng.random::<f64>() - 1.0,
+            2.0 * rng.random::<f64>() - 1.0,
+        );
+        let r2 = a * a + b * b;
+        if r2 <= 1.0 && r2 > 0.0 {
+            break (a, b, r2);
+        }
+    };
+    let sin2 = if c.mu > 0.0 {
+        c.one_minus_mu * (2.0 - c.one_minus_mu)
+    } else {
+        1.0 - c.mu * c.mu
+    };
+    let scale = (sin2.max(0.0) / r2).sqrt();
+    let (t, s) = orthonormal_basis(dir);
+    let (u, v) = (a * scale, b * scale);
+    normalised([
+        u * t[0] + v * s[0] + c.mu * dir[0],
+        u * t[1] + v * s[1] + c.mu * dir[1],
+        u * t[2] + v * s[2] + c.mu * dir[2],
+    ])
 }
 
 /// The direction rescaled to unit length, so that rounding does not drift over thousands of
