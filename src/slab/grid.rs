@@ -43,10 +43,6 @@ pub struct SlabGrid {
     psi_cos: Vec<f64>,
     /// Bins per unit of μ when the μ_V bins are equal.
     mu_uniform: Option<f64>,
-    /// (sin, cos) of each ψ_V bin's lower edge.
-    psi_lo_sin_cos: Vec<(f64, f64)>,
-    /// Whether the ψ_V bins are equal (to rounding).
-    psi_equal: bool,
 }
 
 impl SlabGrid {
@@ -103,14 +99,6 @@ impl SlabGrid {
             .enumerate()
             .all(|(i, e)| *e == -1.0 + 2.0 * i as f64 / n_mu);
         let mu_uniform = uniform.then_some(0.5 * n_mu);
-        let psi_lo_sin_cos = psi_edges[..psi_edges.len() - 1]
-            .iter()
-            .map(|p| p.sin_cos())
-            .collect();
-        let width = psi_edges[1] - psi_edges[0];
-        let psi_equal = psi_edges
-            .windows(2)
-            .all(|e| ((e[1] - e[0]) - width).abs() <= 1e-12 * width);
         Ok(Self {
             depths,
             mu_edges,
@@ -119,8 +107,6 @@ impl SlabGrid {
             group_of_order,
             psi_cos,
             mu_uniform,
-            psi_lo_sin_cos,
-            psi_equal,
         })
     }
 
@@ -178,19 +164,18 @@ impl SlabGrid {
         bin(&self.psi_edges, psi)
     }
 
-    /// For each ψ_V bin k: (sin ψ, cos ψ, Δψ_k/π) at ψ = ψ_k,lo + u Δψ_k: the lower edge turned
-    /// by u Δψ_k, one sin/cos in all when the bins are equal (the default).
-    pub fn psi_targets(&self, u: f64) -> Vec<(f64, f64, f64)> {
-        let pi = std::f64::consts::PI;
-        let equal = self
-            .psi_equal
-            .then(|| (u * (self.psi_edges[1] - self.psi_edges[0])).sin_cos());
+    /// For each ψ_V bin k: (Δψ_k/π, mean of sin ψ, mean of cos ψ over the bin) — what a
+    /// crossing turned to an azimuth uniform in the bin contributes on average.
+    pub fn psi_bin_means(&self) -> Vec<[f64; 3]> {
         self.psi_edges
             .windows(2)
-            .zip(&self.psi_lo_sin_cos)
-            .map(|(e, &(s0, c0))| {
-                let (sd, cd) = equal.unwrap_or_else(|| (u * (e[1] - e[0])).sin_cos());
-                (s0 * cd + c0 * sd, c0 * cd - s0 * sd, (e[1] - e[0]) / pi)
+            .map(|e| {
+                let w = e[1] - e[0];
+                [
+                    w / std::f64::consts::PI,
+                    (e[0].cos() - e[1].cos()) / w,
+                    (e[1].sin() - e[0].sin()) / w,
+                ]
             })
             .collect()
     }
@@ -289,9 +274,13 @@ mod tests {
                 "ψ = −{psi}"
             );
         }
-        for (k, (s, c, share)) in g.psi_targets(0.3).into_iter().enumerate() {
-            let psi = g.psi_edges[k] + 0.3 * (g.psi_edges[k + 1] - g.psi_edges[k]);
-            assert!((s - psi.sin()).abs() < 1e-14 && (c - psi.cos()).abs() < 1e-14);
+        for (k, [share, s, c]) in g.psi_bin_means().into_iter().enumerate() {
+            // Against the midpoint rule on 1000 points.
+            let (lo, hi) = (g.psi_edges[k], g.psi_edges[k + 1]);
+            let psi = |i: usize| lo + (i as f64 + 0.5) / 1000.0 * (hi - lo);
+            let ms: f64 = (0..1000).map(|i| psi(i).sin()).sum::<f64>() / 1000.0;
+            let mc: f64 = (0..1000).map(|i| psi(i).cos()).sum::<f64>() / 1000.0;
+            assert!((s - ms).abs() < 1e-6 && (c - mc).abs() < 1e-6, "bin {k}");
             assert!((share - 1.0 / 12.0).abs() < 1e-14);
         }
         let c = g.cell(3, 7, 11, 5);

@@ -50,6 +50,9 @@ impl Slice<'_> {
         for _ in 0..photons {
             self.walk(rng, &mut tally);
         }
+        if self.mu_l == 1.0 {
+            expand_pooled(self.grid, &mut tally);
+        }
         tally.photons = photons;
         tally
     }
@@ -70,7 +73,7 @@ impl Slice<'_> {
         loop {
             let s = free_path(rng);
             let d1 = pos[2] + s * dir[2];
-            above = self.cross_planes(&pos, &dir, d1, above, order, weight, rng, tally);
+            above = self.cross_planes(&pos, &dir, d1, above, order, weight, tally);
             if d1 <= 0.0 {
                 tally.escaped_top += weight;
                 return;
@@ -112,7 +115,6 @@ impl Slice<'_> {
         above: usize,
         order: u32,
         weight: f64,
-        rng: &mut Xoshiro256PlusPlus,
         tally: &mut BatchTally,
     ) -> usize {
         let depths = &self.grid.depths;
@@ -136,7 +138,7 @@ impl Slice<'_> {
             return end;
         }
         if self.mu_l == 1.0 {
-            self.cross_pooled(pos, dir, planes, order, weight, rng.random::<f64>(), tally);
+            self.cross_pooled(pos, dir, planes, order, weight, tally);
             return end;
         }
         let (m, k, mirror) = self.direction_bin(dir);
@@ -162,12 +164,16 @@ impl Slice<'_> {
         end
     }
 
-    /// The crossings of one flight at normal incidence (μ_L = 1), where nothing fixes an azimuth:
-    /// every crossing is copied into every ψ_V bin k, with weight Δψ_k/π, turned about the
-    /// vertical so that its azimuth lands at ψ_k,lo + u Δψ_k (one uniform u per flight, so each
-    /// copy is uniform within its bin), its displacement turned with it. The expectation is that
-    /// of the plain tally (the azimuth of a crossing is uniform and independent of everything
-    /// else in the frame of the flight), with all ψ_V bins sharing every crossing.
+    /// The crossings of one flight at normal incidence (μ_L = 1), where nothing fixes an azimuth
+    /// and the radiance does not depend on ψ_V. Every crossing belongs to every ψ_V bin k with
+    /// weight Δψ_k/π, turned about the vertical to an azimuth uniform in the bin, its
+    /// displacement turned with it; the turn is averaged out exactly. Turned to azimuth ψ, a
+    /// displacement with components (a, b) along and across the flight's own horizontal direction
+    /// becomes (x, z) = (a sin ψ + b cos ψ, a cos ψ − b sin ψ), linear in (sin ψ, cos ψ); so the
+    /// walk sums w/|μ| · (1, a, b, a² + b²) once per crossing, in the ψ_V = 0 cell, and
+    /// [`expand_pooled`] spreads the batch's sums over the bins with the bins' means of sin ψ and
+    /// cos ψ. The expectation is that of the plain tally (the azimuth of a crossing is uniform
+    /// and independent of everything else in the frame of the flight).
     #[allow(clippy::too_many_arguments)]
     fn cross_pooled(
         &self,
@@ -176,12 +182,10 @@ impl Slice<'_> {
         planes: std::ops::Range<usize>,
         order: u32,
         weight: f64,
-        u: f64,
         tally: &mut BatchTally,
     ) {
         let g = self.grid;
-        let m = g.mu_bin(-dir[2]);
-        let group = g.group(order);
+        let first = g.cell(g.group(order), 0, g.mu_bin(-dir[2]), 0);
         let r = (dir[0] * dir[0] + dir[1] * dir[1]).sqrt();
         // (sin, cos) of the flight's own azimuth (any, for a vertical flight).
         let (s_c, c_c) = if r > 0.0 {
@@ -196,22 +200,16 @@ impl Slice<'_> {
         } else {
             &mut tally.up
         };
-        let targets = g.psi_targets(u);
         for j in planes {
             flux[j] += weight;
             let along = (g.depths[j] - pos[2]) * inv_dz;
             let (x, z) = (pos[0] + along * dir[0], pos[1] + along * dir[1]);
-            let r2 = x * x + z * z;
-            for (k, &(s_t, c_t, share)) in targets.iter().enumerate() {
-                // Turn by α = ψ_target − ψ_flight.
-                let (ca, sa) = (c_t * c_c + s_t * s_c, s_t * c_c - c_t * s_c);
-                let w = inv_mu * share;
-                let cell = &mut tally.cells[g.cell(group, j, m, k)];
-                cell[0] += w;
-                cell[1] += w * (x * ca + z * sa);
-                cell[2] += w * (z * ca - x * sa);
-                cell[3] += w * r2;
-            }
+            let (a, b) = (x * s_c + z * c_c, x * c_c - z * s_c);
+            let cell = &mut tally.cells[first + j];
+            cell[0] += inv_mu;
+            cell[1] += inv_mu * a;
+            cell[2] += inv_mu * b;
+            cell[3] += inv_mu * (x * x + z * z);
         }
     }
 
@@ -223,6 +221,31 @@ impl Slice<'_> {
             self.grid.psi_bin_of(dir[0], dir[1]),
             mirror,
         )
+    }
+}
+
+/// Spreads the normal-incidence sums w/|μ| · (1, a, b, a² + b²) of the ψ_V = 0 cells (see
+/// [`Slice::cross_pooled`]) over every ψ_V bin k: Δψ_k/π · (1, a S_k + b C_k, a C_k − b S_k,
+/// a² + b²), with S_k, C_k the bin's means of sin ψ and cos ψ.
+fn expand_pooled(g: &SlabGrid, tally: &mut BatchTally) {
+    let means = g.psi_bin_means();
+    for group in 0..g.groups.len() {
+        for m in 0..g.n_mu() {
+            for j in 0..g.depths.len() {
+                let [w, a, b, q] = tally.cells[g.cell(group, j, m, 0)];
+                if w == 0.0 {
+                    continue;
+                }
+                for (k, &[share, s, c]) in means.iter().enumerate() {
+                    tally.cells[g.cell(group, j, m, k)] = [
+                        share * w,
+                        share * (a * s + b * c),
+                        share * (a * c - b * s),
+                        share * q,
+                    ];
+                }
+            }
+        }
     }
 }
 
