@@ -3,7 +3,7 @@
 //! ../shared/bench/slab_ref.c (τ = 4, HG g = 0.9, normal incidence), so that
 //! scripts/bench_slab.sh can print both side by side.
 //!
-//!     cargo run --release --example bench_slab [-- PHOTONS]
+//!     cargo run --release --example bench_slab [-- PHOTONS [MU_L]]
 
 use nephele::slab::walk::batch_rng;
 use nephele::slab::{SlabGrid, Slice};
@@ -15,11 +15,16 @@ fn main() {
         .nth(1)
         .and_then(|s| s.parse().ok())
         .unwrap_or(2_000_000);
+    // Normal incidence by default (the problem of slab_ref.c); a second argument sets μ_L.
+    let mu_l: f64 = std::env::args()
+        .nth(2)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1.0);
     let hg = HenyeyGreenstein::new(0.9);
     let grid = SlabGrid::default_for(4.0).expect("default grid");
     let slice = Slice {
         grid: &grid,
-        mu_l: 1.0,
+        mu_l,
         albedo: 1.0,
         phase: &hg,
     };
@@ -28,7 +33,7 @@ fn main() {
     let s = t0.elapsed().as_secs_f64();
     let n = photons as f64;
     println!(
-        "tau=4 g=0.9 N={photons}  R={:.6} T_diffuse={:.6} T_direct={:.6}",
+        "tau=4 g=0.9 mu_L={mu_l} N={photons}  R={:.6} T_diffuse={:.6} T_direct={:.6}",
         tally.escaped_top / n,
         tally.down[grid.depths.len() - 1] / n,
         tally.direct[grid.depths.len() - 1] / n

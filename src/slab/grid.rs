@@ -215,10 +215,10 @@ impl SlabGrid {
         if r == 0.0 {
             return 0;
         }
-        let c = z / r;
-        // Bin k holds cos ψ ∈ (cos ψ_{k+1}, cos ψ_k]; edges inside (0, π) only.
+        // Bin k holds cos ψ = z/r ∈ (cos ψ_{k+1}, cos ψ_k]; edges inside (0, π) only; compared
+        // as z against r cos ψ_k, without a division.
         let inner = &self.psi_cos[1..self.psi_cos.len() - 1];
-        inner.partition_point(|e| *e >= c)
+        inner.partition_point(|e| *e * r >= z)
     }
 }
 

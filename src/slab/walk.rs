@@ -13,6 +13,8 @@ use nephele_runtime::frame::orthonormal_basis;
 use nephele_runtime::PhaseFunction;
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
+use std::f64::consts::PI;
+use std::sync::LazyLock;
 
 /// Weight below which a photon plays Russian roulette (albedo < 1 only).
 const ROULETTE_BELOW: f64 = 1e-3;
@@ -118,50 +120,38 @@ impl Slice<'_> {
         tally: &mut BatchTally,
     ) -> usize {
         let depths = &self.grid.depths;
-        let mut end = above;
-        let planes = if dir[2] > 0.0 {
-            while end < depths.len() && depths[end] <= d1 {
-                end += 1;
-            }
-            above..end
+        let down = dir[2] > 0.0;
+        let crosses = if down {
+            above < depths.len() && depths[above] <= d1
         } else {
-            while end > 0 && depths[end - 1] >= d1 {
-                end -= 1;
-            }
-            end..above
+            above > 0 && depths[above - 1] >= d1
         };
-        if planes.is_empty() {
-            return end;
+        if !crosses {
+            return above;
         }
         if order == 0 {
-            planes.for_each(|j| tally.direct[j] += weight);
-            return end;
+            return visit_planes(depths, above, d1, down, |j| tally.direct[j] += weight);
         }
         if self.mu_l == 1.0 {
-            self.cross_pooled(pos, dir, planes, order, weight, tally);
-            return end;
+            return self.cross_pooled(pos, dir, d1, above, order, weight, tally);
         }
         let (m, k, mirror) = self.direction_bin(dir);
         let first = self.grid.cell(self.grid.group(order), 0, m, k);
         let inv_dz = 1.0 / dir[2];
         let inv_mu = weight * inv_dz.abs();
-        let flux = if dir[2] > 0.0 {
-            &mut tally.down
-        } else {
-            &mut tally.up
-        };
-        for j in planes {
+        let flux = if down { &mut tally.down } else { &mut tally.up };
+        let cells = &mut tally.cells;
+        visit_planes(depths, above, d1, down, |j| {
             flux[j] += weight;
             let along = (depths[j] - pos[2]) * inv_dz;
             let x = mirror * (pos[0] + along * dir[0]);
             let z = pos[1] + along * dir[1];
-            let cell = &mut tally.cells[first + j];
+            let cell = &mut cells[first + j];
             cell[0] += inv_mu;
             cell[1] += inv_mu * x;
             cell[2] += inv_mu * z;
             cell[3] += inv_mu * (x * x + z * z);
-        }
-        end
+        })
     }
 
     /// The crossings of one flight at normal incidence (μ_L = 1), where nothing fixes an azimuth
@@ -179,38 +169,38 @@ impl Slice<'_> {
         &self,
         pos: &[f64; 3],
         dir: &[f64; 3],
-        planes: std::ops::Range<usize>,
+        d1: f64,
+        above: usize,
         order: u32,
         weight: f64,
         tally: &mut BatchTally,
-    ) {
+    ) -> usize {
         let g = self.grid;
         let first = g.cell(g.group(order), 0, g.mu_bin(-dir[2]), 0);
         let r = (dir[0] * dir[0] + dir[1] * dir[1]).sqrt();
-        // (sin, cos) of the flight's own azimuth (any, for a vertical flight).
-        let (s_c, c_c) = if r > 0.0 {
-            (dir[0] / r, dir[1] / r)
+        // 1/dz and the (sin, cos) of the flight's own azimuth from one division (any azimuth
+        // for a vertical flight).
+        let (inv_dz, s_c, c_c) = if r > 0.0 {
+            let inv = 1.0 / (dir[2] * r);
+            (inv * r, dir[0] * inv * dir[2], dir[1] * inv * dir[2])
         } else {
-            (0.0, 1.0)
+            (1.0 / dir[2], 0.0, 1.0)
         };
-        let inv_dz = 1.0 / dir[2];
         let inv_mu = weight * inv_dz.abs();
-        let flux = if dir[2] > 0.0 {
-            &mut tally.down
-        } else {
-            &mut tally.up
-        };
-        for j in planes {
+        let down = dir[2] > 0.0;
+        let flux = if down { &mut tally.down } else { &mut tally.up };
+        let cells = &mut tally.cells;
+        visit_planes(&g.depths, above, d1, down, |j| {
             flux[j] += weight;
             let along = (g.depths[j] - pos[2]) * inv_dz;
             let (x, z) = (pos[0] + along * dir[0], pos[1] + along * dir[1]);
             let (a, b) = (x * s_c + z * c_c, x * c_c - z * s_c);
-            let cell = &mut tally.cells[first + j];
+            let cell = &mut cells[first + j];
             cell[0] += inv_mu;
             cell[1] += inv_mu * a;
             cell[2] += inv_mu * b;
             cell[3] += inv_mu * (x * x + z * z);
-        }
+        })
     }
 
     /// (μ_V bin, ψ_V bin, ±1 for the mirror of x) of a propagation direction.
@@ -222,6 +212,32 @@ impl Slice<'_> {
             mirror,
         )
     }
+}
+
+/// Calls `f` for every plane a flight to depth `d1` crosses, from the `above` planes at or above
+/// its start, going down (`down`) or up; returns the number of planes at or above its end. One
+/// loop both finds and visits the planes (one mispredicted exit per flight, not two).
+#[inline(always)]
+fn visit_planes(
+    depths: &[f64],
+    above: usize,
+    d1: f64,
+    down: bool,
+    mut f: impl FnMut(usize),
+) -> usize {
+    let mut end = above;
+    if down {
+        while end < depths.len() && depths[end] <= d1 {
+            f(end);
+            end += 1;
+        }
+    } else {
+        while end > 0 && depths[end - 1] >= d1 {
+            end -= 1;
+            f(end);
+        }
+    }
+    end
 }
 
 /// Spreads the normal-incidence sums w/|μ| · (1, a, b, a² + b²) of the ψ_V = 0 cells (see
@@ -255,9 +271,8 @@ pub fn free_path(rng: &mut Xoshiro256PlusPlus) -> f64 {
     -(1.0 - rng.random::<f64>()).ln()
 }
 
-/// A new direction: the cosine from the phase function's exact sampler, the azimuth as a
-/// uniform point of the unit disk by rejection (cos φ, sin φ without trigonometry, 4/π
-/// tries on average), in the frame of Duff et al. around the old direction.
+/// A new direction: the cosine from the phase function's exact sampler, the azimuth from
+/// [`unit_circle`], in the frame of Duff et al. around the old direction.
 #[inline]
 pub fn scatter(
     phase: &(dyn PhaseFunction<f64> + Sync),
@@ -265,29 +280,47 @@ pub fn scatter(
     rng: &mut Xoshiro256PlusPlus,
 ) -> [f64; 3] {
     let c = phase.sample_cosine(rng.random::<f64>());
-    let (a, b, r2) = loop {
-        let (a, b) = (
-            2.0 * rng.random::<f64>() - 1.0,
-            2.0 * rng.random::<f64>() - 1.0,
-        );
-        let r2 = a * a + b * b;
-        if r2 <= 1.0 && r2 > 0.0 {
-            break (a, b, r2);
-        }
-    };
+    let (cos_phi, sin_phi) = unit_circle(rng.random::<f64>());
     let sin2 = if c.mu > 0.0 {
         c.one_minus_mu * (2.0 - c.one_minus_mu)
     } else {
         1.0 - c.mu * c.mu
     };
-    let scale = (sin2.max(0.0) / r2).sqrt();
+    let sin_theta = sin2.max(0.0).sqrt();
     let (t, s) = orthonormal_basis(dir);
-    let (u, v) = (a * scale, b * scale);
+    let (u, v) = (cos_phi * sin_theta, sin_phi * sin_theta);
     normalised([
         u * t[0] + v * s[0] + c.mu * dir[0],
         u * t[1] + v * s[1] + c.mu * dir[1],
         u * t[2] + v * s[2] + c.mu * dir[2],
     ])
+}
+
+/// Entries of the azimuth table: φ = 2π(k + f)/AZIMUTHS splits into a tabulated angle and a
+/// remainder δ < 2π/256 = 0.0245 whose sine and cosine take a few terms of their series.
+const AZIMUTHS: usize = 256;
+
+/// (cos, sin) of 2πk/AZIMUTHS.
+static AZIMUTH_TABLE: LazyLock<[(f64, f64); AZIMUTHS]> = LazyLock::new(|| {
+    std::array::from_fn(|k| {
+        let (s, c) = (2.0 * PI * k as f64 / AZIMUTHS as f64).sin_cos();
+        (c, s)
+    })
+});
+
+/// (cos φ, sin φ) of φ = 2πξ, ξ ∈ [0, 1), without a branch or a library call: the table entry
+/// of ⌊256ξ⌋ turned by the remainder δ, cos δ and sin δ by their Taylor series to δ⁶ and δ⁷
+/// (truncation below 4e-18), so within a few ulps of `sin_cos`.
+#[inline]
+pub fn unit_circle(xi: f64) -> (f64, f64) {
+    let scaled = xi * AZIMUTHS as f64;
+    let k = (scaled as usize).min(AZIMUTHS - 1);
+    let d = (scaled - k as f64) * (2.0 * PI / AZIMUTHS as f64);
+    let d2 = d * d;
+    let cos_d = 1.0 - d2 * (0.5 - d2 * (1.0 / 24.0 - d2 * (1.0 / 720.0)));
+    let sin_d = d * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0 - d2 * (1.0 / 5040.0))));
+    let (c, s) = AZIMUTH_TABLE[k];
+    (c * cos_d - s * sin_d, s * cos_d + c * sin_d)
 }
 
 /// The direction rescaled to unit length, so that rounding does not drift over thousands of
@@ -297,4 +330,23 @@ pub fn scatter(
 fn normalised(v: [f64; 3]) -> [f64; 3] {
     let inv = 1.5 - 0.5 * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
     [v[0] * inv, v[1] * inv, v[2] * inv]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unit_circle_is_sin_cos() {
+        let mut worst = 0.0f64;
+        for i in 0..100_000 {
+            let xi = (i as f64 + 0.37) / 100_000.0;
+            let (c, s) = unit_circle(xi);
+            let (s0, c0) = (2.0 * PI * xi).sin_cos();
+            worst = worst.max((c - c0).abs()).max((s - s0).abs());
+        }
+        let (c, s) = unit_circle(1.0 - f64::EPSILON / 2.0);
+        assert!((c - 1.0).abs() < 1e-15 && s.abs() < 1e-14);
+        assert!(worst < 1e-15, "worst {worst}");
+    }
 }

@@ -72,14 +72,15 @@ impl<F: Real> PhaseFunction<F> for HenyeyGreenstein<F> {
         let m0 = two * xi - one;
         let s = one + g * m0;
         if g.abs() > half {
-            let t = (one - g) * (one + g) / s;
-            let mu = ((one + g * g - t * t) / (two * g)).clamp_to(-one, one);
-            if g > F::of(0.0) && mu > F::of(0.0) {
-                // 1 − μ = (1 − g)(1 − μ₀)(t + 1 − g)/(2s): exact where μ is not.
-                let omm = (one - g) * two * (one - xi) * (t + one - g) / (two * s);
+            // One division on the common path (g > 0, forward): 1/s serves t and 1 − μ.
+            let inv_s = one / s;
+            let t = (one - g) * (one + g) * inv_s;
+            if g > F::of(0.0) && t * t < one + g * g {
+                // μ > 0: 1 − μ = (1 − g)(1 − ξ)(t + 1 − g)/s, exact where μ is not.
+                let omm = (one - g) * (one - xi) * (t + one - g) * inv_s;
                 return Cosine::from_one_minus_mu(omm.clamp_to(F::of(0.0), one));
             }
-            return Cosine::from_mu(mu);
+            return Cosine::from_mu(((one + g * g - t * t) / (two * g)).clamp_to(-one, one));
         }
         let num = m0
             + half * g * (F::of(3.0) + m0 * m0)
