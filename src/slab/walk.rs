@@ -16,6 +16,9 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 use std::f64::consts::PI;
 use std::sync::LazyLock;
 
+/// Photons walked side by side in a batch (see [`Slice::run_batch`]).
+const LANES: usize = 2;
+
 /// Weight below which a photon plays Russian roulette (albedo < 1 only).
 const ROULETTE_BELOW: f64 = 1e-3;
 /// Survival probability of the roulette.
@@ -45,12 +48,44 @@ pub fn batch_rng(seed: u64, slice: u64, batch: u64) -> Xoshiro256PlusPlus {
     Xoshiro256PlusPlus::seed_from_u64(z ^ (z >> 31))
 }
 
+/// The state of one photon of the walk.
+struct Photon {
+    /// (x, z, d) relative to the entry point, mfp.
+    pos: [f64; 3],
+    /// Propagation direction, unit.
+    dir: [f64; 3],
+    /// Scatterings so far.
+    order: u32,
+    /// Weight (1 unless albedo < 1).
+    weight: f64,
+    /// Planes at or above the photon's depth (plane 0, the lit face, holds the start): the
+    /// planes a flight crosses are found by stepping from here, not by searching.
+    above: usize,
+}
+
 impl Slice<'_> {
-    /// Walks `photons` photons with `rng`, returning the batch's sums.
+    /// Walks `photons` photons with `rng`, returning the batch's sums. Two photons are walked
+    /// side by side, one step of each in turn: their steps are independent chains of latency,
+    /// which the core overlaps (a photon that leaves is replaced by the next one at once).
     pub fn run_batch(&self, photons: u64, rng: &mut Xoshiro256PlusPlus) -> BatchTally {
         let mut tally = BatchTally::new(self.grid);
-        for _ in 0..photons {
-            self.walk(rng, &mut tally);
+        let mut launched = 0;
+        let mut lanes: [Option<Photon>; LANES] = std::array::from_fn(|_| None);
+        for lane in lanes.iter_mut() {
+            if launched < photons {
+                *lane = Some(self.launch());
+                launched += 1;
+            }
+        }
+        while lanes.iter().any(Option::is_some) {
+            for lane in lanes.iter_mut() {
+                if let Some(p) = lane {
+                    if !self.step(p, rng, &mut tally) {
+                        *lane = (launched < photons).then(|| self.launch());
+                        launched += lane.is_some() as u64;
+                    }
+                }
+            }
         }
         if self.mu_l == 1.0 {
             expand_pooled(self.grid, &mut tally);
@@ -59,50 +94,55 @@ impl Slice<'_> {
         tally
     }
 
-    fn walk(&self, rng: &mut Xoshiro256PlusPlus, tally: &mut BatchTally) {
-        let t = self.grid.thickness();
-        let mut pos = [0.0f64; 3];
-        let mut dir = [
-            0.0,
-            (1.0 - self.mu_l * self.mu_l).max(0.0).sqrt(),
-            self.mu_l,
-        ];
-        let mut order: u32 = 0;
-        let mut weight = 1.0;
-        // Planes at or above the photon's depth (plane 0, the lit face, holds the start): the
-        // planes a flight crosses are found by stepping from here, not by searching.
-        let mut above = 1;
-        loop {
-            let s = free_path(rng);
-            let d1 = pos[2] + s * dir[2];
-            above = self.cross_planes(&pos, &dir, d1, above, order, weight, tally);
-            if d1 <= 0.0 {
-                tally.escaped_top += weight;
-                return;
-            }
-            if d1 >= t {
-                tally.escaped_bottom += weight;
-                return;
-            }
-            for i in 0..3 {
-                pos[i] += s * dir[i];
-            }
-            order = order.saturating_add(1);
-            tally.events += 1;
-            dir = scatter(self.phase, dir, rng);
-            if self.albedo < 1.0 {
-                tally.absorbed += weight * (1.0 - self.albedo);
-                weight *= self.albedo;
-                if weight < ROULETTE_BELOW {
-                    if rng.random::<f64>() >= ROULETTE_SURVIVAL {
-                        tally.absorbed += weight;
-                        return;
-                    }
-                    tally.absorbed -= weight * (1.0 / ROULETTE_SURVIVAL - 1.0);
-                    weight /= ROULETTE_SURVIVAL;
+    /// A photon at the origin of the lit face, along the sun direction.
+    fn launch(&self) -> Photon {
+        Photon {
+            pos: [0.0; 3],
+            dir: [
+                0.0,
+                (1.0 - self.mu_l * self.mu_l).max(0.0).sqrt(),
+                self.mu_l,
+            ],
+            order: 0,
+            weight: 1.0,
+            above: 1,
+        }
+    }
+
+    /// One flight of `p` and, if it stays in the slab, its scattering; false once it has left
+    /// (or been absorbed).
+    #[inline(always)]
+    fn step(&self, p: &mut Photon, rng: &mut Xoshiro256PlusPlus, tally: &mut BatchTally) -> bool {
+        let s = free_path(rng);
+        let d1 = p.pos[2] + s * p.dir[2];
+        p.above = self.cross_planes(&p.pos, &p.dir, d1, p.above, p.order, p.weight, tally);
+        if d1 <= 0.0 {
+            tally.escaped_top += p.weight;
+            return false;
+        }
+        if d1 >= self.grid.thickness() {
+            tally.escaped_bottom += p.weight;
+            return false;
+        }
+        for i in 0..3 {
+            p.pos[i] += s * p.dir[i];
+        }
+        p.order = p.order.saturating_add(1);
+        tally.events += 1;
+        p.dir = scatter(self.phase, p.dir, rng);
+        if self.albedo < 1.0 {
+            tally.absorbed += p.weight * (1.0 - self.albedo);
+            p.weight *= self.albedo;
+            if p.weight < ROULETTE_BELOW {
+                if rng.random::<f64>() >= ROULETTE_SURVIVAL {
+                    tally.absorbed += p.weight;
+                    return false;
                 }
+                tally.absorbed -= p.weight * (1.0 / ROULETTE_SURVIVAL - 1.0);
+                p.weight /= ROULETTE_SURVIVAL;
             }
         }
+        true
     }
 
     /// Records every plane the flight from `pos` along `dir` to depth `d1` crosses, given the
@@ -279,6 +319,12 @@ pub fn scatter(
     dir: [f64; 3],
     rng: &mut Xoshiro256PlusPlus,
 ) -> [f64; 3] {
+    turn_direction(dir, sample_turn(phase, rng))
+}
+
+/// A scattering drawn apart from the direction it turns: (cos θ, sin θ cos φ, sin θ sin φ).
+#[inline]
+fn sample_turn(phase: &(dyn PhaseFunction<f64> + Sync), rng: &mut Xoshiro256PlusPlus) -> [f64; 3] {
     let c = phase.sample_cosine(rng.random::<f64>());
     let (cos_phi, sin_phi) = unit_circle(rng.random::<f64>());
     let sin2 = if c.mu > 0.0 {
@@ -287,12 +333,17 @@ pub fn scatter(
         1.0 - c.mu * c.mu
     };
     let sin_theta = sin2.max(0.0).sqrt();
+    [c.mu, cos_phi * sin_theta, sin_phi * sin_theta]
+}
+
+/// `dir` turned by `turn` (see [`sample_turn`]), in the frame of Duff et al. around it.
+#[inline]
+fn turn_direction(dir: [f64; 3], [mu, u, v]: [f64; 3]) -> [f64; 3] {
     let (t, s) = orthonormal_basis(dir);
-    let (u, v) = (cos_phi * sin_theta, sin_phi * sin_theta);
     normalised([
-        u * t[0] + v * s[0] + c.mu * dir[0],
-        u * t[1] + v * s[1] + c.mu * dir[1],
-        u * t[2] + v * s[2] + c.mu * dir[2],
+        u * t[0] + v * s[0] + mu * dir[0],
+        u * t[1] + v * s[1] + mu * dir[1],
+        u * t[2] + v * s[2] + mu * dir[2],
     ])
 }
 
