@@ -15,3 +15,6 @@ echo "== ../shared/bench/slab_ref.c (analog walk, totals and 10 μ bins)"
 echo
 echo "== nephele slab walk (16 planes × 16 μ_V × 12 ψ_V × 9 groups, collector moments)"
 target/release/examples/bench_slab "$n"
+echo
+echo "== the same at mu_L = 0.5 (the plain tally; slab_ref.c has normal incidence only)"
+target/release/examples/bench_slab "$n" 0.5
