@@ -414,6 +414,7 @@ fn slab_quick_config_writes_tables_and_refuses_bad_configs() {
             "preset",
         ),
         (r#"{"albedo": 0}"#, "albedo"),
+        (r#"{"grazing_mu": 0.5}"#, "grazing_mu"),
         (r#"{"stop": {"photons": 5}}"#, "unknown field"),
         (r#"{"group_starts": [2, 3]}"#, "group_starts"),
     ];

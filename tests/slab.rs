@@ -181,8 +181,12 @@ fn tables_are_bit_identical_for_any_thread_count() {
 #[test]
 fn order_one_collector_matches_the_closed_form() {
     // The bookkeeping of the lateral moments: c_x, c_z and σ of order 1 against quadrature over
-    // the scattering depth (src/slab/single.rs), on cells holding ≥ 5 % of the largest T₁; at
-    // μ_L = 1 through the azimuth pooling of the walk.
+    // the scattering depth (src/slab/single.rs), on cells holding ≥ 5 % of the largest T₁ off
+    // the horizon (whose 1/|μ| estimator has infinite variance: no trustworthy SE there); at
+    // μ_L = 1 through the azimuth pooling of the walk. One order-1 flight crosses several
+    // planes, so the values of neighbouring planes are correlated: Σz² keeps its mean (the
+    // count) but spreads wider than χ² (over 10 seeds at μ_L = 0.5: mean z² 1.01, from 0.66 to
+    // 1.44); the test bounds the mean z² and the worst |z|, and prints the χ² p-value as a guide.
     for mu_l in [0.5, 1.0] {
         collector_case(mu_l);
     }
@@ -222,7 +226,7 @@ fn collector_case(mu_l: f64) {
                     continue;
                 }
                 let c = grid.cell(0, j, m, k);
-                if t.t[c] < 0.05 * max {
+                if t.t[c] < 0.05 * max || grid.is_horizon(m) {
                     continue;
                 }
                 let mu = (grid.mu_edges[m], grid.mu_edges[m + 1]);
@@ -244,9 +248,10 @@ fn collector_case(mu_l: f64) {
         }
     }
     let p = 1.0 - ChiSquared::new(n as f64).unwrap().cdf(chi2);
-    println!("order-1 collector, mu_L = {mu_l}: {n} values, chi2 = {chi2:.1}, p = {p:.3}, worst |z| = {worst:.2}");
+    let mean = chi2 / n as f64;
+    println!("order-1 collector, mu_L = {mu_l}: {n} values, mean z^2 = {mean:.2} (chi2 p = {p:.3} if they were independent), worst |z| = {worst:.2}");
     assert!(
-        n > 30 && p > 1e-3 && worst < 5.0,
-        "chi2 {chi2} over {n} (p = {p}), worst |z| {worst}"
+        n > 30 && mean < 2.0 && worst < 4.5,
+        "mean z² {mean} over {n}, worst |z| {worst}"
     );
 }

@@ -178,7 +178,7 @@ impl Slice<'_> {
         let (m, k, mirror) = self.direction_bin(dir);
         let first = self.grid.cell(self.grid.group(order), 0, m, k);
         let inv_dz = 1.0 / dir[2];
-        let inv_mu = weight * inv_dz.abs();
+        let inv_mu = self.grid.crossing_weight(weight, inv_dz.abs());
         let flux = if down { &mut tally.down } else { &mut tally.up };
         let cells = &mut tally.cells;
         visit_planes(depths, above, d1, down, |j| {
@@ -226,7 +226,7 @@ impl Slice<'_> {
         } else {
             (1.0 / dir[2], 0.0, 1.0)
         };
-        let inv_mu = weight * inv_dz.abs();
+        let inv_mu = g.crossing_weight(weight, inv_dz.abs());
         let down = dir[2] > 0.0;
         let flux = if down { &mut tally.down } else { &mut tally.up };
         let cells = &mut tally.cells;
