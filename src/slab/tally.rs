@@ -3,10 +3,10 @@
 //! A photon crossing tally plane j with direction ω contributes to its cell (group, j, μ_V bin,
 //! ψ_V bin) the vector w/|μ| · (1, x′, z, x′² + z²), where (x′, z) is the crossing point relative
 //! to the photon's entry point (x′ across the sun's horizontal direction, mirrored with ψ_V;
-//! z along it). With N photons, L/E⊥ = μ_L Σ w/|μ| / (N ΔΩ) (each photon carries E⊥ μ_L per unit
-//! area of the lit face, translation invariance turns the crossings of one photon column into a
-//! radiance), and the collector is minus the displacement: c = −(X, Z)/W,
-//! σ² = Q/W − |c|².
+//! z along it; below |μ| = ε the weight is 2w/ε, see `SlabGrid::crossing_weight`). With N
+//! photons, L/E⊥ = μ_L Σ w/|μ| / (N ΔΩ) (each photon carries E⊥ μ_L per unit area of the lit
+//! face, translation invariance turns the crossings of one photon column into a radiance), and
+//! the collector is minus the displacement: c = −(X, Z)/W, σ² = Q/W − |c|².
 //!
 //! Standard errors come from batch means: every batch of B photons gives a vector v_b = (W, X,
 //! Z, Q) per cell; the accumulator keeps Σ v_b and Σ v_b v_bᵀ, so a crossing-heavy photon counts
