@@ -16,6 +16,7 @@ pub mod phase;
 pub mod presets;
 pub mod real;
 pub mod soft_math;
+pub mod transport;
 
 pub use phase::PhaseFunction;
 pub use real::Real;

@@ -1,0 +1,251 @@
+//! Order 1 in closed form: the radiance of light scattered exactly once out of the collimated
+//! sun beam, per unit sun irradiance E⊥ (sr⁻¹) — the `T` of order group 1 of the slab tables,
+//! from the phase function alone.
+//!
+//! The beam is attenuated as e^{−d′/μ_L} down to the scattering depth d′; the scattered light
+//! as e^{−|d − d′|/|μ_V|} on to the viewpoint at depth d:
+//!
+//!   T₁ = ϖ p(Θ) ∫ e^{−d′/μ_L} e^{−|d − d′|/|μ_V|} dd′ / |μ_V|,
+//!
+//! over d′ ∈ [d, t] for μ_V > 0 (light going up, scattered below) and d′ ∈ [0, d] for μ_V < 0:
+//!
+//!   μ_V > 0:  T₁ = ϖ p(Θ) e^{−d/μ_L} (1 − e^{−a(t − d)}) / (1 + μ_V/μ_L),  a = 1/μ_L + 1/μ_V,
+//!   μ_V < 0:  T₁ = ϖ p(Θ) e^{−d/μ_L} (e^{bd} − 1) / (m/μ_L − 1),          m = −μ_V,
+//!                                                                          b = 1/μ_L − 1/m,
+//!
+//! written so that the horizon (μ_V → 0, T₁ → ϖ p e^{−d/μ_L}, the local source) and m = μ_L
+//! (T₁ → ϖ p e^{−d/μ_L} d/m) stay finite. The scattering angle Θ between the sun's direction
+//! (0, sin φ_L, μ_L) and the view (sin θ_V sin ψ_V, sin θ_V cos ψ_V, −μ_V) in (x, z, depth) is
+//! taken as 1 − cos Θ = |ω_L − ω_V|²/2, accurate near the forward peak where cos Θ is not.
+
+use crate::phase::{Cosine, PhaseFunction};
+use crate::real::Real;
+
+/// 8-point Gauss–Legendre nodes on [−1, 1].
+const GL8_X: [f64; 8] = [
+    -0.960_289_856_497_536_2,
+    -0.796_666_477_413_626_7,
+    -0.525_532_409_916_329,
+    -0.183_434_642_495_649_8,
+    0.183_434_642_495_649_8,
+    0.525_532_409_916_329,
+    0.796_666_477_413_626_7,
+    0.960_289_856_497_536_2,
+];
+/// Their weights.
+const GL8_W: [f64; 8] = [
+    0.101_228_536_290_376_26,
+    0.222_381_034_453_374_47,
+    0.313_706_645_877_887_3,
+    0.362_683_783_378_362,
+    0.362_683_783_378_362,
+    0.313_706_645_877_887_3,
+    0.222_381_034_453_374_47,
+    0.101_228_536_290_376_26,
+];
+
+/// T₁ (sr⁻¹) at depth `d` (mfp, 0 ≤ d ≤ t) of a slab of thickness `t`, for the view
+/// (`mu_v`, `psi_v` in radians) and the sun `mu_l` ∈ (0, 1], single-scattering albedo `albedo`.
+pub fn single_scattering<F: Real, P: PhaseFunction<F> + ?Sized>(
+    phase: &P,
+    albedo: F,
+    mu_l: F,
+    t: F,
+    d: F,
+    mu_v: F,
+    psi_v: F,
+) -> F {
+    let (zero, one) = (F::of(0.0), F::of(1.0));
+    let source =
+        albedo * phase.pdf_cosine(scattering_cosine(mu_l, mu_v, psi_v)) * (-d / mu_l).exp();
+    if mu_v >= zero {
+        if t - d <= zero {
+            return zero;
+        }
+        let a = one / mu_l + one / mu_v;
+        source * -exp_m1(-a * (t - d)) / (one + mu_v / mu_l)
+    } else {
+        if d <= zero {
+            return zero;
+        }
+        let m = -mu_v;
+        let bd = (one / mu_l - one / m) * d;
+        if bd.abs() < F::of(1e-3) {
+            // (e^{bd} − 1)/(m/μ_L − 1) = (d/m) (e^{bd} − 1)/(bd), the latter by its series.
+            source * (d / m) * (one + bd * F::of(0.5) * (one + bd / F::of(3.0)))
+        } else {
+            source * exp_m1(bd) / (m / mu_l - one)
+        }
+    }
+}
+
+/// The average of T₁ over the direction bin μ_V ∈ [`mu_a`, `mu_b`] (one sign; the horizon may be
+/// an edge), ψ_V ∈ [`psi_a`, `psi_b`]: 8-point Gauss–Legendre on `pieces` × `pieces` pieces
+/// (the Mie forward peak, a few degrees wide, needs several pieces in the bin that holds it).
+#[allow(clippy::too_many_arguments)]
+pub fn single_scattering_bin<F: Real, P: PhaseFunction<F> + ?Sized>(
+    phase: &P,
+    albedo: F,
+    mu_l: F,
+    t: F,
+    d: F,
+    (mu_a, mu_b): (F, F),
+    (psi_a, psi_b): (F, F),
+    pieces: usize,
+) -> F {
+    let n = F::of(pieces.max(1) as f64);
+    let (h_mu, h_psi) = ((mu_b - mu_a) / n, (psi_b - psi_a) / n);
+    let half = F::of(0.5);
+    let mut sum = F::of(0.0);
+    for i in 0..pieces.max(1) {
+        let mu_mid = mu_a + h_mu * (F::of(i as f64) + half);
+        for (xm, wm) in GL8_X.iter().zip(GL8_W) {
+            let mu = mu_mid + half * h_mu * F::of(*xm);
+            for k in 0..pieces.max(1) {
+                let psi_mid = psi_a + h_psi * (F::of(k as f64) + half);
+                for (xp, wp) in GL8_X.iter().zip(GL8_W) {
+                    let psi = psi_mid + half * h_psi * F::of(*xp);
+                    let w = F::of(wm * wp);
+                    sum = sum + w * single_scattering(phase, albedo, mu_l, t, d, mu, psi);
+                }
+            }
+        }
+    }
+    // Each piece's rule sums to 2 × 2 over its half-widths: the mean is sum / (4 n²).
+    sum / (F::of(4.0) * n * n)
+}
+
+/// cos Θ between the sun's propagation direction and the view (μ_V, ψ_V), with
+/// 1 − cos Θ = |ω_L − ω_V|²/2.
+pub fn scattering_cosine<F: Real>(mu_l: F, mu_v: F, psi_v: F) -> Cosine<F> {
+    let one = F::of(1.0);
+    let sin_l = (one - mu_l * mu_l).clamp_to(F::of(0.0), one).sqrt();
+    let sin_v = (one - mu_v * mu_v).clamp_to(F::of(0.0), one).sqrt();
+    let (s, c) = psi_v.sin_cos();
+    let (dx, dz, dd) = (sin_v * s, sin_l - sin_v * c, mu_l + mu_v);
+    let omm = F::of(0.5) * (dx * dx + dz * dz + dd * dd);
+    Cosine::from_one_minus_mu(omm.clamp_to(F::of(0.0), F::of(2.0)))
+}
+
+/// eˣ − 1 without the cancellation of small x (a series below |x| = 0.01, truncation < 3e-17).
+fn exp_m1<F: Real>(x: F) -> F {
+    if x.abs() < F::of(0.01) {
+        let one = F::of(1.0);
+        x * (one
+            + x / F::of(2.0)
+                * (one
+                    + x / F::of(3.0)
+                        * (one + x / F::of(4.0) * (one + x / F::of(5.0) * (one + x / F::of(6.0))))))
+    } else {
+        x.exp() - F::of(1.0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::phase::HenyeyGreenstein;
+
+    /// T₁ by brute-force quadrature over the scattering depth (f64, 20 000 midpoints).
+    fn brute(g: f64, mu_l: f64, t: f64, d: f64, mu_v: f64, psi_v: f64) -> f64 {
+        let hg = HenyeyGreenstein::new(g);
+        let p = hg.pdf_cosine(scattering_cosine(mu_l, mu_v, psi_v));
+        let (lo, hi) = if mu_v > 0.0 { (d, t) } else { (0.0, d) };
+        let n = 20_000;
+        let h = (hi - lo) / n as f64;
+        (0..n)
+            .map(|i| {
+                let dp = lo + (i as f64 + 0.5) * h;
+                p * (-dp / mu_l - (d - dp).abs() / mu_v.abs()).exp() / mu_v.abs() * h
+            })
+            .sum()
+    }
+
+    #[test]
+    fn closed_form_matches_quadrature_and_limits() {
+        let hg = HenyeyGreenstein::new(0.8);
+        for &(mu_l, t, d, mu_v, psi) in &[
+            (0.5, 2.0, 0.7, 0.3, 0.4),
+            (0.5, 2.0, 0.7, -0.3, 2.0),
+            (0.9, 8.0, 3.0, -0.9, 0.0), // m = μ_L: the series branch
+            (0.3, 1.0, 0.2, -0.95, 1.0),
+            (1.0, 4.0, 4.0, -0.5, 0.0),
+            (0.7, 4.0, 0.0, 0.6, 3.0),
+        ] {
+            let c = single_scattering(&hg, 1.0, mu_l, t, d, mu_v, psi);
+            let b = brute(0.8, mu_l, t, d, mu_v, psi);
+            assert!(
+                (c - b).abs() <= 1e-7 * b.abs().max(1e-12),
+                "{mu_l} {t} {d} {mu_v}: {c} vs {b}"
+            );
+        }
+        // The horizon: T₁ → ϖ p e^{−d/μ_L} from both sides, finite at 0.
+        let at = |mu_v: f64| single_scattering(&hg, 1.0, 0.5, 4.0, 1.0, mu_v, 1.0);
+        let local = hg.pdf_cosine(scattering_cosine(0.5, 0.0, 1.0)) * (-2.0f64).exp();
+        for mu_v in [0.0, 1e-9, -1e-9] {
+            assert!(
+                (at(mu_v) - local).abs() < 1e-6 * local,
+                "{mu_v}: {} vs {local}",
+                at(mu_v)
+            );
+        }
+        // Faces: nothing below the far face going up, nothing above the lit face going down.
+        assert_eq!(single_scattering(&hg, 1.0, 0.5, 4.0, 4.0, 0.5, 0.0), 0.0);
+        assert_eq!(single_scattering(&hg, 1.0, 0.5, 4.0, 0.0, -0.5, 0.0), 0.0);
+    }
+
+    #[test]
+    fn f32_follows_f64() {
+        let (h32, h64) = (
+            HenyeyGreenstein::new(0.85f32),
+            HenyeyGreenstein::new(0.85f64),
+        );
+        let mut worst = 0.0f64;
+        for i in 0..40 {
+            let mu_v = -0.99 + 1.98 * i as f64 / 39.0;
+            for k in 0..12 {
+                let psi = 3.1 * k as f64 / 11.0;
+                for &(mu_l, t, d) in &[(0.5, 2.0, 0.7), (1.0, 16.0, 3.0), (0.2, 64.0, 0.1)] {
+                    let a = single_scattering(&h64, 1.0, mu_l, t, d, mu_v, psi);
+                    let b = single_scattering(
+                        &h32,
+                        1.0,
+                        mu_l as f32,
+                        t as f32,
+                        d as f32,
+                        mu_v as f32,
+                        psi as f32,
+                    );
+                    if a > 1e-12 {
+                        worst = worst.max(((b as f64) - a).abs() / a);
+                    }
+                }
+            }
+        }
+        assert!(worst < 2e-5, "worst relative difference {worst}");
+    }
+
+    #[test]
+    fn bin_average_matches_a_fine_midpoint_rule() {
+        // Isotropic scattering (g = 0): T₁ varies only through μ_V, and the rule must give the
+        // mean of the closed form over the μ_V range.
+        let hg = HenyeyGreenstein::new(0.0);
+        let bin = single_scattering_bin(&hg, 1.0, 0.5, 2.0, 0.5, (0.2, 0.4), (0.0, 1.0), 4);
+        let n = 200_000;
+        let exact: f64 = (0..n)
+            .map(|i| {
+                single_scattering(
+                    &hg,
+                    1.0,
+                    0.5,
+                    2.0,
+                    0.5,
+                    0.2 + 0.2 * (i as f64 + 0.5) / n as f64,
+                    0.0,
+                )
+            })
+            .sum::<f64>()
+            / n as f64;
+        assert!((bin - exact).abs() < 1e-9 * exact, "{bin} vs {exact}");
+    }
+}
