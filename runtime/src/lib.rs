@@ -11,6 +11,7 @@
 //! μ = cos θ (μ = 1 is forward); phase functions are normalised so that ∮ p dΩ = 1 (sr⁻¹).
 #![cfg_attr(not(feature = "std"), no_std)]
 
+pub mod container;
 pub mod frame;
 pub mod phase;
 pub mod presets;

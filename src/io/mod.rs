@@ -2,6 +2,7 @@
 //! place, so a failed or interrupted run never leaves a partial file behind.
 
 pub mod atomic;
+pub mod container;
 pub mod npz;
 pub mod phase;
 pub mod plot;

@@ -1,0 +1,268 @@
+//! The binary container of nephele's transport tables (`.ntt`): named little-endian f32 arrays
+//! behind a fixed header and a directory, closed by a CRC-32. Read in place from a byte slice
+//! — no allocation, no copy, no alignment requirement — and checked completely before any
+//! array is handed out: a truncated, corrupt or foreign input is an error, never a panic.
+//!
+//! Layout (all integers little-endian; docs/format.md):
+//!
+//! ```text
+//! offset  size  field
+//!      0     8  magic  "NEPHTT\r\n"
+//!      8     4  u32    version (1)
+//!     12     4  u32    number of arrays n (≤ MAX_ARRAYS)
+//!     16  48·n  directory, one entry per array:
+//!                 16 B  name, ASCII, NUL-padded (at least one byte, no NUL inside)
+//!                  4 B  u32 rank r (1 ≤ r ≤ 4)
+//!                 16 B  u32 × 4 dimensions (unused ones 1)
+//!                  4 B  u32 offset of the data from the start of the file
+//!                  8 B  u64 reserved (0)
+//!      …     …  data: each array's Π dims f32 values, row-major, inside the file
+//!   L − 4     4  u32    CRC-32 (IEEE 802.3, as zlib) of bytes [0, L − 4)
+//! ```
+
+/// The first 8 bytes of every container ("\r\n" catches text-mode mangling, as PNG does).
+pub const MAGIC: [u8; 8] = *b"NEPHTT\r\n";
+/// The version this reader understands.
+pub const VERSION: u32 = 1;
+/// Most arrays one container may hold.
+pub const MAX_ARRAYS: usize = 4096;
+/// Bytes of one directory entry.
+pub const ENTRY_BYTES: usize = 48;
+/// Bytes before the directory.
+pub const HEADER_BYTES: usize = 16;
+/// Longest array name.
+pub const NAME_BYTES: usize = 16;
+
+/// Why a byte slice is not a valid container.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FormatError {
+    /// Shorter than its header, directory, data or checksum say.
+    Truncated,
+    /// Not starting with [`MAGIC`].
+    BadMagic,
+    /// A version this reader does not know.
+    UnsupportedVersion(u32),
+    /// The CRC-32 does not match the contents.
+    BadChecksum,
+    /// A directory entry that cannot be right (its index).
+    BadEntry(usize),
+    /// Two arrays of the same name (the second's index).
+    DuplicateName(usize),
+}
+
+impl core::fmt::Display for FormatError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            FormatError::Truncated => write!(f, "truncated transport tables"),
+            FormatError::BadMagic => write!(f, "not nephele transport tables (bad magic)"),
+            FormatError::UnsupportedVersion(v) => {
+                write!(
+                    f,
+                    "transport tables version {v} (this reader knows {VERSION})"
+                )
+            }
+            FormatError::BadChecksum => write!(f, "transport tables checksum mismatch (corrupt)"),
+            FormatError::BadEntry(i) => write!(f, "transport tables: bad directory entry {i}"),
+            FormatError::DuplicateName(i) => {
+                write!(f, "transport tables: array {i} repeats a name")
+            }
+        }
+    }
+}
+
+/// A validated container, borrowing its bytes.
+#[derive(Clone, Copy, Debug)]
+pub struct Container<'a> {
+    bytes: &'a [u8],
+    arrays: usize,
+}
+
+/// One f32 array of a container, borrowing its bytes.
+#[derive(Clone, Copy, Debug)]
+pub struct ArrayView<'a> {
+    /// Its name.
+    pub name: &'a str,
+    /// Its dimensions (unused trailing ones are 1).
+    pub dims: [usize; 4],
+    /// Its rank.
+    pub rank: usize,
+    data: &'a [u8],
+}
+
+impl<'a> ArrayView<'a> {
+    /// Number of values.
+    pub fn len(&self) -> usize {
+        self.data.len() / 4
+    }
+
+    /// Whether it holds no value (never, for a validated container).
+    pub fn is_empty(&self) -> bool {
+        self.data.is_empty()
+    }
+
+    /// Value `i` in row-major order (None past the end).
+    #[inline]
+    pub fn get(&self, i: usize) -> Option<f32> {
+        let b = self.data.get(4 * i..4 * i + 4)?;
+        Some(f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    }
+
+    /// Every value, in row-major order.
+    pub fn iter(&self) -> impl Iterator<Item = f32> + 'a {
+        self.data
+            .chunks_exact(4)
+            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    }
+}
+
+fn u32_at(b: &[u8], at: usize) -> Option<u32> {
+    let s = b.get(at..at.checked_add(4)?)?;
+    Some(u32::from_le_bytes([s[0], s[1], s[2], s[3]]))
+}
+
+impl<'a> Container<'a> {
+    /// Validates `bytes` completely: magic, version, checksum, every directory entry (name,
+    /// rank, dimensions, data inside the file, names distinct).
+    pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
+        if bytes.len() < HEADER_BYTES + 4 {
+            return Err(if bytes.len() >= 8 && bytes[..8] != MAGIC {
+                FormatError::BadMagic
+            } else {
+                FormatError::Truncated
+            });
+        }
+        if bytes[..8] != MAGIC {
+            return Err(FormatError::BadMagic);
+        }
+        let version = u32_at(bytes, 8).ok_or(FormatError::Truncated)?;
+        if version != VERSION {
+            return Err(FormatError::UnsupportedVersion(version));
+        }
+        let body = bytes.len() - 4;
+        if u32_at(bytes, body) != Some(crc32(&bytes[..body])) {
+            return Err(FormatError::BadChecksum);
+        }
+        let arrays = u32_at(bytes, 12).ok_or(FormatError::Truncated)? as usize;
+        if arrays > MAX_ARRAYS || HEADER_BYTES + arrays * ENTRY_BYTES > body {
+            return Err(FormatError::Truncated);
+        }
+        let c = Container { bytes, arrays };
+        for i in 0..arrays {
+            let a = c.parse(i).ok_or(FormatError::BadEntry(i))?;
+            if (0..i).any(|k| c.parse(k).is_some_and(|b| b.name == a.name)) {
+                return Err(FormatError::DuplicateName(i));
+            }
+        }
+        Ok(c)
+    }
+
+    /// Number of arrays.
+    pub fn len(&self) -> usize {
+        self.arrays
+    }
+
+    /// Whether it holds no array.
+    pub fn is_empty(&self) -> bool {
+        self.arrays == 0
+    }
+
+    /// Array `i` of the directory.
+    pub fn array(&self, i: usize) -> Option<ArrayView<'a>> {
+        if i < self.arrays {
+            self.parse(i)
+        } else {
+            None
+        }
+    }
+
+    /// The array named `name`.
+    pub fn find(&self, name: &str) -> Option<ArrayView<'a>> {
+        (0..self.arrays)
+            .filter_map(|i| self.parse(i))
+            .find(|a| a.name == name)
+    }
+
+    /// Directory entry `i`, or None if it is malformed.
+    fn parse(&self, i: usize) -> Option<ArrayView<'a>> {
+        let e = HEADER_BYTES + i * ENTRY_BYTES;
+        let entry = self.bytes.get(e..e + ENTRY_BYTES)?;
+        let raw = &entry[..NAME_BYTES];
+        let len = raw.iter().position(|&b| b == 0).unwrap_or(NAME_BYTES);
+        if len == 0 || raw[len..].iter().any(|&b| b != 0) || !raw[..len].is_ascii() {
+            return None;
+        }
+        let name = core::str::from_utf8(&raw[..len]).ok()?;
+        let rank = u32_at(entry, 16)? as usize;
+        if !(1..=4).contains(&rank) {
+            return None;
+        }
+        let mut dims = [1usize; 4];
+        let mut count = 1usize;
+        for (k, d) in dims.iter_mut().enumerate() {
+            *d = u32_at(entry, 20 + 4 * k)? as usize;
+            if *d == 0 || (k >= rank && *d != 1) {
+                return None;
+            }
+            count = count.checked_mul(*d)?;
+        }
+        let offset = u32_at(entry, 36)? as usize;
+        if entry[40..48].iter().any(|&b| b != 0)
+            || offset < HEADER_BYTES + self.arrays * ENTRY_BYTES
+        {
+            return None;
+        }
+        let end = offset.checked_add(count.checked_mul(4)?)?;
+        if end > self.bytes.len() - 4 {
+            return None;
+        }
+        Some(ArrayView {
+            name,
+            dims,
+            rank,
+            data: &self.bytes[offset..end],
+        })
+    }
+}
+
+/// The CRC-32 table (reflected IEEE polynomial 0xEDB88320), built at compile time.
+const CRC_TABLE: [u32; 256] = {
+    let mut table = [0u32; 256];
+    let mut i = 0;
+    while i < 256 {
+        let mut c = i as u32;
+        let mut k = 0;
+        while k < 8 {
+            c = if c & 1 != 0 {
+                0xEDB8_8320 ^ (c >> 1)
+            } else {
+                c >> 1
+            };
+            k += 1;
+        }
+        table[i] = c;
+        i += 1;
+    }
+    table
+};
+
+/// CRC-32 of `bytes` (IEEE 802.3, the checksum of zlib, PNG and gzip).
+pub fn crc32(bytes: &[u8]) -> u32 {
+    !bytes.iter().fold(!0u32, |c, &b| {
+        CRC_TABLE[((c ^ b as u32) & 0xFF) as usize] ^ (c >> 8)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn crc32_known_values() {
+        assert_eq!(crc32(b""), 0);
+        assert_eq!(crc32(b"123456789"), 0xCBF4_3926);
+        assert_eq!(
+            crc32(b"The quick brown fox jumps over the lazy dog"),
+            0x414F_A339
+        );
+    }
+}
