@@ -4,6 +4,7 @@
 //! fitted to them, diameter curves), [`io`] (atomic
 //! NumPy/JSON/CSV/PNG outputs). The evaluators renderers need live in `nephele-runtime`.
 
+pub mod compress;
 pub mod fit;
 pub mod io;
 pub mod mie;

@@ -2,6 +2,7 @@
 //! setup (fit-configs/paper.json) — Mie tables for d = 5…50 µm and every model fitted to them —
 //! into outputs/.
 
+mod compress;
 mod fit;
 mod mie;
 mod phase;
@@ -30,6 +31,8 @@ enum Command {
     Fit(fit::FitArgs),
     /// Slab Monte Carlo: the canonical transport tables ⟨T, c, σ⟩ per order group (spec 40).
     Slab(slab::SlabArgs),
+    /// Fit the compressed form (spec 50) to a slab run's tables and report its error per group.
+    Compress(compress::CompressArgs),
     /// Merge the shards of a slab run (`nephele slab --shard K/N`) into its tables.
     Merge(slab::MergeArgs),
     /// Tabulate and sample a phase model of nephele-runtime (or a Mie table); renderer LUTs.
@@ -53,6 +56,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Fit(args)) => fit::run(args),
         Some(Command::Slab(args)) => slab::run(args),
         Some(Command::Merge(args)) => slab::merge_shards(args),
+        Some(Command::Compress(args)) => compress::run(args),
         None => fit::run_main_job(),
     }
 }

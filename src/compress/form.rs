@@ -1,0 +1,163 @@
+//! The log-additive form of spec 50 (the prototype's best, "the one to beat"), per order group
+//! and slab thickness t:
+//!
+//!   ln T = ln B + Σ_j [a_j(μ_V) + b_j(μ_L)] P_j(2u − 1) + γ(μ_V) ln F₁
+//!          + Σ_i h_i(Θ) [P0_i + P1_i (2u − 1)] + Σ_k [p_k(μ_V) + q_k(μ_L)] (s_V s_L)^k cos kψ_V,
+//!
+//! u the stretched depth (plane index / (planes − 1)), B the boundary factor (the share of the
+//! optical path behind the viewpoint: 1 − e^{−(t−d)/μ_V} looking down at light going up,
+//! 1 − e^{−d/|μ_V|} for light going down), F₁ the single-scattering depth factor (T₁ without its
+//! phase function, [`nephele_runtime::transport::single_scattering`] with p = 1), h_i the hat
+//! functions of nodes Θ_i = π (i/(n − 1))² (dense at the forward peak), s = sin of the polar
+//! angles. Linear in its parameters: fitted by weighted least squares. With `pairs`, γ becomes
+//! γ(μ_V, μ_L) and an offset and a depth slope per (μ_V, μ_L) pair are added.
+
+use nephele_runtime::phase::HenyeyGreenstein;
+use nephele_runtime::transport::{scattering_cosine, single_scattering};
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+
+/// The form's sizes.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+pub struct LogAdditive {
+    /// Legendre terms in depth, J.
+    pub legendre: usize,
+    /// Azimuth harmonics, K.
+    pub harmonics: usize,
+    /// Θ nodes.
+    pub theta_nodes: usize,
+    /// Per-(μ_V, μ_L) γ, offset and slope.
+    pub pairs: bool,
+}
+
+impl Default for LogAdditive {
+    fn default() -> Self {
+        Self {
+            legendre: 6,
+            harmonics: 3,
+            theta_nodes: 24,
+            pairs: false,
+        }
+    }
+}
+
+/// A cell as the form sees it (bin centres).
+#[derive(Clone, Copy, Debug)]
+pub struct Cell {
+    /// μ_L index and value.
+    pub il: usize,
+    /// Sun cosine.
+    pub mu_l: f64,
+    /// μ_V bin index.
+    pub m: usize,
+    /// View cosine (bin centre).
+    pub mu_v: f64,
+    /// View azimuth (bin centre, radians).
+    pub psi_v: f64,
+    /// Stretched depth in [0, 1].
+    pub u: f64,
+    /// Depth (mfp).
+    pub d: f64,
+    /// Thickness (mfp).
+    pub t: f64,
+}
+
+impl LogAdditive {
+    /// Parameters per (group, t) for `nm` μ_V bins and `nl` sun cosines.
+    pub fn n_params(&self, nm: usize, nl: usize) -> usize {
+        let j = self.legendre * (nm + nl);
+        let gamma = if self.pairs { nm * nl } else { nm };
+        let pairs = if self.pairs { 2 * nm * nl } else { 0 };
+        j + gamma + pairs + 2 * self.theta_nodes + self.harmonics * (nm + nl)
+    }
+
+    /// ln B of `c`, or None where the form says T = 0 (no medium behind the viewpoint).
+    pub fn offset(&self, c: &Cell) -> Option<f64> {
+        let path = if c.mu_v > 0.0 { c.t - c.d } else { c.d };
+        let b = -(-path / c.mu_v.abs()).exp_m1();
+        (b > 0.0).then(|| b.ln())
+    }
+
+    /// The features of `c` as (column, value) pairs, into `out` (cleared first); false where the
+    /// cell cannot be represented (F₁ = 0).
+    pub fn features(&self, c: &Cell, nm: usize, nl: usize, out: &mut Vec<(usize, f64)>) -> bool {
+        out.clear();
+        let f1 = 4.0
+            * PI
+            * single_scattering(
+                &HenyeyGreenstein::new(0.0),
+                1.0,
+                c.mu_l,
+                c.t,
+                c.d,
+                c.mu_v,
+                c.psi_v,
+            );
+        if !(f1 > 0.0) {
+            return false;
+        }
+        let x = 2.0 * c.u - 1.0;
+        let mut col = 0;
+        for p in legendre(x, self.legendre) {
+            out.push((col + c.m, p));
+            out.push((col + nm + c.il, p));
+            col += nm + nl;
+        }
+        let pair = c.m * nl + c.il;
+        if self.pairs {
+            out.push((col + pair, f1.ln()));
+            col += nm * nl;
+            out.push((col + 2 * pair, 1.0));
+            out.push((col + 2 * pair + 1, x));
+            col += 2 * nm * nl;
+        } else {
+            out.push((col + c.m, f1.ln()));
+            col += nm;
+        }
+        let theta = scattering_angle(c);
+        for (i, h) in self.theta_hats(theta) {
+            out.push((col + 2 * i, h));
+            out.push((col + 2 * i + 1, h * x));
+        }
+        col += 2 * self.theta_nodes;
+        let s = ((1.0 - c.mu_v * c.mu_v) * (1.0 - c.mu_l * c.mu_l))
+            .max(0.0)
+            .sqrt();
+        for k in 1..=self.harmonics {
+            let f = s.powi(k as i32) * (k as f64 * c.psi_v).cos();
+            out.push((col + c.m, f));
+            out.push((col + nm + c.il, f));
+            col += nm + nl;
+        }
+        true
+    }
+
+    /// The (at most two) hat functions that are not zero at `theta`.
+    fn theta_hats(&self, theta: f64) -> Vec<(usize, f64)> {
+        let n = self.theta_nodes;
+        let node = |i: usize| PI * (i as f64 / (n - 1) as f64).powi(2);
+        let i = (1..n).find(|&i| node(i) >= theta).unwrap_or(n - 1);
+        let (a, b) = (node(i - 1), node(i));
+        let w = ((theta - a) / (b - a)).clamp(0.0, 1.0);
+        vec![(i - 1, 1.0 - w), (i, w)]
+    }
+}
+
+/// P_0(x) … P_{n−1}(x) by the three-term recurrence.
+fn legendre(x: f64, n: usize) -> Vec<f64> {
+    let mut p = Vec::with_capacity(n);
+    for j in 0..n {
+        p.push(match j {
+            0 => 1.0,
+            1 => x,
+            _ => ((2 * j - 1) as f64 * x * p[j - 1] - (j - 1) as f64 * p[j - 2]) / j as f64,
+        });
+    }
+    p
+}
+
+/// The scattering angle Θ (radians) between the sun and the view of `c`.
+fn scattering_angle(c: &Cell) -> f64 {
+    let cos = scattering_cosine(c.mu_l, c.mu_v, c.psi_v);
+    2.0 * (0.5 * cos.one_minus_mu).sqrt().min(1.0).asin()
+}

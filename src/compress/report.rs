@@ -1,0 +1,127 @@
+//! How well a compressed form reproduces the tables: per order group and for the sum of the
+//! groups of orders ≥ 2, the T-weighted relative RMS error
+//!
+//!   E = √( Σ T (T̂/T − 1)² / Σ T )
+//!
+//! over the cells with T > 0 and relative SE < 30 %, next to the tables' own noise on the same
+//! cells, N = √( Σ T (SE/T)² / Σ T ) (a form that follows the tables to their noise has E ≈ N);
+//! and the worst cells among those holding ≥ 1 % of their slice's largest T.
+
+use super::tables::SlabTables;
+use serde::Serialize;
+
+/// One cell named in a report.
+#[derive(Clone, Debug, Serialize)]
+pub struct WorstCell {
+    /// Group index.
+    pub group: usize,
+    /// Thickness (mfp).
+    pub t: f64,
+    /// Sun cosine.
+    pub mu_l: f64,
+    /// Depth (mfp).
+    pub depth: f64,
+    /// View cosine (bin centre).
+    pub mu_v: f64,
+    /// View azimuth (bin centre, degrees).
+    pub psi_v_deg: f64,
+    /// Table value and its standard error.
+    pub t_table: f64,
+    /// See `t_table`.
+    pub t_se: f64,
+    /// The form's value.
+    pub t_form: f64,
+}
+
+/// The error of one group (or of the sum of groups).
+#[derive(Clone, Debug, Serialize)]
+pub struct GroupError {
+    /// Group index, or None for the sum of the groups of orders ≥ 2.
+    pub group: Option<usize>,
+    /// First order of the group.
+    pub first_order: Option<f64>,
+    /// T-weighted relative RMS error E.
+    pub rel_rms: f64,
+    /// The tables' T-weighted relative RMS noise N on the same cells.
+    pub noise: f64,
+    /// Cells measured.
+    pub cells: usize,
+    /// E per thickness.
+    pub rel_rms_by_t: Vec<f64>,
+    /// The five largest relative errors among cells ≥ 1 % of their slice's maximum.
+    pub worst: Vec<WorstCell>,
+}
+
+/// E and N of `pred` (the form's T over the whole table layout, groups ≥ 1 filled) for group
+/// `group`, or for the sum of groups ≥ 1 when `group` is None.
+pub fn group_error(tab: &SlabTables, pred: &[f64], group: Option<usize>) -> GroupError {
+    let [ng, nt, nl, nd, nm, nk] = tab.shape;
+    let groups: Vec<usize> = match group {
+        Some(g) => vec![g],
+        None => (1..ng).collect(),
+    };
+    let value = |v: &[f64], it: usize, rest: usize| -> f64 {
+        groups
+            .iter()
+            .map(|&g| v[(g * nt + it) * nl * nd * nm * nk + rest])
+            .sum()
+    };
+    let se_of = |it: usize, rest: usize| -> f64 {
+        groups
+            .iter()
+            .map(|&g| tab.t_se[(g * nt + it) * nl * nd * nm * nk + rest].powi(2))
+            .sum::<f64>()
+            .sqrt()
+    };
+    let per_slice = nl * nd * nm * nk;
+    let (mut e, mut n, mut w, mut cells) = (0.0, 0.0, 0.0, 0);
+    let mut by_t = Vec::new();
+    let mut worst: Vec<(f64, WorstCell)> = Vec::new();
+    for it in 0..nt {
+        let (mut et, mut wt) = (0.0, 0.0);
+        let slice_max = (0..per_slice)
+            .map(|r| value(&tab.t, it, r))
+            .fold(0.0, f64::max);
+        for r in 0..per_slice {
+            let (t, se, f) = (value(&tab.t, it, r), se_of(it, r), value(pred, it, r));
+            if !(t > 0.0 && se < 0.3 * t) {
+                continue;
+            }
+            let rel = f / t - 1.0;
+            e += t * rel * rel;
+            n += t * (se / t).powi(2);
+            w += t;
+            et += t * rel * rel;
+            wt += t;
+            cells += 1;
+            if t >= 0.01 * slice_max {
+                let (il, j, m, k) = (r / (nd * nm * nk), r / (nm * nk) % nd, r / nk % nm, r % nk);
+                worst.push((
+                    rel.abs(),
+                    WorstCell {
+                        group: group.unwrap_or(usize::MAX),
+                        t: tab.thickness[it],
+                        mu_l: tab.mu_l[il],
+                        depth: tab.depth[it * nd + j],
+                        mu_v: tab.mu_v(m),
+                        psi_v_deg: tab.psi_v(k).to_degrees(),
+                        t_table: t,
+                        t_se: se,
+                        t_form: f,
+                    },
+                ));
+            }
+        }
+        by_t.push(if wt > 0.0 { (et / wt).sqrt() } else { 0.0 });
+    }
+    worst.sort_by(|a, b| b.0.total_cmp(&a.0));
+    GroupError {
+        group,
+        first_order: group.map(|g| tab.group_first[g]),
+        rel_rms: if w > 0.0 { (e / w).sqrt() } else { 0.0 },
+        noise: if w > 0.0 { (n / w).sqrt() } else { 0.0 },
+        cells,
+        rel_rms_by_t: by_t,
+        worst: worst.into_iter().take(5).map(|(_, c)| c).collect(),
+    }
+}
