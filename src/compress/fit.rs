@@ -25,9 +25,8 @@ pub struct GroupFit {
     /// Cells fitted.
     pub cells: usize,
     /// Per (μ_L, μ_V) pair (index il · nm + m): the range of stretched depth u the fitted cells
-    /// cover. Outside it the form's polynomial terms are held at its ends (the boundary and
-    /// single-scattering factors still vary): no polynomial extrapolation into depths where the
-    /// tables hold no usable value.
+    /// cover. Beyond it the form gives 0 — the group's T there is below what the tables resolve
+    /// (no photon, or a relative SE over 30 %) — rather than extrapolate its polynomials.
     pub u_range: Vec<(f64, f64)>,
 }
 
@@ -86,7 +85,7 @@ pub fn fit_one(tab: &SlabTables, form: &LogAdditive, g: usize, it: usize) -> Res
     for (c, [il, j, k], off) in cells_of(tab, form, it) {
         let i = tab.index(g, it, il, j, c.m, k);
         let (t, se) = (tab.t[i], tab.t_se[i]);
-        if !(t > 0.0 && se < MAX_REL_SE * t) || !form.features(&c, nm, nl, &mut row) {
+        if !(t > 0.0 && se < MAX_REL_SE * t && form.features(&c, nm, nl, &mut row)) {
             continue;
         }
         let r = &mut u_range[c.il * nm + c.m];
@@ -135,12 +134,11 @@ pub fn predict(tab: &SlabTables, form: &LogAdditive, fit: &GroupFit) -> Vec<f64>
     let [_, _, nl, nd, nm, nk] = tab.shape;
     let mut out = vec![0.0; nl * nd * nm * nk];
     let mut row = Vec::new();
-    for (mut c, [il, j, k], off) in cells_of(tab, form, fit.it) {
+    for (c, [il, j, k], off) in cells_of(tab, form, fit.it) {
         let (lo, hi) = fit.u_range[il * nm + c.m];
-        if lo > hi {
-            continue; // no fitted cell for this (μ_L, μ_V): nothing to say
+        if c.u < lo || c.u > hi {
+            continue; // beyond the depths where the tables hold a usable value: 0
         }
-        c.u = c.u.clamp(lo, hi);
         if form.features(&c, nm, nl, &mut row) {
             let s: f64 = row.iter().map(|&(col, v)| v * fit.coef[col]).sum();
             out[((il * nd + j) * nm + c.m) * nk + k] = (off + s).exp();

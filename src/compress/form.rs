@@ -93,7 +93,7 @@ impl LogAdditive {
                 c.mu_v,
                 c.psi_v,
             );
-        if !(f1 > 0.0) {
+        if f1.is_nan() || f1 <= 0.0 {
             return false;
         }
         let x = 2.0 * c.u - 1.0;
