@@ -3,7 +3,7 @@
 //! weight is its precision: noise is not fitted), normal equations with a ridge of 10⁻¹⁰ of
 //! their mean diagonal (the form has exact degeneracies, e.g. a₀(μ_V) + b₀(μ_L)), Cholesky.
 
-use super::form::{Cell, LogAdditive};
+use super::form::{Cell, Lerp, LogAdditive};
 use super::tables::SlabTables;
 use anyhow::{anyhow, Result};
 use nalgebra::{DMatrix, DVector};
@@ -32,7 +32,7 @@ pub struct GroupFit {
 
 /// Every (cell, flat table index) of (group `g`, thickness `it`) the form can represent, with
 /// its offset ln B.
-fn cells_of(tab: &SlabTables, form: &LogAdditive, it: usize) -> Vec<(Cell, [usize; 3], f64)> {
+fn cells_of(tab: &SlabTables, form: &LogAdditive, it: usize) -> Vec<(Cell, [usize; 4], f64)> {
     let [_, _, nl, nd, nm, nk] = tab.shape;
     let mut out = Vec::new();
     for il in 0..nl {
@@ -40,9 +40,9 @@ fn cells_of(tab: &SlabTables, form: &LogAdditive, it: usize) -> Vec<(Cell, [usiz
             for m in 0..nm {
                 for k in 0..nk {
                     let c = Cell {
-                        il,
+                        l: Lerp::at(il),
                         mu_l: tab.mu_l[il],
-                        m,
+                        v: Lerp::at(m),
                         mu_v: tab.mu_v(m),
                         psi_v: tab.psi_v(k),
                         u: j as f64 / (nd - 1) as f64,
@@ -50,7 +50,7 @@ fn cells_of(tab: &SlabTables, form: &LogAdditive, it: usize) -> Vec<(Cell, [usiz
                         t: tab.thickness[it],
                     };
                     if let Some(off) = form.offset(&c) {
-                        out.push((c, [il, j, k], off));
+                        out.push((c, [il, j, m, k], off));
                     }
                 }
             }
@@ -82,13 +82,13 @@ pub fn fit_one(tab: &SlabTables, form: &LogAdditive, g: usize, it: usize) -> Res
             *filled = 0;
         }
     };
-    for (c, [il, j, k], off) in cells_of(tab, form, it) {
-        let i = tab.index(g, it, il, j, c.m, k);
+    for (c, [il, j, m, k], off) in cells_of(tab, form, it) {
+        let i = tab.index(g, it, il, j, m, k);
         let (t, se) = (tab.t[i], tab.t_se[i]);
         if !(t > 0.0 && se < MAX_REL_SE * t && form.features(&c, nm, nl, &mut row)) {
             continue;
         }
-        let r = &mut u_range[c.il * nm + c.m];
+        let r = &mut u_range[il * nm + m];
         *r = (r.0.min(c.u), r.1.max(c.u));
         let w = 1.0 / (se / t).max(MIN_REL_SE);
         for &(col, v) in &row {
@@ -134,14 +134,14 @@ pub fn predict(tab: &SlabTables, form: &LogAdditive, fit: &GroupFit) -> Vec<f64>
     let [_, _, nl, nd, nm, nk] = tab.shape;
     let mut out = vec![0.0; nl * nd * nm * nk];
     let mut row = Vec::new();
-    for (c, [il, j, k], off) in cells_of(tab, form, fit.it) {
-        let (lo, hi) = fit.u_range[il * nm + c.m];
+    for (c, [il, j, m, k], off) in cells_of(tab, form, fit.it) {
+        let (lo, hi) = fit.u_range[il * nm + m];
         if c.u < lo || c.u > hi {
             continue; // beyond the depths where the tables hold a usable value: 0
         }
         if form.features(&c, nm, nl, &mut row) {
             let s: f64 = row.iter().map(|&(col, v)| v * fit.coef[col]).sum();
-            out[((il * nd + j) * nm + c.m) * nk + k] = (off + s).exp();
+            out[((il * nd + j) * nm + m) * nk + k] = (off + s).exp();
         }
     }
     out

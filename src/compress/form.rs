@@ -41,15 +41,66 @@ impl Default for LogAdditive {
     }
 }
 
-/// A cell as the form sees it (bin centres).
+/// A position between two nodes of a parameter grid: weight 1 − w on `lo`, w on `hi`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lerp {
+    /// Lower node.
+    pub lo: usize,
+    /// Upper node.
+    pub hi: usize,
+    /// Weight of the upper node, in [0, 1].
+    pub w: f64,
+}
+
+impl Lerp {
+    /// Exactly on node `i`.
+    pub fn at(i: usize) -> Self {
+        Self {
+            lo: i,
+            hi: i,
+            w: 0.0,
+        }
+    }
+
+    /// `x` between the increasing `nodes` (held at the end nodes outside them).
+    pub fn between(nodes: &[f64], x: f64) -> Self {
+        let n = nodes.len();
+        if n == 1 || x <= nodes[0] {
+            return Self::at(0);
+        }
+        if x >= nodes[n - 1] {
+            return Self::at(n - 1);
+        }
+        let hi = nodes.partition_point(|&v| v <= x).min(n - 1);
+        let lo = hi - 1;
+        Self {
+            lo,
+            hi,
+            w: (x - nodes[lo]) / (nodes[hi] - nodes[lo]),
+        }
+    }
+
+    /// (node, weight) pairs (one when on a node).
+    fn parts(&self) -> impl Iterator<Item = (usize, f64)> + Clone {
+        let two = self.w > 0.0 && self.hi != self.lo;
+        [
+            (self.lo, 1.0 - if two { self.w } else { 0.0 }),
+            (self.hi, self.w),
+        ]
+        .into_iter()
+        .take(if two { 2 } else { 1 })
+    }
+}
+
+/// A cell as the form sees it: the sun and view between the nodes of the parameter grids.
 #[derive(Clone, Copy, Debug)]
 pub struct Cell {
-    /// μ_L index and value.
-    pub il: usize,
+    /// Where μ_L sits among the sun cosines of the tables.
+    pub l: Lerp,
     /// Sun cosine.
     pub mu_l: f64,
-    /// μ_V bin index.
-    pub m: usize,
+    /// Where μ_V sits among the μ_V bin centres.
+    pub v: Lerp,
     /// View cosine (bin centre).
     pub mu_v: f64,
     /// View azimuth (bin centre, radians).
@@ -98,20 +149,27 @@ impl LogAdditive {
         }
         let x = 2.0 * c.u - 1.0;
         let mut col = 0;
+        let (v, l) = (c.v.parts(), c.l.parts());
+        let both = |out: &mut Vec<(usize, f64)>, col: usize, val: f64| {
+            out.extend(v.clone().map(|(m, w)| (col + m, w * val)));
+            out.extend(l.clone().map(|(il, w)| (col + nm + il, w * val)));
+        };
         for p in legendre(x, self.legendre) {
-            out.push((col + c.m, p));
-            out.push((col + nm + c.il, p));
+            both(out, col, p);
             col += nm + nl;
         }
-        let pair = c.m * nl + c.il;
+        let pairs: Vec<(usize, f64)> =
+            c.v.parts()
+                .flat_map(|(m, wm)| c.l.parts().map(move |(il, wl)| (m * nl + il, wm * wl)))
+                .collect();
         if self.pairs {
-            out.push((col + pair, f1.ln()));
+            out.extend(pairs.iter().map(|&(p, w)| (col + p, w * f1.ln())));
             col += nm * nl;
-            out.push((col + 2 * pair, 1.0));
-            out.push((col + 2 * pair + 1, x));
+            out.extend(pairs.iter().map(|&(p, w)| (col + 2 * p, w)));
+            out.extend(pairs.iter().map(|&(p, w)| (col + 2 * p + 1, w * x)));
             col += 2 * nm * nl;
         } else {
-            out.push((col + c.m, f1.ln()));
+            out.extend(v.clone().map(|(m, w)| (col + m, w * f1.ln())));
             col += nm;
         }
         let theta = scattering_angle(c);
@@ -124,9 +182,7 @@ impl LogAdditive {
             .max(0.0)
             .sqrt();
         for k in 1..=self.harmonics {
-            let f = s.powi(k as i32) * (k as f64 * c.psi_v).cos();
-            out.push((col + c.m, f));
-            out.push((col + nm + c.il, f));
+            both(out, col, s.powi(k as i32) * (k as f64 * c.psi_v).cos());
             col += nm + nl;
         }
         true
