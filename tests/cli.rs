@@ -404,6 +404,37 @@ fn slab_quick_config_writes_tables_and_refuses_bad_configs() {
         let r = s["reflected"].as_f64().unwrap() + s["transmitted"].as_f64().unwrap();
         assert!((r - 1.0).abs() < 1e-12, "albedo 1: every photon leaves");
     }
+    // The compressor reads them and reports a finite error per group and for the sum.
+    let comp = dir.path().join("compress");
+    let tables = out.join("tables.npz");
+    succeeds(&[
+        "compress",
+        "--tables",
+        tables.to_str().unwrap(),
+        "--out",
+        comp.to_str().unwrap(),
+        "--legendre",
+        "3",
+        "--theta-nodes",
+        "8",
+    ]);
+    assert_eq!(files_in(&comp), ["compressed.npz", "report.json"]);
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(comp.join("report.json")).unwrap()).unwrap();
+    let errors = report["errors"].as_array().unwrap();
+    assert_eq!(errors.len(), 9, "8 groups of orders ≥ 2 and their sum");
+    assert!(errors
+        .iter()
+        .all(|e| e["rel_rms"].as_f64().unwrap().is_finite()));
+    let missing = nephele(&[
+        "compress",
+        "--tables",
+        "/nonexistent.npz",
+        "--out",
+        comp.to_str().unwrap(),
+    ]);
+    assert!(!missing.status.success());
+    assert!(String::from_utf8_lossy(&missing.stderr).contains("nonexistent"));
     let cases = [
         (r#"{"thicknesses": [4, 1]}"#, "thicknesses"),
         (r#"{"mu_l": [0, 1]}"#, "mu_l"),

@@ -2,8 +2,8 @@
 
 use anyhow::{ensure, Context, Result};
 use clap::Args;
-use nephele::compress::fit::predict;
-use nephele::compress::report::group_error;
+use nephele::compress::fit::{predict, predict_held_out};
+use nephele::compress::report::{group_error, group_error_on, GroupError};
 use nephele::compress::{fit_all, LogAdditive, SlabTables};
 use nephele::io::{write_atomic, Npz};
 use std::path::PathBuf;
@@ -30,6 +30,10 @@ pub struct CompressArgs {
     /// Per-(μ_V, μ_L) γ, offset and depth slope.
     #[arg(long)]
     pub pairs: bool,
+    /// Skip the held-out study (a second fit without two thicknesses and two sun cosines,
+    /// evaluated there by interpolation).
+    #[arg(long)]
+    pub no_held_out: bool,
 }
 
 /// Runs `nephele compress`.
@@ -49,7 +53,7 @@ pub fn run(args: CompressArgs) -> Result<()> {
     let tab = SlabTables::load(&args.tables)?;
     ensure!(tab.shape[0] >= 2, "the tables hold no group of orders ≥ 2");
     let t0 = Instant::now();
-    let fits = fit_all(&tab, &form)?;
+    let fits = fit_all(&tab, &form, &[], &[])?;
     let fit_s = t0.elapsed().as_secs_f64();
     let [ng, nt, nl, nd, nm, nk] = tab.shape;
     let slice = nl * nd * nm * nk;
@@ -60,19 +64,34 @@ pub fn run(args: CompressArgs) -> Result<()> {
     }
     let mut errors: Vec<_> = (1..ng).map(|g| group_error(&tab, &pred, Some(g))).collect();
     errors.push(group_error(&tab, &pred, None));
-    println!("group  orders   E (T-weighted rel RMS)   noise    cells");
-    for e in &errors {
-        let name = e
-            .first_order
-            .map_or("sum ≥ 2".to_string(), |o| format!("{o:>4}+"));
-        println!(
-            "{:>5}  {name:>7}   {:>8.2} %               {:>5.2} %  {:>7}",
-            e.group.map_or("all".into(), |g| g.to_string()),
-            100.0 * e.rel_rms,
-            100.0 * e.noise,
-            e.cells
-        );
-    }
+    print_errors("fitted slices", &errors);
+    let held_out = if args.no_held_out {
+        serde_json::Value::Null
+    } else {
+        // Inner thicknesses and sun cosines at a third and two thirds of their grids.
+        let inner = |n: usize| -> Vec<usize> {
+            let mut v: Vec<usize> = [n / 3, 2 * n / 3]
+                .into_iter()
+                .filter(|&i| i > 0 && i + 1 < n)
+                .collect();
+            v.dedup();
+            v
+        };
+        let (skip_t, skip_l) = (inner(nt), inner(nl));
+        let fits = fit_all(&tab, &form, &skip_t, &skip_l)?;
+        let pred = predict_held_out(&tab, &form, &fits, &skip_l);
+        let held = |it: usize, il: usize| skip_t.contains(&it) || skip_l.contains(&il);
+        let mut errors: Vec<_> = (1..ng)
+            .map(|g| group_error_on(&tab, &pred, Some(g), &held))
+            .collect();
+        errors.push(group_error_on(&tab, &pred, None, &held));
+        print_errors("held-out slices", &errors);
+        serde_json::json!({
+            "thicknesses": skip_t.iter().map(|&i| tab.thickness[i]).collect::<Vec<_>>(),
+            "mu_l": skip_l.iter().map(|&i| tab.mu_l[i]).collect::<Vec<_>>(),
+            "errors": errors,
+        })
+    };
     let params = form.n_params(nm, nl) * fits.len();
     println!(
         "{params} parameters ({:.0} KB as f32), fitted in {fit_s:.1} s",
@@ -86,6 +105,7 @@ pub fn run(args: CompressArgs) -> Result<()> {
         "parameters": params,
         "fit_seconds": fit_s,
         "errors": errors,
+        "held_out": held_out,
         "version": nephele::VERSION,
         "git_commit": option_env!("NEPHELE_GIT_COMMIT"),
     });
@@ -105,4 +125,22 @@ pub fn run(args: CompressArgs) -> Result<()> {
     write_atomic(&args.out.join("compressed.npz"), |w| npz.write_to(w))?;
     println!("wrote {}/report.json, compressed.npz", args.out.display());
     Ok(())
+}
+
+fn print_errors(what: &str, errors: &[GroupError]) {
+    println!("{what}: group  orders   E (T-weighted rel RMS)   noise    cells");
+    for e in errors {
+        let name = e
+            .first_order
+            .map_or("sum ≥ 2".to_string(), |o| format!("{o:>4}+"));
+        let group = e.group.map_or("all".into(), |g| g.to_string());
+        println!(
+            "{:>w$}  {group:>5}  {name:>7}   {:>8.2} %               {:>5.2} %  {:>7}",
+            "",
+            100.0 * e.rel_rms,
+            100.0 * e.noise,
+            e.cells,
+            w = what.len()
+        );
+    }
 }

@@ -59,8 +59,14 @@ fn cells_of(tab: &SlabTables, form: &LogAdditive, it: usize) -> Vec<(Cell, [usiz
     out
 }
 
-/// Fits one (group, thickness).
-pub fn fit_one(tab: &SlabTables, form: &LogAdditive, g: usize, it: usize) -> Result<GroupFit> {
+/// Fits one (group, thickness), leaving out the sun cosines of index in `skip_l` (held out).
+pub fn fit_one(
+    tab: &SlabTables,
+    form: &LogAdditive,
+    g: usize,
+    it: usize,
+    skip_l: &[usize],
+) -> Result<GroupFit> {
     let [_, _, nl, _, nm, _] = tab.shape;
     let np = form.n_params(nm, nl);
     let mut ata = DMatrix::<f64>::zeros(np, np);
@@ -83,6 +89,9 @@ pub fn fit_one(tab: &SlabTables, form: &LogAdditive, g: usize, it: usize) -> Res
         }
     };
     for (c, [il, j, m, k], off) in cells_of(tab, form, it) {
+        if skip_l.contains(&il) {
+            continue;
+        }
         let i = tab.index(g, it, il, j, m, k);
         let (t, se) = (tab.t[i], tab.t_se[i]);
         if !(t > 0.0 && se < MAX_REL_SE * t && form.features(&c, nm, nl, &mut row)) {
@@ -118,33 +127,112 @@ pub fn fit_one(tab: &SlabTables, form: &LogAdditive, g: usize, it: usize) -> Res
     })
 }
 
-/// Fits every group of orders ≥ 2 at every thickness (in parallel).
-pub fn fit_all(tab: &SlabTables, form: &LogAdditive) -> Result<Vec<GroupFit>> {
+/// Fits every group of orders ≥ 2 at every thickness but those of index in `skip_t`, without
+/// the sun cosines of index in `skip_l` (in parallel).
+pub fn fit_all(
+    tab: &SlabTables,
+    form: &LogAdditive,
+    skip_t: &[usize],
+    skip_l: &[usize],
+) -> Result<Vec<GroupFit>> {
     let jobs: Vec<(usize, usize)> = (1..tab.shape[0])
         .flat_map(|g| (0..tab.shape[1]).map(move |it| (g, it)))
+        .filter(|(_, it)| !skip_t.contains(it))
         .collect();
     jobs.par_iter()
-        .map(|&(g, it)| fit_one(tab, form, g, it))
+        .map(|&(g, it)| fit_one(tab, form, g, it, skip_l))
         .collect()
 }
 
 /// The form's T at every cell of (group, thickness) of `fit` (0 where it cannot represent one),
 /// in the tables' layout [μ_L, depth, μ_V, ψ_V].
 pub fn predict(tab: &SlabTables, form: &LogAdditive, fit: &GroupFit) -> Vec<f64> {
+    predict_ln(tab, form, fit, fit.it, &|il| Lerp::at(il))
+        .into_iter()
+        .map(|v| v.map_or(0.0, f64::exp))
+        .collect()
+}
+
+/// ln T of the form with the parameters of `fit`, at the cells of thickness `it_geom` (its
+/// depths, boundary and single-scattering factors), the sun cosine of index il taken at
+/// `l_of(il)` among the parameter nodes; None where the form says 0.
+pub fn predict_ln(
+    tab: &SlabTables,
+    form: &LogAdditive,
+    fit: &GroupFit,
+    it_geom: usize,
+    l_of: &dyn Fn(usize) -> Lerp,
+) -> Vec<Option<f64>> {
     let [_, _, nl, nd, nm, nk] = tab.shape;
-    let mut out = vec![0.0; nl * nd * nm * nk];
+    let mut out = vec![None; nl * nd * nm * nk];
     let mut row = Vec::new();
-    for (c, [il, j, m, k], off) in cells_of(tab, form, fit.it) {
-        let (lo, hi) = fit.u_range[il * nm + m];
-        if c.u < lo || c.u > hi {
-            continue; // beyond the depths where the tables hold a usable value: 0
-        }
-        if form.features(&c, nm, nl, &mut row) {
+    for (mut c, [il, j, m, k], off) in cells_of(tab, form, it_geom) {
+        c.l = l_of(il);
+        // Inside the fitted depth range of every node it draws on.
+        let inside = [c.l.lo, c.l.hi].iter().all(|&l| {
+            let (lo, hi) = fit.u_range[l * nm + m];
+            c.u >= lo && c.u <= hi
+        });
+        if inside && form.features(&c, nm, nl, &mut row) {
             let s: f64 = row.iter().map(|&(col, v)| v * fit.coef[col]).sum();
-            out[((il * nd + j) * nm + m) * nk + k] = (off + s).exp();
+            out[((il * nd + j) * nm + m) * nk + k] = Some(off + s);
         }
     }
     out
+}
+
+/// The form's T over the whole table layout from fits that left out the thicknesses `skip_t`
+/// and the sun cosines `skip_l`: a held-out thickness by interpolating ln T linearly in ln t
+/// between the nearest fitted thicknesses (each evaluated at the held-out geometry), a held-out
+/// sun cosine by interpolating the μ_L parameters between its fitted neighbours.
+pub fn predict_held_out(
+    tab: &SlabTables,
+    form: &LogAdditive,
+    fits: &[GroupFit],
+    skip_l: &[usize],
+) -> Vec<f64> {
+    let [_, nt, nl, nd, nm, nk] = tab.shape;
+    let slice = nl * nd * nm * nk;
+    let mut pred = vec![0.0; tab.t.len()];
+    let kept_l: Vec<usize> = (0..nl).filter(|il| !skip_l.contains(il)).collect();
+    let kept_mu: Vec<f64> = kept_l.iter().map(|&il| tab.mu_l[il]).collect();
+    let l_of = |il: usize| {
+        let p = Lerp::between(&kept_mu, tab.mu_l[il]);
+        Lerp {
+            lo: kept_l[p.lo],
+            hi: kept_l[p.hi],
+            w: p.w,
+        }
+    };
+    for g in 1..tab.shape[0] {
+        let of_t: Vec<Option<&GroupFit>> = (0..nt)
+            .map(|it| fits.iter().find(|f| f.group == g && f.it == it))
+            .collect();
+        let fitted: Vec<usize> = (0..nt).filter(|&it| of_t[it].is_some()).collect();
+        for it in 0..nt {
+            let ln = |fit: &GroupFit| predict_ln(tab, form, fit, it, &l_of);
+            let values: Vec<Option<f64>> = match of_t[it] {
+                Some(f) => ln(f),
+                None => {
+                    let ln_t: Vec<f64> = fitted.iter().map(|&i| tab.thickness[i].ln()).collect();
+                    let p = Lerp::between(&ln_t, tab.thickness[it].ln());
+                    let (a, b) = (
+                        ln(of_t[fitted[p.lo]].unwrap()),
+                        ln(of_t[fitted[p.hi]].unwrap()),
+                    );
+                    a.iter()
+                        .zip(&b)
+                        .map(|(x, y)| Some((1.0 - p.w) * (*x)? + p.w * (*y)?))
+                        .collect()
+                }
+            };
+            let start = (g * nt + it) * slice;
+            for (dst, v) in pred[start..start + slice].iter_mut().zip(values) {
+                *dst = v.map_or(0.0, f64::exp);
+            }
+        }
+    }
+    pred
 }
 
 #[cfg(test)]
@@ -152,17 +240,21 @@ mod tests {
     use super::*;
     use crate::compress::SlabTables;
 
-    /// A table made by the form itself from arbitrary parameters: the fit must give it back
-    /// (its predictions, the parameters being defined up to the form's degeneracies).
-    #[test]
-    fn recovers_a_table_made_by_the_form() {
+    /// Tables of `nt` thicknesses made by the form from the same arbitrary parameters at every
+    /// thickness.
+    fn synthetic(nt: usize) -> (SlabTables, LogAdditive, GroupFit) {
         let (nl, nd, nm, nk) = (3, 6, 8, 4);
-        let depth: Vec<f64> = (0..nd).map(|j| 4.0 * j as f64 / (nd - 1) as f64).collect();
+        let thickness: Vec<f64> = (0..nt).map(|i| 2.0 * 2f64.powi(i as i32)).collect();
+        let depth = thickness
+            .iter()
+            .flat_map(|&t| (0..nd).map(move |j| t * j as f64 / (nd - 1) as f64))
+            .collect();
+        let n = 2 * nt * nl * nd * nm * nk;
         let mut tab = SlabTables {
-            shape: [2, 1, nl, nd, nm, nk],
-            t: vec![0.0; 2 * nl * nd * nm * nk],
-            t_se: vec![0.0; 2 * nl * nd * nm * nk],
-            thickness: vec![4.0],
+            shape: [2, nt, nl, nd, nm, nk],
+            t: vec![0.0; n],
+            t_se: vec![0.0; n],
+            thickness,
             mu_l: vec![0.3, 0.6, 0.9],
             depth,
             mu_v_edges: (0..=nm)
@@ -180,7 +272,7 @@ mod tests {
             pairs: false,
         };
         let np = form.n_params(nm, nl);
-        let truth = GroupFit {
+        let mut truth = GroupFit {
             group: 1,
             it: 0,
             coef: (0..np)
@@ -189,21 +281,49 @@ mod tests {
             cells: 0,
             u_range: vec![(0.0, 1.0); nl * nm],
         };
-        let made = predict(&tab, &form, &truth);
-        let start = tab.index(1, 0, 0, 0, 0, 0);
-        for (i, &v) in made.iter().enumerate() {
-            tab.t[start + i] = v;
-            tab.t_se[start + i] = 0.01 * v;
+        for it in 0..nt {
+            truth.it = it;
+            let start = tab.index(1, it, 0, 0, 0, 0);
+            for (i, v) in predict(&tab, &form, &truth).into_iter().enumerate() {
+                tab.t[start + i] = v;
+                tab.t_se[start + i] = 0.01 * v;
+            }
         }
-        let fit = fit_one(&tab, &form, 1, 0).unwrap();
+        truth.it = 0;
+        (tab, form, truth)
+    }
+
+    fn worst_relative(a: &[f64], b: &[f64]) -> f64 {
+        a.iter()
+            .zip(b)
+            .filter(|(x, _)| **x > 0.0)
+            .map(|(x, y)| (y / x - 1.0).abs())
+            .fold(0.0, f64::max)
+    }
+
+    /// A held-out thickness of tables whose parameters do not change with t comes back exactly
+    /// from its neighbours (the interpolation path and the held-out geometry are right).
+    #[test]
+    fn a_held_out_thickness_of_a_t_independent_form_comes_back() {
+        let (tab, form, _) = synthetic(3);
+        let fits = fit_all(&tab, &form, &[1], &[]).unwrap();
+        assert_eq!(fits.len(), 2);
+        let pred = predict_held_out(&tab, &form, &fits, &[]);
+        let start = tab.index(1, 1, 0, 0, 0, 0);
+        let n = 3 * 6 * 8 * 4;
+        let worst = worst_relative(&tab.t[start..start + n], &pred[start..start + n]);
+        assert!(worst < 1e-6, "worst relative difference {worst}");
+    }
+
+    /// A table made by the form itself from arbitrary parameters: the fit must give it back
+    /// (its predictions, the parameters being defined up to the form's degeneracies).
+    #[test]
+    fn recovers_a_table_made_by_the_form() {
+        let (tab, form, truth) = synthetic(1);
+        let made = predict(&tab, &form, &truth);
+        let fit = fit_one(&tab, &form, 1, 0, &[]).unwrap();
         assert!(fit.cells > 400, "{} cells", fit.cells);
-        let back = predict(&tab, &form, &fit);
-        let worst = made
-            .iter()
-            .zip(&back)
-            .filter(|(a, _)| **a > 0.0)
-            .map(|(a, b)| (b / a - 1.0).abs())
-            .fold(0.0, f64::max);
+        let worst = worst_relative(&made, &predict(&tab, &form, &fit));
         assert!(worst < 1e-6, "worst relative difference {worst}");
     }
 }

@@ -55,6 +55,16 @@ pub struct GroupError {
 /// E and N of `pred` (the form's T over the whole table layout, groups ≥ 1 filled) for group
 /// `group`, or for the sum of groups ≥ 1 when `group` is None.
 pub fn group_error(tab: &SlabTables, pred: &[f64], group: Option<usize>) -> GroupError {
+    group_error_on(tab, pred, group, &|_, _| true)
+}
+
+/// As [`group_error`], on the slices (t index, μ_L index) that `include` accepts only.
+pub fn group_error_on(
+    tab: &SlabTables,
+    pred: &[f64],
+    group: Option<usize>,
+    include: &dyn Fn(usize, usize) -> bool,
+) -> GroupError {
     let [ng, nt, nl, nd, nm, nk] = tab.shape;
     let groups: Vec<usize> = match group {
         Some(g) => vec![g],
@@ -84,7 +94,7 @@ pub fn group_error(tab: &SlabTables, pred: &[f64], group: Option<usize>) -> Grou
             .fold(0.0, f64::max);
         for r in 0..per_slice {
             let (t, se, f) = (value(&tab.t, it, r), se_of(it, r), value(pred, it, r));
-            if !(t > 0.0 && se < 0.3 * t) {
+            if !(t > 0.0 && se < 0.3 * t) || !include(it, r / (nd * nm * nk)) {
                 continue;
             }
             let rel = f / t - 1.0;
