@@ -3,6 +3,7 @@
 use anyhow::{ensure, Context, Result};
 use clap::Args;
 use nephele::compress::fit::{predict, predict_held_out};
+use nephele::compress::joint::fit_all_joint;
 use nephele::compress::report::{group_error, group_error_on, GroupError};
 use nephele::compress::{fit_all, LogAdditive, SlabTables};
 use nephele::io::{write_atomic, Npz};
@@ -30,6 +31,10 @@ pub struct CompressArgs {
     /// Per-(μ_V, μ_L) γ, offset and depth slope.
     #[arg(long)]
     pub pairs: bool,
+    /// Parameters as polynomials of degree Q − 1 in ln t fitted over all thicknesses at once
+    /// (interpolates in t); 0 fits each thickness on its own.
+    #[arg(long, default_value_t = 5)]
+    pub smooth_t: usize,
     /// Skip the held-out study (a second fit without two thicknesses and two sun cosines,
     /// evaluated there by interpolation).
     #[arg(long)]
@@ -39,10 +44,11 @@ pub struct CompressArgs {
 /// Runs `nephele compress`.
 pub fn run(args: CompressArgs) -> Result<()> {
     ensure!(
-        (1..=16).contains(&args.legendre)
+        args.smooth_t <= 9
+            && (1..=16).contains(&args.legendre)
             && args.harmonics <= 8
             && (2..=512).contains(&args.theta_nodes),
-        "--legendre in 1..=16, --harmonics in 0..=8, --theta-nodes in 2..=512"
+        "--smooth-t in 0..=9, --legendre in 1..=16, --harmonics in 0..=8, --theta-nodes in 2..=512"
     );
     let form = LogAdditive {
         legendre: args.legendre,
@@ -53,7 +59,14 @@ pub fn run(args: CompressArgs) -> Result<()> {
     let tab = SlabTables::load(&args.tables)?;
     ensure!(tab.shape[0] >= 2, "the tables hold no group of orders ≥ 2");
     let t0 = Instant::now();
-    let fits = fit_all(&tab, &form, &[], &[])?;
+    let fit = |skip_t: &[usize], skip_l: &[usize]| {
+        if args.smooth_t == 0 {
+            fit_all(&tab, &form, skip_t, skip_l)
+        } else {
+            fit_all_joint(&tab, &form, args.smooth_t, skip_t, skip_l)
+        }
+    };
+    let fits = fit(&[], &[])?;
     let fit_s = t0.elapsed().as_secs_f64();
     let [ng, nt, nl, nd, nm, nk] = tab.shape;
     let slice = nl * nd * nm * nk;
@@ -78,7 +91,7 @@ pub fn run(args: CompressArgs) -> Result<()> {
             v
         };
         let (skip_t, skip_l) = (inner(nt), inner(nl));
-        let fits = fit_all(&tab, &form, &skip_t, &skip_l)?;
+        let fits = fit(&skip_t, &skip_l)?;
         let pred = predict_held_out(&tab, &form, &fits, &skip_l);
         let held = |it: usize, il: usize| skip_t.contains(&it) || skip_l.contains(&il);
         let mut errors: Vec<_> = (1..ng)
@@ -92,7 +105,12 @@ pub fn run(args: CompressArgs) -> Result<()> {
             "errors": errors,
         })
     };
-    let params = form.n_params(nm, nl) * fits.len();
+    let params = form.n_params(nm, nl)
+        * if args.smooth_t == 0 {
+            fits.len()
+        } else {
+            (ng - 1) * args.smooth_t
+        };
     println!(
         "{params} parameters ({:.0} KB as f32), fitted in {fit_s:.1} s",
         params as f64 * 4.0 / 1024.0
@@ -102,6 +120,7 @@ pub fn run(args: CompressArgs) -> Result<()> {
     let report = serde_json::json!({
         "tables": args.tables,
         "form": form,
+        "smooth_t": args.smooth_t,
         "parameters": params,
         "fit_seconds": fit_s,
         "errors": errors,

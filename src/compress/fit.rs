@@ -10,9 +10,9 @@ use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 
 /// Cells noisier than this (relative SE) are left out of the fit.
-const MAX_REL_SE: f64 = 0.3;
+pub(crate) const MAX_REL_SE: f64 = 0.3;
 /// Floor of the relative SE in the weights (MC zero-variance accidents).
-const MIN_REL_SE: f64 = 0.002;
+pub(crate) const MIN_REL_SE: f64 = 0.002;
 
 /// The fit of one (group, thickness).
 pub struct GroupFit {
@@ -32,7 +32,11 @@ pub struct GroupFit {
 
 /// Every (cell, flat table index) of (group `g`, thickness `it`) the form can represent, with
 /// its offset ln B.
-fn cells_of(tab: &SlabTables, form: &LogAdditive, it: usize) -> Vec<(Cell, [usize; 4], f64)> {
+pub(crate) fn cells_of(
+    tab: &SlabTables,
+    form: &LogAdditive,
+    it: usize,
+) -> Vec<(Cell, [usize; 4], f64)> {
     let [_, _, nl, nd, nm, nk] = tab.shape;
     let mut out = Vec::new();
     for il in 0..nl {

@@ -5,6 +5,7 @@
 
 pub mod fit;
 pub mod form;
+pub mod joint;
 pub mod report;
 pub mod tables;
 

@@ -1,0 +1,197 @@
+//! Fits across thicknesses: every parameter θ_p of the form becomes a smooth function of the
+//! slab thickness, θ_p(t) = Σ_{q<Q} β_pq L_q(s), s = 2 (ln t − ln t₀)/(ln t₁ − ln t₀) − 1 over the
+//! tables' range [t₀, t₁] (L_q Legendre polynomials), and the β of one order group are fitted to
+//! all its thicknesses at once — what makes thicknesses between the grid's interpolate (fits per
+//! thickness do not: docs/compress.md). Same weights and ridge as [`super::fit`]; the normal
+//! equations are accumulated from the sparse rows directly.
+
+use super::fit::{cells_of, GroupFit, MAX_REL_SE, MIN_REL_SE};
+use super::form::LogAdditive;
+use super::tables::SlabTables;
+use anyhow::{anyhow, Result};
+use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
+
+/// The fit of one order group over all thicknesses.
+pub struct JointFit {
+    /// Group index (≥ 1).
+    pub group: usize,
+    /// Legendre terms in ln t, Q.
+    pub q: usize,
+    /// β, parameter-major: β[p · Q + q].
+    pub beta: Vec<f64>,
+    /// Per thickness index, the fitted depth range per (μ_L, μ_V) pair (see [`GroupFit`]);
+    /// a held-out thickness takes the intersection of its fitted neighbours'.
+    pub u_range: Vec<Vec<(f64, f64)>>,
+    /// Cells fitted.
+    pub cells: usize,
+    /// ln of the thickness range the fit spans (where the group has enough usable cells);
+    /// outside it the parameters are those of its ends.
+    pub ln_t_range: (f64, f64),
+}
+
+/// s(t) ∈ [−1, 1] over the range (a, b) of ln t (held at ±1 outside), and L_0(s) … L_{Q−1}(s).
+fn legendre_in_ln_t((a, b): (f64, f64), t: f64, q: usize) -> Vec<f64> {
+    let s = if b > a {
+        (2.0 * (t.ln() - a) / (b - a) - 1.0).clamp(-1.0, 1.0)
+    } else {
+        0.0
+    };
+    let mut p: Vec<f64> = Vec::with_capacity(q);
+    for j in 0..q {
+        p.push(match j {
+            0 => 1.0,
+            1 => s,
+            _ => ((2 * j - 1) as f64 * s * p[j - 1] - (j - 1) as f64 * p[j - 2]) / j as f64,
+        });
+    }
+    p
+}
+
+/// Fits group `g` over every thickness not in `skip_t`, without the sun cosines in `skip_l`.
+pub fn fit_joint(
+    tab: &SlabTables,
+    form: &LogAdditive,
+    g: usize,
+    q: usize,
+    skip_t: &[usize],
+    skip_l: &[usize],
+) -> Result<JointFit> {
+    let [_, nt, nl, _, nm, _] = tab.shape;
+    let n = form.n_params(nm, nl) * q;
+    let mut ata = DMatrix::<f64>::zeros(n, n);
+    let mut aty = DVector::<f64>::zeros(n);
+    let (mut row, mut wide) = (Vec::new(), Vec::new());
+    let mut cells = 0;
+    let mut u_range = vec![vec![(f64::INFINITY, f64::NEG_INFINITY); nl * nm]; nt];
+    // Thicknesses where the group is thin on usable cells (a high order in a thin slab) would
+    // make the polynomials in ln t swing: the fit spans those with ≥ 5 % of the largest count.
+    let usable = |it: usize| {
+        let start = tab.index(g, it, 0, 0, 0, 0);
+        let n = tab.t.len() / (tab.shape[0] * nt);
+        (start..start + n)
+            .filter(|&i| tab.t[i] > 0.0 && tab.t_se[i] < MAX_REL_SE * tab.t[i])
+            .count()
+    };
+    let counts: Vec<usize> = (0..nt).map(usable).collect();
+    let most = counts.iter().copied().max().unwrap_or(0);
+    let spanned: Vec<usize> = (0..nt)
+        .filter(|&it| !skip_t.contains(&it) && counts[it] * 20 >= most && most > 0)
+        .collect();
+    let ln_t_range = match (spanned.first(), spanned.last()) {
+        (Some(&a), Some(&b)) => (tab.thickness[a].ln(), tab.thickness[b].ln()),
+        _ => return Err(anyhow!("group {g}: no thickness with usable cells")),
+    };
+    for it in (0..nt).filter(|it| !skip_t.contains(it)) {
+        let lq = legendre_in_ln_t(ln_t_range, tab.thickness[it], q);
+        let in_fit = spanned.contains(&it);
+        for (c, [il, j, m, k], off) in cells_of(tab, form, it) {
+            if skip_l.contains(&il) {
+                continue;
+            }
+            let i = tab.index(g, it, il, j, m, k);
+            let (t, se) = (tab.t[i], tab.t_se[i]);
+            if !(t > 0.0 && se < MAX_REL_SE * t && form.features(&c, nm, nl, &mut row)) {
+                continue;
+            }
+            let r = &mut u_range[it][il * nm + m];
+            *r = (r.0.min(c.u), r.1.max(c.u));
+            if !in_fit {
+                continue;
+            }
+            let w = 1.0 / (se / t).max(MIN_REL_SE);
+            wide.clear();
+            for &(col, v) in &row {
+                wide.extend(
+                    lq.iter()
+                        .enumerate()
+                        .map(|(qi, l)| (col * q + qi, w * v * l)),
+                );
+            }
+            let y = w * (t.ln() - off);
+            // The upper triangle of the outer product of the sparse row.
+            for &(a, va) in &wide {
+                aty[a] += va * y;
+                for &(b, vb) in &wide {
+                    if b >= a {
+                        ata[(a, b)] += va * vb;
+                    }
+                }
+            }
+            cells += 1;
+        }
+    }
+    for a in 0..n {
+        for b in 0..a {
+            ata[(a, b)] = ata[(b, a)];
+        }
+    }
+    let ridge = 1e-10 * (0..n).map(|i| ata[(i, i)]).sum::<f64>() / n as f64;
+    for i in 0..n {
+        ata[(i, i)] += ridge.max(1e-300);
+    }
+    let chol = ata
+        .cholesky()
+        .ok_or_else(|| anyhow!("group {g}: normal equations not positive definite"))?;
+    let beta = chol.solve(&aty).iter().copied().collect();
+    // Held-out thicknesses: the depth ranges both fitted neighbours cover.
+    let fitted: Vec<usize> = (0..nt).filter(|it| !skip_t.contains(it)).collect();
+    for it in skip_t.iter().copied() {
+        let below = fitted.iter().rev().find(|&&f| f < it).or(fitted.first());
+        let above = fitted.iter().find(|&&f| f > it).or(fitted.last());
+        if let (Some(&a), Some(&b)) = (below, above) {
+            u_range[it] = u_range[a]
+                .iter()
+                .zip(&u_range[b])
+                .map(|(x, y)| (x.0.max(y.0), x.1.min(y.1)))
+                .collect();
+        }
+    }
+    Ok(JointFit {
+        group: g,
+        q,
+        beta,
+        u_range,
+        cells,
+        ln_t_range,
+    })
+}
+
+impl JointFit {
+    /// The form's parameters at thickness index `it` (its thickness), as a per-thickness fit.
+    pub fn at(&self, tab: &SlabTables, it: usize) -> GroupFit {
+        let lq = legendre_in_ln_t(self.ln_t_range, tab.thickness[it], self.q);
+        let coef = self
+            .beta
+            .chunks(self.q)
+            .map(|b| b.iter().zip(&lq).map(|(x, l)| x * l).sum())
+            .collect();
+        GroupFit {
+            group: self.group,
+            it,
+            coef,
+            cells: self.cells,
+            u_range: self.u_range[it].clone(),
+        }
+    }
+}
+
+/// Joint fits of every group of orders ≥ 2, as per-thickness fits at every thickness (held-out
+/// ones included), in parallel over groups.
+pub fn fit_all_joint(
+    tab: &SlabTables,
+    form: &LogAdditive,
+    q: usize,
+    skip_t: &[usize],
+    skip_l: &[usize],
+) -> Result<Vec<GroupFit>> {
+    let groups: Vec<usize> = (1..tab.shape[0]).collect();
+    let joint: Vec<JointFit> = groups
+        .par_iter()
+        .map(|&g| fit_joint(tab, form, g, q, skip_t, skip_l))
+        .collect::<Result<_>>()?;
+    Ok(joint
+        .iter()
+        .flat_map(|j| (0..tab.shape[1]).map(move |it| j.at(tab, it)))
+        .collect())
+}
