@@ -240,13 +240,13 @@ pub fn predict_held_out(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::compress::SlabTables;
 
     /// Tables of `nt` thicknesses made by the form from the same arbitrary parameters at every
     /// thickness.
-    fn synthetic(nt: usize) -> (SlabTables, LogAdditive, GroupFit) {
+    pub(crate) fn synthetic(nt: usize) -> (SlabTables, LogAdditive, GroupFit) {
         let (nl, nd, nm, nk) = (3, 6, 8, 4);
         let thickness: Vec<f64> = (0..nt).map(|i| 2.0 * 2f64.powi(i as i32)).collect();
         let depth = thickness
@@ -297,7 +297,7 @@ mod tests {
         (tab, form, truth)
     }
 
-    fn worst_relative(a: &[f64], b: &[f64]) -> f64 {
+    pub(crate) fn worst_relative(a: &[f64], b: &[f64]) -> f64 {
         a.iter()
             .zip(b)
             .filter(|(x, _)| **x > 0.0)

@@ -17,6 +17,9 @@ use nephele_runtime::transport::{scattering_cosine, single_scattering};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
+/// Floor of ln F₁ as a feature (see [`LogAdditive::features`]).
+pub const LN_F1_FLOOR: f64 = -10.0;
+
 /// The form's sizes.
 #[derive(Clone, Copy, Debug, Serialize, Deserialize)]
 pub struct LogAdditive {
@@ -147,6 +150,10 @@ impl LogAdditive {
         if f1.is_nan() || f1 <= 0.0 {
             return false;
         }
+        // Deep in a thick slab F₁ falls like e^{−d/μ_L} (e^{−500} at t = 128, μ_L = 1/4) while
+        // the multiply scattered T does not: held at LN_F1_FLOOR, ln F₁ cannot lever the fit
+        // there (nor blow up between thicknesses).
+        let ln_f1 = f1.ln().max(LN_F1_FLOOR);
         let x = 2.0 * c.u - 1.0;
         let mut col = 0;
         let (v, l) = (c.v.parts(), c.l.parts());
@@ -163,13 +170,13 @@ impl LogAdditive {
                 .flat_map(|(m, wm)| c.l.parts().map(move |(il, wl)| (m * nl + il, wm * wl)))
                 .collect();
         if self.pairs {
-            out.extend(pairs.iter().map(|&(p, w)| (col + p, w * f1.ln())));
+            out.extend(pairs.iter().map(|&(p, w)| (col + p, w * ln_f1)));
             col += nm * nl;
             out.extend(pairs.iter().map(|&(p, w)| (col + 2 * p, w)));
             out.extend(pairs.iter().map(|&(p, w)| (col + 2 * p + 1, w * x)));
             col += 2 * nm * nl;
         } else {
-            out.extend(v.clone().map(|(m, w)| (col + m, w * f1.ln())));
+            out.extend(v.clone().map(|(m, w)| (col + m, w * ln_f1)));
             col += nm;
         }
         let theta = scattering_angle(c);

@@ -195,3 +195,24 @@ pub fn fit_all_joint(
         .flat_map(|j| (0..tab.shape[1]).map(move |it| j.at(tab, it)))
         .collect())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::compress::fit::predict_held_out;
+    use crate::compress::fit::tests::{synthetic, worst_relative};
+
+    /// Tables made by the form with parameters that do not depend on t: the joint fit gives
+    /// them back at every thickness, the held-out one included.
+    #[test]
+    fn joint_fit_recovers_t_independent_tables_and_a_held_out_thickness() {
+        let (tab, form, _) = synthetic(4);
+        let fits = fit_all_joint(&tab, &form, 2, &[2], &[]).unwrap();
+        assert_eq!(fits.len(), 4);
+        let pred = predict_held_out(&tab, &form, &fits, &[]);
+        let start = tab.index(1, 0, 0, 0, 0, 0);
+        let end = tab.index(1, 3, 2, 5, 7, 3) + 1;
+        let worst = worst_relative(&tab.t[start..end], &pred[start..end]);
+        assert!(worst < 1e-6, "worst relative difference {worst}");
+    }
+}
