@@ -119,7 +119,7 @@ pub fn run(args: CompressArgs) -> Result<()> {
         .with_context(|| format!("cannot create '{}'", args.out.display()))?;
     let report = serde_json::json!({
         "tables": args.tables,
-        "form": form,
+        "form": nephele::compress::form::to_json(&form),
         "smooth_t": args.smooth_t,
         "parameters": params,
         "fit_seconds": fit_s,

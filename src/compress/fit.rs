@@ -3,7 +3,7 @@
 //! weight is its precision: noise is not fitted), normal equations with a ridge of 10⁻¹⁰ of
 //! their mean diagonal (the form has exact degeneracies, e.g. a₀(μ_V) + b₀(μ_L)), Cholesky.
 
-use super::form::{Cell, Lerp, LogAdditive};
+use super::form::{features, Cell, Lerp, LogAdditive};
 use super::tables::SlabTables;
 use anyhow::{anyhow, Result};
 use nalgebra::{DMatrix, DVector};
@@ -53,7 +53,7 @@ pub(crate) fn cells_of(
                         d: tab.depth[it * nd + j],
                         t: tab.thickness[it],
                     };
-                    if let Some(off) = form.offset(&c) {
+                    if let Some(off) = form.ln_boundary(&c) {
                         out.push((c, [il, j, m, k], off));
                     }
                 }
@@ -98,7 +98,7 @@ pub fn fit_one(
         }
         let i = tab.index(g, it, il, j, m, k);
         let (t, se) = (tab.t[i], tab.t_se[i]);
-        if !(t > 0.0 && se < MAX_REL_SE * t && form.features(&c, nm, nl, &mut row)) {
+        if !(t > 0.0 && se < MAX_REL_SE * t && features(form, &c, nm, nl, &mut row)) {
             continue;
         }
         let r = &mut u_range[il * nm + m];
@@ -177,7 +177,7 @@ pub fn predict_ln(
             let (lo, hi) = fit.u_range[l * nm + m];
             c.u >= lo && c.u <= hi
         });
-        if inside && form.features(&c, nm, nl, &mut row) {
+        if inside && features(form, &c, nm, nl, &mut row) {
             let s: f64 = row.iter().map(|&(col, v)| v * fit.coef[col]).sum();
             out[((il * nd + j) * nm + m) * nk + k] = Some(off + s);
         }

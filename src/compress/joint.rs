@@ -6,7 +6,7 @@
 //! equations are accumulated from the sparse rows directly.
 
 use super::fit::{cells_of, GroupFit, MAX_REL_SE, MIN_REL_SE};
-use super::form::LogAdditive;
+use super::form::{features, LogAdditive};
 use super::tables::SlabTables;
 use anyhow::{anyhow, Result};
 use nalgebra::{DMatrix, DVector};
@@ -91,7 +91,7 @@ pub fn fit_joint(
             }
             let i = tab.index(g, it, il, j, m, k);
             let (t, se) = (tab.t[i], tab.t_se[i]);
-            if !(t > 0.0 && se < MAX_REL_SE * t && form.features(&c, nm, nl, &mut row)) {
+            if !(t > 0.0 && se < MAX_REL_SE * t && features(form, &c, nm, nl, &mut row)) {
                 continue;
             }
             let r = &mut u_range[it][il * nm + m];

@@ -128,7 +128,7 @@ pub fn scattering_cosine<F: Real>(mu_l: F, mu_v: F, psi_v: F) -> Cosine<F> {
 }
 
 /// eˣ − 1 without the cancellation of small x (a series below |x| = 0.01, truncation < 3e-17).
-fn exp_m1<F: Real>(x: F) -> F {
+pub(crate) fn exp_m1<F: Real>(x: F) -> F {
     if x.abs() < F::of(0.01) {
         let one = F::of(1.0);
         x * (one

@@ -1,0 +1,323 @@
+//! The log-additive form of spec 50 (its prototype's best, "the one to beat"): per order group,
+//! the transport T of orders ≥ 2 as
+//!
+//!   ln T = ln B + Σ_j [a_j(μ_V) + b_j(μ_L)] P_j(2u − 1) + γ(μ_V) max(ln F₁, −10)
+//!          + Σ_i h_i(Θ) [P0_i + P1_i (2u − 1)] + Σ_k [p_k(μ_V) + q_k(μ_L)] (s_V s_L)^k cos kψ_V,
+//!
+//! u the stretched depth in [0, 1] (the plane index over planes − 1 on the slab grid), B the
+//! boundary factor (the share of optical path behind the viewpoint: 1 − e^{−(t−d)/μ_V} for light
+//! going up, 1 − e^{−d/|μ_V|} going down), F₁ the single-scattering depth factor (T₁ of
+//! [`super::single`] without its phase function), held at e⁻¹⁰ (deep in thick slabs it falls
+//! like e^{−d/μ_L} while multiple scattering does not), h_i the hat functions of the nodes
+//! Θ_i = π (i/(n − 1))² (dense at the forward peak), s = sin of the polar angles. With `pairs`,
+//! γ becomes γ(μ_V, μ_L) and an offset and a depth slope per (μ_V, μ_L) pair are added.
+//!
+//! Linear in its parameters; parameters indexed by μ_V or μ_L are read between their grid nodes
+//! with [`Lerp`] weights. The toolchain fits it (`nephele compress`) with these very features.
+
+use super::single::{exp_m1, scattering_cosine, single_scattering};
+use crate::phase::HenyeyGreenstein;
+use crate::real::Real;
+
+/// Most Legendre terms in depth.
+pub const MAX_LEGENDRE: usize = 16;
+/// Floor of ln F₁ as a feature.
+pub const LN_F1_FLOOR: f64 = -10.0;
+
+/// The form's sizes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LogAdditive {
+    /// Legendre terms in depth, J (≤ [`MAX_LEGENDRE`]).
+    pub legendre: usize,
+    /// Azimuth harmonics, K.
+    pub harmonics: usize,
+    /// Θ nodes (≥ 2).
+    pub theta_nodes: usize,
+    /// Per-(μ_V, μ_L) γ, offset and depth slope.
+    pub pairs: bool,
+}
+
+impl Default for LogAdditive {
+    fn default() -> Self {
+        Self {
+            legendre: 6,
+            harmonics: 3,
+            theta_nodes: 24,
+            pairs: false,
+        }
+    }
+}
+
+/// A position between two nodes of a parameter grid: weight 1 − w on `lo`, w on `hi`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lerp<F> {
+    /// Lower node.
+    pub lo: usize,
+    /// Upper node.
+    pub hi: usize,
+    /// Weight of the upper node, in [0, 1].
+    pub w: F,
+}
+
+impl<F: Real> Lerp<F> {
+    /// Exactly on node `i`.
+    pub fn at(i: usize) -> Self {
+        Self {
+            lo: i,
+            hi: i,
+            w: F::of(0.0),
+        }
+    }
+
+    /// `x` between the increasing `nodes` (held at the end nodes outside them; node 0 if empty).
+    pub fn between(nodes: &[F], x: F) -> Self {
+        let n = nodes.len();
+        if n <= 1 || !(x > nodes[0]) {
+            return Self::at(0);
+        }
+        if x >= nodes[n - 1] {
+            return Self::at(n - 1);
+        }
+        let hi = nodes.partition_point(|&v| v <= x).clamp(1, n - 1);
+        let lo = hi - 1;
+        Self {
+            lo,
+            hi,
+            w: (x - nodes[lo]) / (nodes[hi] - nodes[lo]),
+        }
+    }
+
+    /// Calls `f(node, weight)` for its one or two nodes.
+    fn each(&self, mut f: impl FnMut(usize, F)) {
+        if self.hi != self.lo && self.w > F::of(0.0) {
+            f(self.lo, F::of(1.0) - self.w);
+            f(self.hi, self.w);
+        } else {
+            f(self.lo, F::of(1.0));
+        }
+    }
+}
+
+/// Where the form is evaluated.
+#[derive(Clone, Copy, Debug)]
+pub struct Cell<F> {
+    /// μ_L among the parameter nodes of the sun cosines.
+    pub l: Lerp<F>,
+    /// Sun cosine.
+    pub mu_l: F,
+    /// μ_V among the parameter nodes of the view cosines.
+    pub v: Lerp<F>,
+    /// View cosine.
+    pub mu_v: F,
+    /// View azimuth from the sun's horizontal travel (radians).
+    pub psi_v: F,
+    /// Stretched depth in [0, 1].
+    pub u: F,
+    /// Depth (mfp).
+    pub d: F,
+    /// Slab thickness (mfp).
+    pub t: F,
+}
+
+impl LogAdditive {
+    /// Parameters for `nm` view-cosine and `nl` sun-cosine nodes.
+    pub fn n_params(&self, nm: usize, nl: usize) -> usize {
+        let gamma = if self.pairs { nm * nl } else { nm };
+        let pairs = if self.pairs { 2 * nm * nl } else { 0 };
+        self.legendre * (nm + nl)
+            + gamma
+            + pairs
+            + 2 * self.theta_nodes
+            + self.harmonics * (nm + nl)
+    }
+
+    /// ln B at `c`, or None where the form says T = 0 (no medium behind the viewpoint).
+    pub fn ln_boundary<F: Real>(&self, c: &Cell<F>) -> Option<F> {
+        let path = if c.mu_v > F::of(0.0) { c.t - c.d } else { c.d };
+        let b = -exp_m1(-path / c.mu_v.abs());
+        (b > F::of(0.0)).then(|| b.ln())
+    }
+
+    /// Calls `f(column, value)` for every feature of `c` that is not zero by construction;
+    /// false (and no call) where F₁ = 0 and the form cannot represent the cell.
+    pub fn for_each_feature<F: Real>(
+        &self,
+        c: &Cell<F>,
+        nm: usize,
+        nl: usize,
+        mut f: impl FnMut(usize, F),
+    ) -> bool {
+        let four_pi = F::of(4.0 * core::f64::consts::PI);
+        let hg0 = HenyeyGreenstein::new(F::of(0.0));
+        let f1 = four_pi * single_scattering(&hg0, F::of(1.0), c.mu_l, c.t, c.d, c.mu_v, c.psi_v);
+        if !(f1 > F::of(0.0)) {
+            return false;
+        }
+        let ln_f1 = {
+            let l = f1.ln();
+            if l < F::of(LN_F1_FLOOR) {
+                F::of(LN_F1_FLOOR)
+            } else {
+                l
+            }
+        };
+        let x = F::of(2.0) * c.u - F::of(1.0);
+        let mut col = 0;
+        let both = |f: &mut dyn FnMut(usize, F), col: usize, val: F| {
+            c.v.each(|m, w| f(col + m, w * val));
+            c.l.each(|il, w| f(col + nm + il, w * val));
+        };
+        let (mut p0, mut p1) = (F::of(1.0), x);
+        for j in 0..self.legendre.min(MAX_LEGENDRE) {
+            let p = match j {
+                0 => F::of(1.0),
+                1 => x,
+                _ => {
+                    // P_j = ((2j − 1) x P_{j−1} − (j − 1) P_{j−2}) / j.
+                    let next = (F::of((2 * j - 1) as f64) * x * p1 - F::of((j - 1) as f64) * p0)
+                        / F::of(j as f64);
+                    (p0, p1) = (p1, next);
+                    next
+                }
+            };
+            both(&mut f, col, p);
+            col += nm + nl;
+        }
+        if self.pairs {
+            let each_pair = |g: &mut dyn FnMut(usize, F)| {
+                c.v.each(|m, wm| c.l.each(|il, wl| g(m * nl + il, wm * wl)));
+            };
+            each_pair(&mut |p, w| f(col + p, w * ln_f1));
+            col += nm * nl;
+            each_pair(&mut |p, w| {
+                f(col + 2 * p, w);
+                f(col + 2 * p + 1, w * x);
+            });
+            col += 2 * nm * nl;
+        } else {
+            c.v.each(|m, w| f(col + m, w * ln_f1));
+            col += nm;
+        }
+        let (i, w) = self.theta_hat(c);
+        for (node, h) in [(i - 1, F::of(1.0) - w), (i, w)] {
+            f(col + 2 * node, h);
+            f(col + 2 * node + 1, h * x);
+        }
+        col += 2 * self.theta_nodes;
+        let one = F::of(1.0);
+        let s = ((one - c.mu_v * c.mu_v) * (one - c.mu_l * c.mu_l))
+            .clamp_to(F::of(0.0), one)
+            .sqrt();
+        let mut s_k = one;
+        for k in 1..=self.harmonics {
+            s_k = s_k * s;
+            let (_, cos_k) = (F::of(k as f64) * c.psi_v).sin_cos();
+            both(&mut f, col, s_k * cos_k);
+            col += nm + nl;
+        }
+        true
+    }
+
+    /// ln T at `c` with parameters `coef(column)`, or None where the form says T = 0.
+    pub fn ln_t<F: Real>(
+        &self,
+        c: &Cell<F>,
+        nm: usize,
+        nl: usize,
+        coef: impl Fn(usize) -> F,
+    ) -> Option<F> {
+        let offset = self.ln_boundary(c)?;
+        let mut sum = offset;
+        self.for_each_feature(c, nm, nl, |col, v| sum = sum + v * coef(col))
+            .then_some(sum)
+    }
+
+    /// (i, w): Θ of `c` lies between nodes i − 1 and i, at weight w on node i.
+    fn theta_hat<F: Real>(&self, c: &Cell<F>) -> (usize, F) {
+        let cos = scattering_cosine(c.mu_l, c.mu_v, c.psi_v);
+        let half = (F::of(0.5) * cos.one_minus_mu).sqrt();
+        let theta = F::of(2.0) * (if half > F::of(1.0) { F::of(1.0) } else { half }).asin();
+        let n = self.theta_nodes.max(2);
+        let node = |i: usize| {
+            let r = i as f64 / (n - 1) as f64;
+            F::of(core::f64::consts::PI * r * r)
+        };
+        let mut i = 1;
+        while i < n - 1 && node(i) < theta {
+            i += 1;
+        }
+        let (a, b) = (node(i - 1), node(i));
+        (i, ((theta - a) / (b - a)).clamp_to(F::of(0.0), F::of(1.0)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cell<F: Real>(mu_l: f64, mu_v: f64, psi: f64, u: f64, t: f64) -> Cell<F> {
+        let lnodes = [0.25, 0.5, 0.75, 1.0].map(F::of);
+        let vnodes = [-0.75, -0.25, 0.25, 0.75].map(F::of);
+        Cell {
+            l: Lerp::between(&lnodes, F::of(mu_l)),
+            mu_l: F::of(mu_l),
+            v: Lerp::between(&vnodes, F::of(mu_v)),
+            mu_v: F::of(mu_v),
+            psi_v: F::of(psi),
+            u: F::of(u),
+            d: F::of(u * t),
+            t: F::of(t),
+        }
+    }
+
+    #[test]
+    fn f32_follows_f64_and_lerp_finds_its_nodes() {
+        for pairs in [false, true] {
+            let form = LogAdditive {
+                pairs,
+                ..LogAdditive::default()
+            };
+            let n = form.n_params(4, 4);
+            let coef = |i: usize| 0.2 * ((i * 7919 % 103) as f64 / 103.0 - 0.5);
+            let mut worst = 0.0f64;
+            for &(mu_l, mu_v, psi, u, t) in &[
+                (0.3, 0.6, 0.2, 0.3, 4.0),
+                (0.8, -0.4, 2.5, 0.7, 16.0),
+                (1.0, -0.9, 0.0, 0.95, 1.0),
+                (0.55, 0.1, 1.3, 0.1, 64.0),
+            ] {
+                let a = form
+                    .ln_t(&cell::<f64>(mu_l, mu_v, psi, u, t), 4, 4, coef)
+                    .unwrap();
+                let b = form
+                    .ln_t(&cell::<f32>(mu_l, mu_v, psi, u, t), 4, 4, |i| {
+                        coef(i) as f32
+                    })
+                    .unwrap();
+                worst = worst.max((b as f64 - a).abs());
+                let mut cols = 0;
+                form.for_each_feature(&cell::<f64>(mu_l, mu_v, psi, u, t), 4, 4, |c, _| {
+                    assert!(c < n);
+                    cols += 1;
+                });
+                assert!(cols > 0);
+            }
+            assert!(worst < 2e-5, "pairs {pairs}: |Δ ln T| {worst}");
+        }
+        let l = Lerp::between(&[0.0, 1.0, 3.0], 2.0);
+        assert_eq!((l.lo, l.hi), (1, 2));
+        assert!((l.w - 0.5f64).abs() < 1e-15);
+        assert_eq!(Lerp::between(&[0.0, 1.0], 5.0), Lerp::at(1));
+        assert_eq!(Lerp::between(&[0.0, 1.0], -5.0), Lerp::at(0));
+    }
+
+    #[test]
+    fn no_medium_behind_the_viewpoint_is_zero() {
+        let form = LogAdditive::default();
+        // Light going up at the far face, going down at the lit face.
+        let mut c = cell::<f64>(0.5, 0.5, 0.0, 1.0, 4.0);
+        assert!(form.ln_t(&c, 4, 4, |_| 0.0).is_none());
+        c = cell::<f64>(0.5, -0.5, 0.0, 0.0, 4.0);
+        assert!(form.ln_t(&c, 4, 4, |_| 0.0).is_none());
+    }
+}
