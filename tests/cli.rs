@@ -418,7 +418,10 @@ fn slab_quick_config_writes_tables_and_refuses_bad_configs() {
         "--theta-nodes",
         "8",
     ]);
-    assert_eq!(files_in(&comp), ["compressed.npz", "report.json"]);
+    assert_eq!(
+        files_in(&comp),
+        ["compressed.npz", "report.json", "transport.ntt"]
+    );
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(comp.join("report.json")).unwrap()).unwrap();
     let errors = report["errors"].as_array().unwrap();
@@ -435,6 +438,7 @@ fn slab_quick_config_writes_tables_and_refuses_bad_configs() {
     ]);
     assert!(!missing.status.success());
     assert!(String::from_utf8_lossy(&missing.stderr).contains("nonexistent"));
+    transport_tables_answer_and_refuse(&comp.join("transport.ntt"));
     let cases = [
         (r#"{"thicknesses": [4, 1]}"#, "thicknesses"),
         (r#"{"mu_l": [0, 1]}"#, "mu_l"),
@@ -604,4 +608,65 @@ fn a_killed_slab_run_resumes_to_the_same_bits() {
     let a = std::fs::read(whole.join("tables.npz")).unwrap();
     let b = std::fs::read(resumed.join("tables.npz")).unwrap();
     assert!(a == b, "the resumed run differs from the uninterrupted one");
+}
+
+/// `nephele transport` on the quick tables' transport.ntt: JSON with a finite T per group and
+/// order 1; bad points and damaged files are errors. The runtime loader, fed truncations and
+/// thousands of bit flips of the same file, errs and never panics.
+fn transport_tables_answer_and_refuse(ntt: &Path) {
+    use nephele_runtime::transport::tables::TransportTables;
+    let path = ntt.to_str().unwrap();
+    let point = [
+        "--t", "2", "--mu-l", "0.5", "--depth", "0.7", "--mu-v", "-0.6", "--psi", "20",
+    ];
+    let o = nephele(&[&["transport", "--tables", path][..], &point[..]].concat());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let groups = v["groups"].as_array().unwrap();
+    assert_eq!(groups.len(), 8);
+    assert!(groups.iter().all(|g| g["T"].as_f64().unwrap() >= 0.0));
+    assert!(v["order1"].as_f64().unwrap() > 0.0);
+    let bad = nephele(&[
+        "transport",
+        "--tables",
+        path,
+        "--t",
+        "2",
+        "--mu-l",
+        "0.5",
+        "--depth",
+        "3",
+        "--mu-v",
+        "0.5",
+        "--psi",
+        "0",
+    ]);
+    assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("--depth"));
+    let bytes = std::fs::read(ntt).unwrap();
+    assert!(TransportTables::from_bytes(&bytes).is_ok());
+    let mut damaged = bytes.clone();
+    damaged[bytes.len() / 2] ^= 0x10;
+    let broken = ntt.with_file_name("broken.ntt");
+    std::fs::write(&broken, &damaged).unwrap();
+    let o = nephele(
+        &[
+            &["transport", "--tables", broken.to_str().unwrap()][..],
+            &point[..],
+        ]
+        .concat(),
+    );
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("checksum"));
+    for cut in (0..bytes.len()).step_by(97) {
+        assert!(TransportTables::from_bytes(&bytes[..cut]).is_err());
+    }
+    let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
+    for _ in 0..3000 {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        let bit = (x % (8 * bytes.len() as u64)) as usize;
+        let mut b = bytes.clone();
+        b[bit / 8] ^= 1 << (bit % 8);
+        assert!(TransportTables::from_bytes(&b).is_err());
+    }
 }

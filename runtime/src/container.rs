@@ -48,6 +48,10 @@ pub enum FormatError {
     BadEntry(usize),
     /// Two arrays of the same name (the second's index).
     DuplicateName(usize),
+    /// An array a reader needs is not there.
+    Missing(&'static str),
+    /// An array has the wrong shape or impossible values for its reader.
+    BadArray(&'static str),
 }
 
 impl core::fmt::Display for FormatError {
@@ -66,6 +70,8 @@ impl core::fmt::Display for FormatError {
             FormatError::DuplicateName(i) => {
                 write!(f, "transport tables: array {i} repeats a name")
             }
+            FormatError::Missing(name) => write!(f, "transport tables: no array '{name}'"),
+            FormatError::BadArray(name) => write!(f, "transport tables: bad array '{name}'"),
         }
     }
 }

@@ -3,10 +3,14 @@
 use anyhow::{ensure, Context, Result};
 use clap::Args;
 use nephele::compress::fit::{predict, predict_held_out};
-use nephele::compress::joint::fit_all_joint;
+use nephele::compress::joint::{fit_all_joint, fit_joint_groups, JointFit};
 use nephele::compress::report::{group_error, group_error_on, GroupError};
+use nephele::compress::ship::{ntt_bytes, phase_angles};
 use nephele::compress::{fit_all, LogAdditive, SlabTables};
 use nephele::io::{write_atomic, Npz};
+use nephele::slab::tables::PhaseModel;
+use nephele::slab::PhaseSpec;
+use nephele_runtime::transport::tables::TransportTables;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -66,7 +70,17 @@ pub fn run(args: CompressArgs) -> Result<()> {
             fit_all_joint(&tab, &form, args.smooth_t, skip_t, skip_l)
         }
     };
-    let fits = fit(&[], &[])?;
+    let (fits, joint) = if args.smooth_t == 0 {
+        (fit_all(&tab, &form, &[], &[])?, Vec::new())
+    } else {
+        let joint = fit_joint_groups(&tab, &form, args.smooth_t, &[], &[])?;
+        let tab = &tab;
+        let fits = joint
+            .iter()
+            .flat_map(|j| (0..tab.shape[1]).map(move |it| j.at(tab, it)))
+            .collect();
+        (fits, joint)
+    };
     let fit_s = t0.elapsed().as_secs_f64();
     let [ng, nt, nl, nd, nm, nk] = tab.shape;
     let slice = nl * nd * nm * nk;
@@ -143,6 +157,77 @@ pub fn run(args: CompressArgs) -> Result<()> {
     }
     write_atomic(&args.out.join("compressed.npz"), |w| npz.write_to(w))?;
     println!("wrote {}/report.json, compressed.npz", args.out.display());
+    if !joint.is_empty() {
+        write_ntt(&args, &tab, &form, &joint, &pred)?;
+    }
+    Ok(())
+}
+
+/// transport.ntt for renderers (joint fits only), checked by loading it back with the runtime:
+/// its f32 evaluation against the fitted form (f64) on every cell the form represents.
+fn write_ntt(
+    args: &CompressArgs,
+    tab: &SlabTables,
+    form: &LogAdditive,
+    joint: &[JointFit],
+    pred: &[f64],
+) -> Result<()> {
+    let json = args.tables.with_extension("json");
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).with_context(|| {
+            format!(
+                "the phase function for order 1 comes from '{}'",
+                json.display()
+            )
+        })?)
+        .with_context(|| format!("'{}' is not JSON", json.display()))?;
+    let spec: PhaseSpec = serde_json::from_value(doc["config"]["phase"].clone())
+        .with_context(|| format!("'{}': no config.phase", json.display()))?;
+    let model = PhaseModel::build(&spec)?;
+    let phase: Vec<f64> = phase_angles()
+        .iter()
+        .map(|deg| model.with(|p| p.eval(deg.to_radians().cos())))
+        .collect();
+    let bytes = ntt_bytes(tab, form, args.smooth_t, joint, &phase)?;
+    let rt = TransportTables::from_bytes(&bytes).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let [_, nt, nl, nd, nm, nk] = tab.shape;
+    let mut worst = 0.0f64;
+    for (gi, f) in joint.iter().enumerate() {
+        for it in 0..nt {
+            for il in 0..nl {
+                for j in 0..nd {
+                    for m in 0..nm {
+                        for k in 0..nk {
+                            let want = pred[tab.index(f.group, it, il, j, m, k)];
+                            let (d, t) = (tab.depth[it * nd + j], tab.thickness[it]);
+                            let got = rt.transport(
+                                gi,
+                                d as f32,
+                                t as f32,
+                                tab.mu_v(m) as f32,
+                                tab.psi_v(k) as f32,
+                                tab.mu_l[il] as f32,
+                            ) as f64;
+                            if want > 0.0 && got > 0.0 {
+                                worst = worst.max((got / want - 1.0).abs());
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let path = args.out.join("transport.ntt");
+    nephele::io::write_atomic(&path, |w| {
+        std::io::Write::write_all(w, &bytes)?;
+        Ok(())
+    })?;
+    println!(
+        "wrote {} ({:.0} KB); the runtime's f32 evaluation within {:.1e} of the fitted form",
+        path.display(),
+        bytes.len() as f64 / 1024.0,
+        worst
+    );
     Ok(())
 }
 

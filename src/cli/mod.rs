@@ -8,6 +8,7 @@ mod mie;
 mod phase;
 mod slab;
 mod sphere;
+mod transport;
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
@@ -33,6 +34,8 @@ enum Command {
     Slab(slab::SlabArgs),
     /// Fit the compressed form (spec 50) to a slab run's tables and report its error per group.
     Compress(compress::CompressArgs),
+    /// Evaluate compressed transport tables (transport.ntt) at one point: T per order group, as JSON.
+    Transport(transport::TransportArgs),
     /// Merge the shards of a slab run (`nephele slab --shard K/N`) into its tables.
     Merge(slab::MergeArgs),
     /// Tabulate and sample a phase model of nephele-runtime (or a Mie table); renderer LUTs.
@@ -57,6 +60,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Slab(args)) => slab::run(args),
         Some(Command::Merge(args)) => slab::merge_shards(args),
         Some(Command::Compress(args)) => compress::run(args),
+        Some(Command::Transport(args)) => transport::run(args),
         None => fit::run_main_job(),
     }
 }

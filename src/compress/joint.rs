@@ -176,8 +176,23 @@ impl JointFit {
     }
 }
 
+/// Joint fits of every group of orders ≥ 2, in parallel over groups.
+pub fn fit_joint_groups(
+    tab: &SlabTables,
+    form: &LogAdditive,
+    q: usize,
+    skip_t: &[usize],
+    skip_l: &[usize],
+) -> Result<Vec<JointFit>> {
+    let groups: Vec<usize> = (1..tab.shape[0]).collect();
+    groups
+        .par_iter()
+        .map(|&g| fit_joint(tab, form, g, q, skip_t, skip_l))
+        .collect()
+}
+
 /// Joint fits of every group of orders ≥ 2, as per-thickness fits at every thickness (held-out
-/// ones included), in parallel over groups.
+/// ones included).
 pub fn fit_all_joint(
     tab: &SlabTables,
     form: &LogAdditive,
@@ -185,11 +200,7 @@ pub fn fit_all_joint(
     skip_t: &[usize],
     skip_l: &[usize],
 ) -> Result<Vec<GroupFit>> {
-    let groups: Vec<usize> = (1..tab.shape[0]).collect();
-    let joint: Vec<JointFit> = groups
-        .par_iter()
-        .map(|&g| fit_joint(tab, form, g, q, skip_t, skip_l))
-        .collect::<Result<_>>()?;
+    let joint = fit_joint_groups(tab, form, q, skip_t, skip_l)?;
     Ok(joint
         .iter()
         .flat_map(|j| (0..tab.shape[1]).map(move |it| j.at(tab, it)))

@@ -7,6 +7,7 @@ pub mod fit;
 pub mod form;
 pub mod joint;
 pub mod report;
+pub mod ship;
 pub mod tables;
 
 pub use fit::{fit_all, GroupFit};

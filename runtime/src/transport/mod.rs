@@ -4,5 +4,6 @@
 
 pub mod log_additive;
 pub mod single;
+pub mod tables;
 
 pub use single::{scattering_cosine, single_scattering, single_scattering_bin};

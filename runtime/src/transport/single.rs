@@ -21,6 +21,19 @@
 use crate::phase::{Cosine, PhaseFunction};
 use crate::real::Real;
 
+/// What order 1 needs of a phase function: its value at a scattering cosine (sr⁻¹). Every
+/// [`PhaseFunction`] has it; so do tabulated phase functions stored with compressed tables.
+pub trait PhaseValue<F> {
+    /// p at `c`.
+    fn value(&self, c: Cosine<F>) -> F;
+}
+
+impl<F: Real, P: PhaseFunction<F> + ?Sized> PhaseValue<F> for P {
+    fn value(&self, c: Cosine<F>) -> F {
+        self.pdf_cosine(c)
+    }
+}
+
 /// 8-point Gauss–Legendre nodes on [−1, 1].
 const GL8_X: [f64; 8] = [
     -0.960_289_856_497_536_2,
@@ -46,7 +59,7 @@ const GL8_W: [f64; 8] = [
 
 /// T₁ (sr⁻¹) at depth `d` (mfp, 0 ≤ d ≤ t) of a slab of thickness `t`, for the view
 /// (`mu_v`, `psi_v` in radians) and the sun `mu_l` ∈ (0, 1], single-scattering albedo `albedo`.
-pub fn single_scattering<F: Real, P: PhaseFunction<F> + ?Sized>(
+pub fn single_scattering<F: Real, P: PhaseValue<F> + ?Sized>(
     phase: &P,
     albedo: F,
     mu_l: F,
@@ -56,8 +69,7 @@ pub fn single_scattering<F: Real, P: PhaseFunction<F> + ?Sized>(
     psi_v: F,
 ) -> F {
     let (zero, one) = (F::of(0.0), F::of(1.0));
-    let source =
-        albedo * phase.pdf_cosine(scattering_cosine(mu_l, mu_v, psi_v)) * (-d / mu_l).exp();
+    let source = albedo * phase.value(scattering_cosine(mu_l, mu_v, psi_v)) * (-d / mu_l).exp();
     if mu_v >= zero {
         if t - d <= zero {
             return zero;
@@ -83,7 +95,7 @@ pub fn single_scattering<F: Real, P: PhaseFunction<F> + ?Sized>(
 /// an edge), ψ_V ∈ [`psi_a`, `psi_b`]: 8-point Gauss–Legendre on `pieces` × `pieces` pieces
 /// (the Mie forward peak, a few degrees wide, needs several pieces in the bin that holds it).
 #[allow(clippy::too_many_arguments)]
-pub fn single_scattering_bin<F: Real, P: PhaseFunction<F> + ?Sized>(
+pub fn single_scattering_bin<F: Real, P: PhaseValue<F> + ?Sized>(
     phase: &P,
     albedo: F,
     mu_l: F,

@@ -1,0 +1,309 @@
+//! The compressed transport tables as renderers use them: loaded in place from the bytes of a
+//! `.ntt` container ([`crate::container`], docs/format.md), checked once, then evaluated at any
+//! (d, t, μ_V, ψ_V, μ_L) without allocation: T per order group of orders ≥ 2 from the
+//! log-additive form ([`super::log_additive`]) with its parameters read between the grid's
+//! nodes, and order 1 in closed form ([`super::single`]) from the stored phase function.
+//!
+//! Arrays (all f32):
+//!
+//! | name | shape | content |
+//! |---|---|---|
+//! | `form` | [5] | J, K, Θ nodes, pairs (0/1), Q |
+//! | `group_first` | [G] | first order of each group |
+//! | `mu_l_nodes` | [L] | sun cosines of the μ_L parameters |
+//! | `mu_v_nodes` | [M] | view cosines of the μ_V parameters |
+//! | `thickness` | [N] | thicknesses of the depth ranges |
+//! | `ln_t_range` | [G, 2] | ln t span of each group's polynomials in ln t |
+//! | `beta` | [G, P, Q] | the parameters' Legendre coefficients in s(ln t) |
+//! | `u_range` | [G, N, L·M, 2] | per thickness and (μ_L, μ_V) pair, the stretched depths fitted |
+//! | `phase_theta` | [n] | phase function angles (degrees, increasing, 0 … 180) |
+//! | `phase` | [n] | phase function p(θ) (sr⁻¹) |
+
+use super::log_additive::{Cell, Lerp, LogAdditive, MAX_LEGENDRE};
+use super::single::{single_scattering, PhaseValue};
+use crate::container::{ArrayView, Container, FormatError};
+use crate::phase::Cosine;
+use crate::real::Real;
+
+/// Most Legendre terms in ln t.
+pub const MAX_Q: usize = 16;
+
+/// Validated compressed tables, borrowing the container's bytes.
+#[derive(Clone, Copy, Debug)]
+pub struct TransportTables<'a> {
+    form: LogAdditive,
+    q: usize,
+    group_first: ArrayView<'a>,
+    mu_l: ArrayView<'a>,
+    mu_v: ArrayView<'a>,
+    thickness: ArrayView<'a>,
+    ln_t_range: ArrayView<'a>,
+    beta: ArrayView<'a>,
+    u_range: ArrayView<'a>,
+    phase_theta: ArrayView<'a>,
+    phase: ArrayView<'a>,
+}
+
+fn need<'a>(
+    c: &Container<'a>,
+    name: &'static str,
+    len: usize,
+) -> Result<ArrayView<'a>, FormatError> {
+    let a = c.find(name).ok_or(FormatError::Missing(name))?;
+    if a.len() != len || a.iter().any(|v| !v.is_finite()) {
+        return Err(FormatError::BadArray(name));
+    }
+    Ok(a)
+}
+
+fn increasing(a: &ArrayView) -> bool {
+    a.iter().zip(a.iter().skip(1)).all(|(x, y)| x < y)
+}
+
+impl<'a> TransportTables<'a> {
+    /// Loads and checks every array (shapes, finiteness, increasing grids).
+    pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
+        let c = Container::from_bytes(bytes)?;
+        let form_a = c.find("form").ok_or(FormatError::Missing("form"))?;
+        let int = |i: usize| {
+            form_a
+                .get(i)
+                .map(|v| v as usize)
+                .ok_or(FormatError::BadArray("form"))
+        };
+        if form_a.len() != 5
+            || form_a
+                .iter()
+                .any(|v| !(v >= 0.0 && v <= 4096.0 && v == (v as u32) as f32))
+        {
+            return Err(FormatError::BadArray("form"));
+        }
+        let form = LogAdditive {
+            legendre: int(0)?,
+            harmonics: int(1)?,
+            theta_nodes: int(2)?,
+            pairs: int(3)? == 1,
+        };
+        let q = int(4)?;
+        if !(1..=MAX_LEGENDRE).contains(&form.legendre)
+            || form.theta_nodes < 2
+            || form.harmonics > 64
+            || !(1..=MAX_Q).contains(&q)
+        {
+            return Err(FormatError::BadArray("form"));
+        }
+        let count = |name: &'static str| {
+            c.find(name)
+                .map(|a| a.len())
+                .ok_or(FormatError::Missing(name))
+        };
+        let (g, l, m, n) = (
+            count("group_first")?,
+            count("mu_l_nodes")?,
+            count("mu_v_nodes")?,
+            count("thickness")?,
+        );
+        if g == 0 || l == 0 || m == 0 || n == 0 || g > 64 || l > 1024 || m > 1024 || n > 1024 {
+            return Err(FormatError::BadArray("group_first"));
+        }
+        let p = form.n_params(m, l);
+        let theta_len = count("phase_theta")?;
+        let t = TransportTables {
+            form,
+            q,
+            group_first: need(&c, "group_first", g)?,
+            mu_l: need(&c, "mu_l_nodes", l)?,
+            mu_v: need(&c, "mu_v_nodes", m)?,
+            thickness: need(&c, "thickness", n)?,
+            ln_t_range: need(&c, "ln_t_range", 2 * g)?,
+            beta: need(
+                &c,
+                "beta",
+                g.checked_mul(p)
+                    .and_then(|x| x.checked_mul(q))
+                    .ok_or(FormatError::BadArray("beta"))?,
+            )?,
+            u_range: need(&c, "u_range", 2 * g * n * l * m)?,
+            phase_theta: need(&c, "phase_theta", theta_len)?,
+            phase: need(&c, "phase", theta_len)?,
+        };
+        for (a, name) in [
+            (&t.mu_l, "mu_l_nodes"),
+            (&t.mu_v, "mu_v_nodes"),
+            (&t.thickness, "thickness"),
+            (&t.phase_theta, "phase_theta"),
+        ] {
+            if !increasing(a) {
+                return Err(FormatError::BadArray(name));
+            }
+        }
+        if theta_len < 2 || t.phase.iter().any(|v| v < 0.0) {
+            return Err(FormatError::BadArray("phase"));
+        }
+        Ok(t)
+    }
+
+    /// Number of order groups (of orders ≥ 2).
+    pub fn groups(&self) -> usize {
+        self.group_first.len()
+    }
+
+    /// First scattering order of group `g`.
+    pub fn group_first_order(&self, g: usize) -> Option<f32> {
+        self.group_first.get(g)
+    }
+
+    /// T = L/E⊥ (sr⁻¹) of group `g` at depth `d` of a slab of thickness `t` (mfp), view
+    /// (`mu_v`, `psi_v` radians), sun `mu_l`; 0 where the tables resolve nothing.
+    pub fn transport(&self, g: usize, d: f32, t: f32, mu_v: f32, psi_v: f32, mu_l: f32) -> f32 {
+        if g >= self.groups() || !(t > 0.0) || !(d >= 0.0 && d <= t) {
+            return 0.0;
+        }
+        let (nl, nm) = (self.mu_l.len(), self.mu_v.len());
+        let u = stretched_u(d, t);
+        let c = Cell {
+            l: lerp(&self.mu_l, mu_l),
+            mu_l,
+            v: lerp(&self.mu_v, mu_v),
+            mu_v,
+            psi_v,
+            u,
+            d,
+            t,
+        };
+        if !self.inside_fitted_depths(g, t, &c) {
+            return 0.0;
+        }
+        let lq = self.legendre_in_ln_t(g, t);
+        let (p, q) = (self.form.n_params(nm, nl), self.q);
+        let coef = |col: usize| {
+            let base = (g * p + col) * q;
+            (0..q)
+                .map(|k| self.beta.get(base + k).unwrap_or(0.0) * lq[k])
+                .sum::<f32>()
+        };
+        self.form.ln_t(&c, nm, nl, coef).map_or(0.0, Real::exp)
+    }
+
+    /// Order 1 (single scattering of the sun beam, sr⁻¹) at the same point, albedo 1.
+    pub fn order1(&self, d: f32, t: f32, mu_v: f32, psi_v: f32, mu_l: f32) -> f32 {
+        single_scattering(&StoredPhase(self), 1.0, mu_l, t, d, mu_v, psi_v)
+    }
+
+    fn legendre_in_ln_t(&self, g: usize, t: f32) -> [f32; MAX_Q] {
+        let (a, b) = (
+            self.ln_t_range.get(2 * g).unwrap_or(0.0),
+            self.ln_t_range.get(2 * g + 1).unwrap_or(0.0),
+        );
+        let s = if b > a {
+            (2.0 * (Real::ln(t) - a) / (b - a) - 1.0).clamp(-1.0, 1.0)
+        } else {
+            0.0
+        };
+        let mut p = [0.0f32; MAX_Q];
+        for j in 0..self.q {
+            p[j] = match j {
+                0 => 1.0,
+                1 => s,
+                _ => ((2 * j - 1) as f32 * s * p[j - 1] - (j - 1) as f32 * p[j - 2]) / j as f32,
+            };
+        }
+        p
+    }
+
+    /// Whether u lies within the fitted depths of the thickness nodes around t and of the
+    /// (μ_L, μ_V) nodes the cell draws on.
+    fn inside_fitted_depths(&self, g: usize, t: f32, c: &Cell<f32>) -> bool {
+        let n = self.thickness.len();
+        let (nl, nm) = (self.mu_l.len(), self.mu_v.len());
+        let k = lerp(&self.thickness, t);
+        [k.lo, k.hi].iter().all(|&it| {
+            [c.l.lo, c.l.hi].iter().all(|&il| {
+                [c.v.lo, c.v.hi].iter().all(|&m| {
+                    let at = 2 * (((g * n + it) * nl + il) * nm + m);
+                    match (self.u_range.get(at), self.u_range.get(at + 1)) {
+                        (Some(lo), Some(hi)) => c.u >= lo - 1e-6 && c.u <= hi + 1e-6,
+                        _ => false,
+                    }
+                })
+            })
+        })
+    }
+
+    /// p(θ) by linear interpolation of the stored table.
+    fn phase_at(&self, theta_deg: f32) -> f32 {
+        let n = self.phase_theta.len();
+        let mut lo = 0;
+        let mut hi = n - 1;
+        while hi - lo > 1 {
+            let mid = (lo + hi) / 2;
+            if self.phase_theta.get(mid).unwrap_or(0.0) <= theta_deg {
+                lo = mid
+            } else {
+                hi = mid
+            }
+        }
+        let (a, b) = (
+            self.phase_theta.get(lo).unwrap_or(0.0),
+            self.phase_theta.get(hi).unwrap_or(180.0),
+        );
+        let (pa, pb) = (
+            self.phase.get(lo).unwrap_or(0.0),
+            self.phase.get(hi).unwrap_or(0.0),
+        );
+        let w = if b > a {
+            ((theta_deg - a) / (b - a)).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        pa + w * (pb - pa)
+    }
+}
+
+/// Where x sits among the values of `a` (held at the ends).
+fn lerp(a: &ArrayView, x: f32) -> Lerp<f32> {
+    let n = a.len();
+    if n <= 1 || !(x > a.get(0).unwrap_or(0.0)) {
+        return Lerp::at(0);
+    }
+    if x >= a.get(n - 1).unwrap_or(0.0) {
+        return Lerp::at(n - 1);
+    }
+    let (mut lo, mut hi) = (0, n - 1);
+    while hi - lo > 1 {
+        let mid = (lo + hi) / 2;
+        if a.get(mid).unwrap_or(0.0) <= x {
+            lo = mid
+        } else {
+            hi = mid
+        }
+    }
+    let (va, vb) = (a.get(lo).unwrap_or(0.0), a.get(hi).unwrap_or(1.0));
+    Lerp {
+        lo,
+        hi,
+        w: (x - va) / (vb - va),
+    }
+}
+
+/// The stretched depth u ∈ [0, 1] of depth d in a slab of thickness t: the inverse of the slab
+/// grid's planes d/t = (e^{βu} − 1)/(e^β − 1), β = 0.3 t^0.65 (nephele slab's default grid).
+pub fn stretched_u(d: f32, t: f32) -> f32 {
+    let beta = 0.3 * Real::exp(0.65 * Real::ln(t));
+    if beta < 1e-6 {
+        return d / t;
+    }
+    (Real::ln(1.0 + (Real::exp(beta) - 1.0) * d / t) / beta).clamp(0.0, 1.0)
+}
+
+/// The stored phase function, for order 1.
+struct StoredPhase<'t, 'a>(&'t TransportTables<'a>);
+
+impl PhaseValue<f32> for StoredPhase<'_, '_> {
+    fn value(&self, c: Cosine<f32>) -> f32 {
+        // θ from 1 − μ keeps the forward peak's digits: θ = 2 asin √((1 − μ)/2).
+        let half = Real::sqrt((0.5 * c.one_minus_mu).max(0.0)).min(1.0);
+        self.0
+            .phase_at(2.0 * Real::asin(half) * (180.0 / core::f32::consts::PI))
+    }
+}

@@ -1,0 +1,63 @@
+//! `nephele transport`: the compressed tables evaluated at one point, as JSON.
+
+use anyhow::{ensure, Context, Result};
+use clap::Args;
+use nephele_runtime::transport::tables::TransportTables;
+use std::path::PathBuf;
+
+/// Options of `nephele transport`.
+#[derive(Args, Debug)]
+pub struct TransportArgs {
+    /// transport.ntt of `nephele compress`.
+    #[arg(long)]
+    pub tables: PathBuf,
+    /// Slab thickness t (mean free paths).
+    #[arg(long)]
+    pub t: f32,
+    /// Sun cosine μ_L in (0, 1].
+    #[arg(long = "mu-l")]
+    pub mu_l: f32,
+    /// Depth of the viewpoint below the lit face (mfp), in [0, t].
+    #[arg(long)]
+    pub depth: f32,
+    /// View cosine μ_V in [−1, 1] (> 0: light going up).
+    #[arg(long = "mu-v", allow_hyphen_values = true)]
+    pub mu_v: f32,
+    /// View azimuth ψ_V from the sun's horizontal travel, degrees.
+    #[arg(long, allow_hyphen_values = true)]
+    pub psi: f32,
+}
+
+/// Runs `nephele transport`.
+pub fn run(a: TransportArgs) -> Result<()> {
+    ensure!(
+        a.t > 0.0 && a.t.is_finite(),
+        "--t must be a positive thickness"
+    );
+    ensure!(a.mu_l > 0.0 && a.mu_l <= 1.0, "--mu-l must be in (0, 1]");
+    ensure!((0.0..=a.t).contains(&a.depth), "--depth must be in [0, t]");
+    ensure!((-1.0..=1.0).contains(&a.mu_v), "--mu-v must be in [-1, 1]");
+    ensure!(a.psi.is_finite(), "--psi must be a number of degrees");
+    let bytes = std::fs::read(&a.tables)
+        .with_context(|| format!("cannot read '{}'", a.tables.display()))?;
+    let tab = TransportTables::from_bytes(&bytes)
+        .map_err(|e| anyhow::anyhow!("'{}': {e}", a.tables.display()))?;
+    let psi = a.psi.to_radians();
+    let groups: Vec<serde_json::Value> = (0..tab.groups())
+        .map(|g| {
+            serde_json::json!({
+                "first_order": tab.group_first_order(g),
+                "T": tab.transport(g, a.depth, a.t, a.mu_v, psi, a.mu_l),
+            })
+        })
+        .collect();
+    let out = serde_json::json!({
+        "point": {"t": a.t, "mu_l": a.mu_l, "depth": a.depth, "mu_v": a.mu_v, "psi_deg": a.psi},
+        "units": "T = L / E_perp (1/sr); orders >= 2 per group from the compressed form, order 1 in closed form",
+        "order1": tab.order1(a.depth, a.t, a.mu_v, psi, a.mu_l),
+        "groups": groups,
+        "collector": "not in this version of the tables (issue 7)",
+    });
+    println!("{}", serde_json::to_string_pretty(&out)?);
+    Ok(())
+}
