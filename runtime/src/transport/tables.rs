@@ -27,6 +27,13 @@ use crate::real::Real;
 
 /// Most Legendre terms in ln t.
 pub const MAX_Q: usize = 16;
+/// Most order groups.
+pub const MAX_GROUPS: usize = 64;
+/// Most azimuth harmonics of a loadable form (bounds the features of a point).
+pub const MAX_HARMONICS: usize = 8;
+/// Room for the features of one point: J ≤ 16 Legendre terms on two μ_V and two μ_L nodes,
+/// γ and the pair terms on four (μ_V, μ_L) pairs, two Θ hats, K ≤ 8 harmonics.
+const MAX_FEATURES: usize = 16 * 4 + 4 * 3 + 4 + MAX_HARMONICS * 4;
 
 /// Validated compressed tables, borrowing the container's bytes.
 #[derive(Clone, Copy, Debug)]
@@ -87,7 +94,7 @@ impl<'a> TransportTables<'a> {
         let q = int(4)?;
         if !(1..=MAX_LEGENDRE).contains(&form.legendre)
             || form.theta_nodes < 2
-            || form.harmonics > 64
+            || form.harmonics > MAX_HARMONICS
             || !(1..=MAX_Q).contains(&q)
         {
             return Err(FormatError::BadArray("form"));
@@ -103,7 +110,15 @@ impl<'a> TransportTables<'a> {
             count("mu_v_nodes")?,
             count("thickness")?,
         );
-        if g == 0 || l == 0 || m == 0 || n == 0 || g > 64 || l > 1024 || m > 1024 || n > 1024 {
+        if g == 0
+            || l == 0
+            || m == 0
+            || n == 0
+            || g > MAX_GROUPS
+            || l > 1024
+            || m > 1024
+            || n > 1024
+        {
             return Err(FormatError::BadArray("group_first"));
         }
         let p = form.n_params(m, l);
@@ -154,35 +169,66 @@ impl<'a> TransportTables<'a> {
     }
 
     /// T = L/E⊥ (sr⁻¹) of group `g` at depth `d` of a slab of thickness `t` (mfp), view
-    /// (`mu_v`, `psi_v` radians), sun `mu_l`; 0 where the tables resolve nothing.
+    /// (`mu_v`, `psi_v` radians), sun `mu_l`; 0 where the tables resolve nothing. For several
+    /// groups at one point, [`Self::transport_all`] shares the work.
     pub fn transport(&self, g: usize, d: f32, t: f32, mu_v: f32, psi_v: f32, mu_l: f32) -> f32 {
-        if g >= self.groups() || !(t > 0.0) || !(d >= 0.0 && d <= t) {
-            return 0.0;
+        let mut all = [0.0f32; MAX_GROUPS];
+        self.transport_all(d, t, mu_v, psi_v, mu_l, &mut all);
+        all.get(g).copied().unwrap_or(0.0)
+    }
+
+    /// T of every group at one point into `out[..groups()]` (the rest untouched): the features
+    /// (geometry, single-scattering factor, scattering angle) are computed once, then each
+    /// group is a dot product with its parameters at t.
+    pub fn transport_all(&self, d: f32, t: f32, mu_v: f32, psi_v: f32, mu_l: f32, out: &mut [f32]) {
+        let groups = self.groups().min(out.len());
+        out[..groups].iter_mut().for_each(|v| *v = 0.0);
+        if !(t > 0.0) || !(d >= 0.0 && d <= t) {
+            return;
         }
         let (nl, nm) = (self.mu_l.len(), self.mu_v.len());
-        let u = stretched_u(d, t);
         let c = Cell {
             l: lerp(&self.mu_l, mu_l),
             mu_l,
             v: lerp(&self.mu_v, mu_v),
             mu_v,
             psi_v,
-            u,
+            u: stretched_u(d, t),
             d,
             t,
         };
-        if !self.inside_fitted_depths(g, t, &c) {
-            return 0.0;
-        }
-        let lq = self.legendre_in_ln_t(g, t);
-        let (p, q) = (self.form.n_params(nm, nl), self.q);
-        let coef = |col: usize| {
-            let base = (g * p + col) * q;
-            (0..q)
-                .map(|k| self.beta.get(base + k).unwrap_or(0.0) * lq[k])
-                .sum::<f32>()
+        let Some(offset) = self.form.ln_boundary(&c) else {
+            return;
         };
-        self.form.ln_t(&c, nm, nl, coef).map_or(0.0, Real::exp)
+        let mut row = [(0usize, 0.0f32); MAX_FEATURES];
+        let mut n = 0;
+        let ok = self.form.for_each_feature(&c, nm, nl, |col, v| {
+            if n < MAX_FEATURES {
+                row[n] = (col, v);
+                n += 1;
+            }
+        });
+        if !ok {
+            return;
+        }
+        let (p, q) = (self.form.n_params(nm, nl), self.q);
+        let (near_t, ln_t_point) = (lerp(&self.thickness, t), Real::ln(t));
+        for (g, slot) in out[..groups].iter_mut().enumerate() {
+            if !self.inside_fitted_depths(g, near_t, &c) {
+                continue;
+            }
+            let lq = self.legendre_in_ln_t(g, ln_t_point);
+            let mut ln_t = offset;
+            for &(col, v) in &row[..n] {
+                let base = (g * p + col) * q;
+                let mut coef = 0.0;
+                for (k, l) in lq[..q].iter().enumerate() {
+                    coef += self.beta.get(base + k).unwrap_or(0.0) * l;
+                }
+                ln_t += v * coef;
+            }
+            *slot = Real::exp(ln_t);
+        }
     }
 
     /// Order 1 (single scattering of the sun beam, sr⁻¹) at the same point, albedo 1.
@@ -190,13 +236,13 @@ impl<'a> TransportTables<'a> {
         single_scattering(&StoredPhase(self), 1.0, mu_l, t, d, mu_v, psi_v)
     }
 
-    fn legendre_in_ln_t(&self, g: usize, t: f32) -> [f32; MAX_Q] {
+    fn legendre_in_ln_t(&self, g: usize, ln_t: f32) -> [f32; MAX_Q] {
         let (a, b) = (
             self.ln_t_range.get(2 * g).unwrap_or(0.0),
             self.ln_t_range.get(2 * g + 1).unwrap_or(0.0),
         );
         let s = if b > a {
-            (2.0 * (Real::ln(t) - a) / (b - a) - 1.0).clamp(-1.0, 1.0)
+            (2.0 * (ln_t - a) / (b - a) - 1.0).clamp(-1.0, 1.0)
         } else {
             0.0
         };
@@ -211,12 +257,11 @@ impl<'a> TransportTables<'a> {
         p
     }
 
-    /// Whether u lies within the fitted depths of the thickness nodes around t and of the
+    /// Whether u lies within the fitted depths of the thickness nodes `k` around t and of the
     /// (μ_L, μ_V) nodes the cell draws on.
-    fn inside_fitted_depths(&self, g: usize, t: f32, c: &Cell<f32>) -> bool {
+    fn inside_fitted_depths(&self, g: usize, k: Lerp<f32>, c: &Cell<f32>) -> bool {
         let n = self.thickness.len();
         let (nl, nm) = (self.mu_l.len(), self.mu_v.len());
-        let k = lerp(&self.thickness, t);
         [k.lo, k.hi].iter().all(|&it| {
             [c.l.lo, c.l.hi].iter().all(|&il| {
                 [c.v.lo, c.v.hi].iter().all(|&m| {
