@@ -63,6 +63,51 @@ pub(crate) fn cells_of(
     out
 }
 
+/// One row of the weighted least squares: a usable cell's features, weight and target.
+pub(crate) struct Row<'r> {
+    /// Index il · nm + m of its (μ_L, μ_V) pair.
+    pub pair: usize,
+    /// Its stretched depth.
+    pub u: f64,
+    /// Its features (column, value).
+    pub features: &'r [(usize, f64)],
+    /// 1/max(rel SE, floor).
+    pub w: f64,
+    /// ln T − ln B.
+    pub y: f64,
+}
+
+/// Calls `f` with the row of every cell of (group `g`, thickness `it`) that enters a fit: T > 0,
+/// relative SE below [`MAX_REL_SE`], representable by the form, its sun cosine not in `skip_l`.
+pub(crate) fn for_each_row(
+    tab: &SlabTables,
+    form: &LogAdditive,
+    g: usize,
+    it: usize,
+    skip_l: &[usize],
+    row: &mut Vec<(usize, f64)>,
+    mut f: impl FnMut(Row),
+) {
+    let [_, _, nl, _, nm, _] = tab.shape;
+    for (c, [il, j, m, k], off) in cells_of(tab, form, it) {
+        if skip_l.contains(&il) {
+            continue;
+        }
+        let i = tab.index(g, it, il, j, m, k);
+        let (t, se) = (tab.t[i], tab.t_se[i]);
+        if !(t > 0.0 && se < MAX_REL_SE * t && features(form, &c, nm, nl, row)) {
+            continue;
+        }
+        f(Row {
+            pair: il * nm + m,
+            u: c.u,
+            features: row,
+            w: 1.0 / (se / t).max(MIN_REL_SE),
+            y: t.ln() - off,
+        });
+    }
+}
+
 /// Fits one (group, thickness), leaving out the sun cosines of index in `skip_l` (held out).
 pub fn fit_one(
     tab: &SlabTables,
@@ -92,28 +137,19 @@ pub fn fit_one(
             *filled = 0;
         }
     };
-    for (c, [il, j, m, k], off) in cells_of(tab, form, it) {
-        if skip_l.contains(&il) {
-            continue;
+    for_each_row(tab, form, g, it, skip_l, &mut row, |r| {
+        let range = &mut u_range[r.pair];
+        *range = (range.0.min(r.u), range.1.max(r.u));
+        for &(col, v) in r.features {
+            a[(filled, col)] += r.w * v;
         }
-        let i = tab.index(g, it, il, j, m, k);
-        let (t, se) = (tab.t[i], tab.t_se[i]);
-        if !(t > 0.0 && se < MAX_REL_SE * t && features(form, &c, nm, nl, &mut row)) {
-            continue;
-        }
-        let r = &mut u_range[il * nm + m];
-        *r = (r.0.min(c.u), r.1.max(c.u));
-        let w = 1.0 / (se / t).max(MIN_REL_SE);
-        for &(col, v) in &row {
-            a[(filled, col)] += w * v;
-        }
-        y[filled] = w * (t.ln() - off);
+        y[filled] = r.w * r.y;
         filled += 1;
         cells += 1;
         if filled == block {
             flush(&mut a, &mut y, &mut filled);
         }
-    }
+    });
     flush(&mut a, &mut y, &mut filled);
     let ridge = 1e-10 * (0..np).map(|i| ata[(i, i)]).sum::<f64>() / np as f64;
     for i in 0..np {

@@ -5,8 +5,8 @@
 //! thickness do not: docs/compress.md). Same weights and ridge as [`super::fit`]; the normal
 //! equations are accumulated from the sparse rows directly.
 
-use super::fit::{cells_of, GroupFit, MAX_REL_SE, MIN_REL_SE};
-use super::form::{features, LogAdditive};
+use super::fit::{for_each_row, GroupFit, MAX_REL_SE};
+use super::form::LogAdditive;
 use super::tables::SlabTables;
 use anyhow::{anyhow, Result};
 use nalgebra::{DMatrix, DVector};
@@ -85,30 +85,21 @@ pub fn fit_joint(
     for it in (0..nt).filter(|it| !skip_t.contains(it)) {
         let lq = legendre_in_ln_t(ln_t_range, tab.thickness[it], q);
         let in_fit = spanned.contains(&it);
-        for (c, [il, j, m, k], off) in cells_of(tab, form, it) {
-            if skip_l.contains(&il) {
-                continue;
-            }
-            let i = tab.index(g, it, il, j, m, k);
-            let (t, se) = (tab.t[i], tab.t_se[i]);
-            if !(t > 0.0 && se < MAX_REL_SE * t && features(form, &c, nm, nl, &mut row)) {
-                continue;
-            }
-            let r = &mut u_range[it][il * nm + m];
-            *r = (r.0.min(c.u), r.1.max(c.u));
+        for_each_row(tab, form, g, it, skip_l, &mut row, |r| {
+            let range = &mut u_range[it][r.pair];
+            *range = (range.0.min(r.u), range.1.max(r.u));
             if !in_fit {
-                continue;
+                return;
             }
-            let w = 1.0 / (se / t).max(MIN_REL_SE);
             wide.clear();
-            for &(col, v) in &row {
+            for &(col, v) in r.features {
                 wide.extend(
                     lq.iter()
                         .enumerate()
-                        .map(|(qi, l)| (col * q + qi, w * v * l)),
+                        .map(|(qi, l)| (col * q + qi, r.w * v * l)),
                 );
             }
-            let y = w * (t.ln() - off);
+            let y = r.w * r.y;
             // The upper triangle of the outer product of the sparse row.
             for &(a, va) in &wide {
                 aty[a] += va * y;
@@ -119,7 +110,7 @@ pub fn fit_joint(
                 }
             }
             cells += 1;
-        }
+        });
     }
     for a in 0..n {
         for b in 0..a {
