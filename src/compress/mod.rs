@@ -7,6 +7,7 @@ pub mod fit;
 pub mod form;
 pub mod joint;
 pub mod report;
+pub mod run;
 pub mod ship;
 pub mod tables;
 

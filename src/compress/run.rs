@@ -1,0 +1,246 @@
+//! The compression stage end to end: fit the form to a slab run's tables, measure it on every
+//! cell and on held-out slices, and write report.json, compressed.npz and transport.ntt (the
+//! latter loaded back by the runtime and compared with the fit).
+
+use super::fit::{fit_all, predict, predict_held_out, GroupFit};
+use super::joint::{fit_all_joint, fit_joint_groups, JointFit};
+use super::report::{group_error, group_error_on, GroupError};
+use super::ship::{ntt_bytes, phase_angles};
+use super::{LogAdditive, SlabTables};
+use crate::io::{write_atomic, Npz};
+use crate::slab::tables::PhaseModel;
+use crate::slab::PhaseSpec;
+use anyhow::{anyhow, ensure, Context, Result};
+use nephele_runtime::transport::tables::TransportTables;
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// What to fit.
+#[derive(Clone, Copy, Debug)]
+pub struct Options {
+    /// The form's sizes.
+    pub form: LogAdditive,
+    /// Legendre terms in ln t of the joint fits; 0 fits each thickness on its own.
+    pub smooth_t: usize,
+    /// Whether to run the held-out study.
+    pub held_out: bool,
+}
+
+/// The held-out study: which slices were left out, and the errors there.
+#[derive(Clone, Debug, Serialize)]
+pub struct HeldOut {
+    /// Thicknesses left out.
+    pub thicknesses: Vec<f64>,
+    /// Sun cosines left out.
+    pub mu_l: Vec<f64>,
+    /// Errors on the held-out slices, per group then for the sum.
+    pub errors: Vec<GroupError>,
+}
+
+/// What a compression produced.
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    /// Errors on every slice, per group then for the sum of the groups of orders ≥ 2.
+    pub errors: Vec<GroupError>,
+    /// The held-out study, if run.
+    pub held_out: Option<HeldOut>,
+    /// Parameters of T.
+    pub params: usize,
+    /// Seconds spent fitting (the first fit).
+    pub fit_seconds: f64,
+    /// transport.ntt: path, bytes and the largest relative difference of the runtime's f32
+    /// evaluation from the fit (joint fits only).
+    pub ntt: Option<(PathBuf, usize, f64)>,
+}
+
+/// Fits, measures and writes everything into `out`.
+pub fn compress(tables: &Path, out: &Path, opt: &Options) -> Result<Outcome> {
+    let tab = SlabTables::load(tables)?;
+    ensure!(tab.shape[0] >= 2, "the tables hold no group of orders ≥ 2");
+    let [ng, _, nl, _, nm, _] = tab.shape;
+    let t0 = Instant::now();
+    let (fits, joint) = fit(&tab, opt, &[], &[])?;
+    let fit_seconds = t0.elapsed().as_secs_f64();
+    let pred = predict_everywhere(&tab, &opt.form, &fits);
+    let mut errors: Vec<_> = (1..ng).map(|g| group_error(&tab, &pred, Some(g))).collect();
+    errors.push(group_error(&tab, &pred, None));
+    let held_out = opt
+        .held_out
+        .then(|| held_out_study(&tab, opt))
+        .transpose()?;
+    let params = opt.form.n_params(nm, nl)
+        * if opt.smooth_t == 0 {
+            fits.len()
+        } else {
+            (ng - 1) * opt.smooth_t
+        };
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create '{}'", out.display()))?;
+    let report = serde_json::json!({
+        "tables": tables,
+        "form": super::form::to_json(&opt.form),
+        "smooth_t": opt.smooth_t,
+        "parameters": params,
+        "fit_seconds": fit_seconds,
+        "errors": errors,
+        "held_out": held_out,
+        "version": crate::VERSION,
+        "git_commit": option_env!("NEPHELE_GIT_COMMIT"),
+    });
+    write_atomic(&out.join("report.json"), |w| {
+        serde_json::to_writer_pretty(&mut *w, &report)?;
+        Ok(())
+    })?;
+    let mut npz = Npz::new();
+    npz.add("T_form", &tab.shape, &pred);
+    for f in &fits {
+        npz.add(
+            &format!("coef_g{}_t{}", f.group, f.it),
+            &[f.coef.len()],
+            &f.coef,
+        );
+    }
+    write_atomic(&out.join("compressed.npz"), |w| npz.write_to(w))?;
+    let ntt = if joint.is_empty() {
+        None
+    } else {
+        Some(write_ntt(tables, out, &tab, opt, &joint, &pred)?)
+    };
+    Ok(Outcome {
+        errors,
+        held_out,
+        params,
+        fit_seconds,
+        ntt,
+    })
+}
+
+/// The fits (per thickness, or joint and then read at every thickness), skipping the
+/// thicknesses `skip_t` and sun cosines `skip_l`.
+fn fit(
+    tab: &SlabTables,
+    opt: &Options,
+    skip_t: &[usize],
+    skip_l: &[usize],
+) -> Result<(Vec<GroupFit>, Vec<JointFit>)> {
+    if opt.smooth_t == 0 {
+        return Ok((fit_all(tab, &opt.form, skip_t, skip_l)?, Vec::new()));
+    }
+    let joint = fit_joint_groups(tab, &opt.form, opt.smooth_t, skip_t, skip_l)?;
+    let fits = joint
+        .iter()
+        .flat_map(|j| (0..tab.shape[1]).map(move |it| j.at(tab, it)))
+        .collect();
+    Ok((fits, joint))
+}
+
+/// The form's T over the whole table layout.
+fn predict_everywhere(tab: &SlabTables, form: &LogAdditive, fits: &[GroupFit]) -> Vec<f64> {
+    let [_, nt, nl, nd, nm, nk] = tab.shape;
+    let slice = nl * nd * nm * nk;
+    let mut pred = vec![0.0; tab.t.len()];
+    for f in fits {
+        let start = (f.group * nt + f.it) * slice;
+        pred[start..start + slice].copy_from_slice(&predict(tab, form, f));
+    }
+    pred
+}
+
+/// A second fit without the inner thicknesses and sun cosines at a third and two thirds of
+/// their grids, measured on those slices only.
+fn held_out_study(tab: &SlabTables, opt: &Options) -> Result<HeldOut> {
+    let [ng, nt, nl, ..] = tab.shape;
+    let inner = |n: usize| -> Vec<usize> {
+        let mut v: Vec<usize> = [n / 3, 2 * n / 3]
+            .into_iter()
+            .filter(|&i| i > 0 && i + 1 < n)
+            .collect();
+        v.dedup();
+        v
+    };
+    let (skip_t, skip_l) = (inner(nt), inner(nl));
+    let fits = if opt.smooth_t == 0 {
+        fit_all(tab, &opt.form, &skip_t, &skip_l)?
+    } else {
+        fit_all_joint(tab, &opt.form, opt.smooth_t, &skip_t, &skip_l)?
+    };
+    let pred = predict_held_out(tab, &opt.form, &fits, &skip_l);
+    let held = |it: usize, il: usize| skip_t.contains(&it) || skip_l.contains(&il);
+    let mut errors: Vec<_> = (1..ng)
+        .map(|g| group_error_on(tab, &pred, Some(g), &held))
+        .collect();
+    errors.push(group_error_on(tab, &pred, None, &held));
+    Ok(HeldOut {
+        thicknesses: skip_t.iter().map(|&i| tab.thickness[i]).collect(),
+        mu_l: skip_l.iter().map(|&i| tab.mu_l[i]).collect(),
+        errors,
+    })
+}
+
+/// The phase function of the slab run (its tables.json's config.phase) at [`phase_angles`].
+fn phase_of_run(tables: &Path) -> Result<Vec<f64>> {
+    let json = tables.with_extension("json");
+    let text = std::fs::read_to_string(&json).with_context(|| {
+        format!(
+            "the phase function for order 1 comes from '{}'",
+            json.display()
+        )
+    })?;
+    let doc: serde_json::Value =
+        serde_json::from_str(&text).with_context(|| format!("'{}' is not JSON", json.display()))?;
+    let spec: PhaseSpec = serde_json::from_value(doc["config"]["phase"].clone())
+        .with_context(|| format!("'{}': no config.phase", json.display()))?;
+    let model = PhaseModel::build(&spec)?;
+    Ok(phase_angles()
+        .iter()
+        .map(|deg| model.with(|p| p.eval(deg.to_radians().cos())))
+        .collect())
+}
+
+/// Writes transport.ntt (joint fits and the phase function) after loading it back with the
+/// runtime and comparing its f32 evaluation with the fit on every cell the form represents.
+fn write_ntt(
+    tables: &Path,
+    out: &Path,
+    tab: &SlabTables,
+    opt: &Options,
+    joint: &[JointFit],
+    pred: &[f64],
+) -> Result<(PathBuf, usize, f64)> {
+    let bytes = ntt_bytes(tab, &opt.form, opt.smooth_t, joint, &phase_of_run(tables)?)?;
+    let rt = TransportTables::from_bytes(&bytes).map_err(|e| anyhow!("{e}"))?;
+    let [_, nt, nl, nd, nm, nk] = tab.shape;
+    let mut worst = 0.0f64;
+    let mut all = vec![0.0f32; joint.len()];
+    for it in 0..nt {
+        for il in 0..nl {
+            for j in 0..nd {
+                for m in 0..nm {
+                    for k in 0..nk {
+                        let (d, t) = (tab.depth[it * nd + j], tab.thickness[it]);
+                        rt.transport_all(
+                            d as f32,
+                            t as f32,
+                            tab.mu_v(m) as f32,
+                            tab.psi_v(k) as f32,
+                            tab.mu_l[il] as f32,
+                            &mut all,
+                        );
+                        for (f, &got) in joint.iter().zip(&all) {
+                            let want = pred[tab.index(f.group, it, il, j, m, k)];
+                            if want > 0.0 && got > 0.0 {
+                                worst = worst.max((got as f64 / want - 1.0).abs());
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let path = out.join("transport.ntt");
+    write_atomic(&path, |w| {
+        std::io::Write::write_all(w, &bytes)?;
+        Ok(())
+    })?;
+    Ok((path, bytes.len(), worst))
+}
