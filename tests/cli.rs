@@ -420,7 +420,13 @@ fn slab_quick_config_writes_tables_and_refuses_bad_configs() {
     ]);
     assert_eq!(
         files_in(&comp),
-        ["compressed.npz", "report.json", "transport.ntt"]
+        [
+            "compressed.npz",
+            "error_by_thickness.png",
+            "fit_vs_tables.png",
+            "report.json",
+            "transport.ntt"
+        ]
     );
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(comp.join("report.json")).unwrap()).unwrap();

@@ -68,7 +68,10 @@ pub fn run(args: CompressArgs) -> Result<()> {
         o.params as f64 * 4.0 / 1024.0,
         o.fit_seconds
     );
-    println!("wrote {}/report.json, compressed.npz", args.out.display());
+    println!(
+        "wrote {}/report.json, compressed.npz, fit_vs_tables.png, error_by_thickness.png",
+        args.out.display()
+    );
     if let Some((path, bytes, worst)) = &o.ntt {
         println!(
             "wrote {} ({:.0} KB); the runtime's f32 evaluation within {worst:.1e} of the fitted form",

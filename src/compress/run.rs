@@ -2,12 +2,13 @@
 //! cell and on held-out slices, and write report.json, compressed.npz and transport.ntt (the
 //! latter loaded back by the runtime and compared with the fit).
 
+use super::figure;
 use super::fit::{fit_all, predict, predict_held_out, GroupFit};
 use super::joint::{fit_all_joint, fit_joint_groups, JointFit};
 use super::report::{group_error, group_error_on, GroupError};
 use super::ship::{ntt_bytes, phase_angles};
 use super::{LogAdditive, SlabTables};
-use crate::io::{write_atomic, Npz};
+use crate::io::{write_atomic, AtomicFiles, Npz};
 use crate::slab::tables::PhaseModel;
 use crate::slab::PhaseSpec;
 use anyhow::{anyhow, ensure, Context, Result};
@@ -101,6 +102,19 @@ pub fn compress(tables: &Path, out: &Path, opt: &Options) -> Result<Outcome> {
         );
     }
     write_atomic(&out.join("compressed.npz"), |w| npz.write_to(w))?;
+    let mut figures = AtomicFiles::new();
+    figures.write_via_path(&out.join("fit_vs_tables.png"), |p| {
+        figure::fit_vs_tables(p, &tab, &pred)
+    })?;
+    figures.write_via_path(&out.join("error_by_thickness.png"), |p| {
+        figure::error_by_thickness(
+            p,
+            &tab,
+            &errors,
+            held_out.as_ref().map(|h| h.errors.as_slice()),
+        )
+    })?;
+    figures.commit()?;
     let ntt = if joint.is_empty() {
         None
     } else {
