@@ -172,49 +172,40 @@ impl Slice<'_> {
         if order == 0 {
             return visit_planes(depths, above, d1, down, |j| tally.direct[j] += weight);
         }
-        if self.mu_l == 1.0 {
-            return self.cross_pooled(pos, dir, d1, above, order, weight, tally);
-        }
-        let (m, k, mirror) = self.direction_bin(dir);
-        let first = self.grid.cell(self.grid.group(order), 0, m, k);
-        let inv_dz = 1.0 / dir[2];
+        let (first, inv_dz, proj) = if self.mu_l == 1.0 {
+            self.pooled_frame(dir, order)
+        } else {
+            let (m, k, mirror) = self.direction_bin(dir);
+            let first = self.grid.cell(self.grid.group(order), 0, m, k);
+            (first, 1.0 / dir[2], [mirror, 0.0, 0.0, 1.0])
+        };
         let inv_mu = self.grid.crossing_weight(weight, inv_dz.abs());
         let flux = if down { &mut tally.down } else { &mut tally.up };
         let cells = &mut tally.cells;
         visit_planes(depths, above, d1, down, |j| {
             flux[j] += weight;
             let along = (depths[j] - pos[2]) * inv_dz;
-            let x = mirror * (pos[0] + along * dir[0]);
-            let z = pos[1] + along * dir[1];
+            let (x, z) = (pos[0] + along * dir[0], pos[1] + along * dir[1]);
             let cell = &mut cells[first + j];
             cell[0] += inv_mu;
-            cell[1] += inv_mu * x;
-            cell[2] += inv_mu * z;
+            cell[1] += inv_mu * (proj[0] * x + proj[1] * z);
+            cell[2] += inv_mu * (proj[2] * x + proj[3] * z);
             cell[3] += inv_mu * (x * x + z * z);
         })
     }
 
-    /// The crossings of one flight at normal incidence (μ_L = 1), where nothing fixes an azimuth
-    /// and the radiance does not depend on ψ_V. Every crossing belongs to every ψ_V bin k with
-    /// weight Δψ_k/π, turned about the vertical to an azimuth uniform in the bin, its
-    /// displacement turned with it; the turn is averaged out exactly. Turned to azimuth ψ, a
-    /// displacement with components (a, b) along and across the flight's own horizontal direction
-    /// becomes (x, z) = (a sin ψ + b cos ψ, a cos ψ − b sin ψ), linear in (sin ψ, cos ψ); so the
-    /// walk sums w/|μ| · (1, a, b, a² + b²) once per crossing, in the ψ_V = 0 cell, and
-    /// [`expand_pooled`] spreads the batch's sums over the bins with the bins' means of sin ψ and
-    /// cos ψ. The expectation is that of the plain tally (the azimuth of a crossing is uniform
-    /// and independent of everything else in the frame of the flight).
-    #[allow(clippy::too_many_arguments)]
-    fn cross_pooled(
-        &self,
-        pos: &[f64; 3],
-        dir: &[f64; 3],
-        d1: f64,
-        above: usize,
-        order: u32,
-        weight: f64,
-        tally: &mut BatchTally,
-    ) -> usize {
+    /// At normal incidence (μ_L = 1) nothing fixes an azimuth and the radiance does not depend
+    /// on ψ_V. Every crossing belongs to every ψ_V bin k with weight Δψ_k/π, turned about the
+    /// vertical to an azimuth uniform in the bin, its displacement turned with it; the turn is
+    /// averaged out exactly. Turned to azimuth ψ, a displacement with components (a, b) along and
+    /// across the flight's own horizontal direction becomes (x, z) = (a sin ψ + b cos ψ,
+    /// a cos ψ − b sin ψ), linear in (sin ψ, cos ψ); so the walk sums w/|μ| · (1, a, b, a² + b²)
+    /// once per crossing, in the ψ_V = 0 cell, and [`expand_pooled`] spreads the batch's sums over
+    /// the bins with the bins' means of sin ψ and cos ψ. The expectation is that of the plain
+    /// tally (the azimuth of a crossing is uniform and independent of everything else in the
+    /// frame of the flight). Returns that cell, 1/dz and the projection (x, z) → (a, b) as a
+    /// row-major 2×2 matrix.
+    fn pooled_frame(&self, dir: &[f64; 3], order: u32) -> (usize, f64, [f64; 4]) {
         let g = self.grid;
         let first = g.cell(g.group(order), 0, g.mu_bin(-dir[2]), 0);
         let r = (dir[0] * dir[0] + dir[1] * dir[1]).sqrt();
@@ -226,21 +217,7 @@ impl Slice<'_> {
         } else {
             (1.0 / dir[2], 0.0, 1.0)
         };
-        let inv_mu = g.crossing_weight(weight, inv_dz.abs());
-        let down = dir[2] > 0.0;
-        let flux = if down { &mut tally.down } else { &mut tally.up };
-        let cells = &mut tally.cells;
-        visit_planes(&g.depths, above, d1, down, |j| {
-            flux[j] += weight;
-            let along = (g.depths[j] - pos[2]) * inv_dz;
-            let (x, z) = (pos[0] + along * dir[0], pos[1] + along * dir[1]);
-            let (a, b) = (x * s_c + z * c_c, x * c_c - z * s_c);
-            let cell = &mut cells[first + j];
-            cell[0] += inv_mu;
-            cell[1] += inv_mu * a;
-            cell[2] += inv_mu * b;
-            cell[3] += inv_mu * (x * x + z * z);
-        })
+        (first, inv_dz, [s_c, c_c, c_c, -s_c])
     }
 
     /// (μ_V bin, ψ_V bin, ±1 for the mirror of x) of a propagation direction.
@@ -281,7 +258,7 @@ fn visit_planes(
 }
 
 /// Spreads the normal-incidence sums w/|μ| · (1, a, b, a² + b²) of the ψ_V = 0 cells (see
-/// [`Slice::cross_pooled`]) over every ψ_V bin k: Δψ_k/π · (1, a S_k + b C_k, a C_k − b S_k,
+/// [`Slice::pooled_frame`]) over every ψ_V bin k: Δψ_k/π · (1, a S_k + b C_k, a C_k − b S_k,
 /// a² + b²), with S_k, C_k the bin's means of sin ψ and cos ψ.
 fn expand_pooled(g: &SlabGrid, tally: &mut BatchTally) {
     let means = g.psi_bin_means();
