@@ -338,29 +338,8 @@ fn bad_fit_configs_are_one_error_line_and_no_file() {
         ),
         ("{not json".to_string(), "config"),
     ];
-    for (i, (text, expect)) in cases.iter().enumerate() {
-        let cfg = dir.path().join(format!("cfg{i}.json"));
-        std::fs::write(&cfg, text).unwrap();
-        let out = dir.path().join(format!("out{i}"));
-        let o = nephele(&[
-            "fit",
-            "--config",
-            cfg.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ]);
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert!(!o.status.success(), "{text} should fail");
-        assert!(
-            err.trim().lines().count() == 1 && err.starts_with("error: ") && err.contains(expect),
-            "{text}: {err}"
-        );
-        assert!(
-            files_in(&out).is_empty(),
-            "{text} left files: {:?}",
-            files_in(&out)
-        );
-    }
+    let cases: Vec<(&str, &str)> = cases.iter().map(|(t, e)| (t.as_str(), *e)).collect();
+    refuses_bad_configs(dir.path(), "fit", &cases);
 }
 
 #[test]
@@ -459,25 +438,7 @@ fn slab_quick_config_writes_tables_and_refuses_bad_configs() {
         (r#"{"stop": {"photons": 5}}"#, "unknown field"),
         (r#"{"group_starts": [2, 3]}"#, "group_starts"),
     ];
-    for (i, (text, expect)) in cases.iter().enumerate() {
-        let cfg = dir.path().join(format!("bad{i}.json"));
-        std::fs::write(&cfg, text).unwrap();
-        let out = dir.path().join(format!("out{i}"));
-        let o = nephele(&[
-            "slab",
-            "--config",
-            cfg.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ]);
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert!(!o.status.success(), "{text} should fail");
-        assert!(
-            err.trim().lines().count() == 1 && err.contains(expect),
-            "{text}: {err}"
-        );
-        assert!(files_in(&out).is_empty(), "{text} left files");
-    }
+    refuses_bad_configs(dir.path(), "slab", &cases);
 }
 
 /// slab-quick.json with a larger budget, so that a run lasts long enough to be killed.
@@ -674,5 +635,33 @@ fn transport_tables_answer_and_refuse(ntt: &Path) {
         let mut b = bytes.clone();
         b[bit / 8] ^= 1 << (bit % 8);
         assert!(TransportTables::from_bytes(&b).is_err());
+    }
+}
+
+/// Each bad config makes `nephele CMD --config … --out …` fail with one `error: ` line naming
+/// the problem and leave no file behind.
+fn refuses_bad_configs(dir: &Path, cmd: &str, cases: &[(&str, &str)]) {
+    for (i, (text, expect)) in cases.iter().enumerate() {
+        let cfg = dir.join(format!("{cmd}-bad{i}.json"));
+        std::fs::write(&cfg, text).unwrap();
+        let out = dir.join(format!("{cmd}-out{i}"));
+        let o = nephele(&[
+            cmd,
+            "--config",
+            cfg.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{text} should fail");
+        assert!(
+            err.trim().lines().count() == 1 && err.starts_with("error: ") && err.contains(expect),
+            "{text}: {err}"
+        );
+        assert!(
+            files_in(&out).is_empty(),
+            "{text} left files: {:?}",
+            files_in(&out)
+        );
     }
 }
