@@ -2,9 +2,10 @@
 
 use anyhow::{ensure, Result};
 use clap::Args;
-use nephele::compress::report::GroupError;
+use nephele::compress::report::{CollectorError, GroupError};
 use nephele::compress::run::{compress, Options};
 use nephele::compress::LogAdditive;
+use nephele_runtime::transport::collector::CollectorForm;
 use std::path::PathBuf;
 
 /// Options of `nephele compress`.
@@ -32,6 +33,15 @@ pub struct CompressArgs {
     /// (interpolates in t); 0 fits each thickness on its own (and writes no transport.ntt).
     #[arg(long, default_value_t = 5)]
     pub smooth_t: usize,
+    /// Legendre terms in depth of the collector form (c, σ).
+    #[arg(long, default_value_t = 4)]
+    pub collector_legendre: usize,
+    /// Azimuth harmonics of the collector form.
+    #[arg(long, default_value_t = 2)]
+    pub collector_harmonics: usize,
+    /// Legendre terms in ln t of the collector's parameters (0: no collector).
+    #[arg(long, default_value_t = 3)]
+    pub collector_smooth_t: usize,
     /// Skip the held-out study (a second fit without two thicknesses and two sun cosines,
     /// evaluated there by interpolation).
     #[arg(long)]
@@ -44,8 +54,12 @@ pub fn run(args: CompressArgs) -> Result<()> {
         args.smooth_t <= 9
             && (1..=16).contains(&args.legendre)
             && args.harmonics <= 8
-            && (2..=512).contains(&args.theta_nodes),
-        "--smooth-t in 0..=9, --legendre in 1..=16, --harmonics in 0..=8, --theta-nodes in 2..=512"
+            && (2..=512).contains(&args.theta_nodes)
+            && (1..=16).contains(&args.collector_legendre)
+            && args.collector_harmonics <= 8
+            && args.collector_smooth_t <= 9,
+        "--smooth-t in 0..=9, --legendre and --collector-legendre in 1..=16, --harmonics and \
+         --collector-harmonics in 0..=8, --theta-nodes in 2..=512, --collector-smooth-t in 0..=9"
     );
     let opt = Options {
         form: LogAdditive {
@@ -56,16 +70,25 @@ pub fn run(args: CompressArgs) -> Result<()> {
         },
         smooth_t: args.smooth_t,
         held_out: !args.no_held_out,
+        collector: CollectorForm {
+            legendre: args.collector_legendre,
+            harmonics: args.collector_harmonics,
+            theta_nodes: args.theta_nodes,
+        },
+        collector_q: args.collector_smooth_t,
     };
     let o = compress(&args.tables, &args.out, &opt)?;
     print_errors("fitted slices", &o.errors);
+    print_collector("fitted slices", &o.collector);
     if let Some(h) = &o.held_out {
         print_errors("held-out slices", &h.errors);
+        print_collector("held-out slices", &h.collector);
     }
     println!(
-        "{} parameters ({:.0} KB as f32), fitted in {:.1} s",
+        "{} parameters of T and {} of c, σ ({:.0} KB as f32), fitted in {:.1} s",
         o.params,
-        o.params as f64 * 4.0 / 1024.0,
+        o.collector_params,
+        (o.params + o.collector_params) as f64 * 4.0 / 1024.0,
         o.fit_seconds
     );
     println!(
@@ -94,6 +117,27 @@ fn print_errors(what: &str, errors: &[GroupError]) {
             "",
             100.0 * e.rel_rms,
             100.0 * e.noise,
+            e.cells,
+            w = what.len()
+        );
+    }
+}
+
+fn print_collector(what: &str, errors: &[CollectorError]) {
+    if errors.is_empty() {
+        return;
+    }
+    println!("{what}: group  orders   σ rel RMS (noise)    |Δc|/σ RMS (noise)   cells");
+    for e in errors {
+        println!(
+            "{:>w$}  {:>5}  {:>6}+   {:>6.2} % ({:>5.2} %)   {:>6.2} % ({:>5.2} %)  {:>7}",
+            "",
+            e.group,
+            e.first_order,
+            100.0 * e.sigma_rel,
+            100.0 * e.sigma_noise,
+            100.0 * e.c_in_sigma,
+            100.0 * e.c_noise,
             e.cells,
             w = what.len()
         );

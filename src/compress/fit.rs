@@ -221,6 +221,21 @@ pub fn predict_ln(
     out
 }
 
+/// Where sun cosine il sits among the fitted ones (all but `skip_l`): its own node, or between
+/// its fitted neighbours.
+pub fn held_out_l<'a>(tab: &'a SlabTables, skip_l: &[usize]) -> impl Fn(usize) -> Lerp + use<'a> {
+    let kept_l: Vec<usize> = (0..tab.shape[2]).filter(|il| !skip_l.contains(il)).collect();
+    let kept_mu: Vec<f64> = kept_l.iter().map(|&il| tab.mu_l[il]).collect();
+    move |il: usize| {
+        let p = Lerp::between(&kept_mu, tab.mu_l[il]);
+        Lerp {
+            lo: kept_l[p.lo],
+            hi: kept_l[p.hi],
+            w: p.w,
+        }
+    }
+}
+
 /// The form's T over the whole table layout from fits that left out the thicknesses `skip_t`
 /// and the sun cosines `skip_l`: a held-out thickness by interpolating ln T linearly in ln t
 /// between the nearest fitted thicknesses (each evaluated at the held-out geometry), a held-out
@@ -234,16 +249,7 @@ pub fn predict_held_out(
     let [_, nt, nl, nd, nm, nk] = tab.shape;
     let slice = nl * nd * nm * nk;
     let mut pred = vec![0.0; tab.t.len()];
-    let kept_l: Vec<usize> = (0..nl).filter(|il| !skip_l.contains(il)).collect();
-    let kept_mu: Vec<f64> = kept_l.iter().map(|&il| tab.mu_l[il]).collect();
-    let l_of = |il: usize| {
-        let p = Lerp::between(&kept_mu, tab.mu_l[il]);
-        Lerp {
-            lo: kept_l[p.lo],
-            hi: kept_l[p.hi],
-            w: p.w,
-        }
-    };
+    let l_of = held_out_l(tab, skip_l);
     for g in 1..tab.shape[0] {
         let of_t: Vec<Option<&GroupFit>> = (0..nt)
             .map(|it| fits.iter().find(|f| f.group == g && f.it == it))
@@ -304,6 +310,7 @@ pub(crate) mod tests {
                 .map(|i| std::f64::consts::PI * i as f64 / nk as f64)
                 .collect(),
             group_first: vec![1.0, 2.0],
+            collector: Default::default(),
         };
         let form = LogAdditive {
             legendre: 3,

@@ -5,7 +5,7 @@
 //! thickness do not: docs/compress.md). Same weights and ridge as [`super::fit`]; the normal
 //! equations are accumulated from the sparse rows directly.
 
-use super::fit::{for_each_row, GroupFit, MAX_REL_SE};
+use super::fit::{for_each_row, GroupFit, Row, MAX_REL_SE};
 use super::form::LogAdditive;
 use super::tables::SlabTables;
 use anyhow::{anyhow, Result};
@@ -31,7 +31,7 @@ pub struct JointFit {
 }
 
 /// s(t) ∈ [−1, 1] over the range (a, b) of ln t (held at ±1 outside), and L_0(s) … L_{Q−1}(s).
-fn legendre_in_ln_t((a, b): (f64, f64), t: f64, q: usize) -> Vec<f64> {
+pub(crate) fn legendre_in_ln_t((a, b): (f64, f64), t: f64, q: usize) -> Vec<f64> {
     let s = if b > a {
         (2.0 * (t.ln() - a) / (b - a) - 1.0).clamp(-1.0, 1.0)
     } else {
@@ -48,24 +48,15 @@ fn legendre_in_ln_t((a, b): (f64, f64), t: f64, q: usize) -> Vec<f64> {
     p
 }
 
-/// Fits group `g` over every thickness not in `skip_t`, without the sun cosines in `skip_l`.
-pub fn fit_joint(
+/// The thicknesses the polynomials of group `g` span (not in `skip_t`, with ≥ 5 % of the largest
+/// count of usable cells: a high order in a thin slab is thin on them and would make the
+/// polynomials in ln t swing) and their ln t range.
+pub(crate) fn spanned(
     tab: &SlabTables,
-    form: &LogAdditive,
     g: usize,
-    q: usize,
     skip_t: &[usize],
-    skip_l: &[usize],
-) -> Result<JointFit> {
-    let [_, nt, nl, _, nm, _] = tab.shape;
-    let n = form.n_params(nm, nl) * q;
-    let mut ata = DMatrix::<f64>::zeros(n, n);
-    let mut aty = DVector::<f64>::zeros(n);
-    let (mut row, mut wide) = (Vec::new(), Vec::new());
-    let mut cells = 0;
-    let mut u_range = vec![vec![(f64::INFINITY, f64::NEG_INFINITY); nl * nm]; nt];
-    // Thicknesses where the group is thin on usable cells (a high order in a thin slab) would
-    // make the polynomials in ln t swing: the fit spans those with ≥ 5 % of the largest count.
+) -> Result<(Vec<usize>, (f64, f64))> {
+    let nt = tab.shape[1];
     let usable = |it: usize| {
         let start = tab.index(g, it, 0, 0, 0, 0);
         let n = tab.t.len() / (tab.shape[0] * nt);
@@ -78,53 +69,115 @@ pub fn fit_joint(
     let spanned: Vec<usize> = (0..nt)
         .filter(|&it| !skip_t.contains(&it) && counts[it] * 20 >= most && most > 0)
         .collect();
-    let ln_t_range = match (spanned.first(), spanned.last()) {
-        (Some(&a), Some(&b)) => (tab.thickness[a].ln(), tab.thickness[b].ln()),
-        _ => return Err(anyhow!("group {g}: no thickness with usable cells")),
-    };
+    match (spanned.first(), spanned.last()) {
+        (Some(&a), Some(&b)) => {
+            let range = (tab.thickness[a].ln(), tab.thickness[b].ln());
+            Ok((spanned, range))
+        }
+        _ => Err(anyhow!("group {g}: no thickness with usable cells")),
+    }
+}
+
+/// The normal equations of a joint fit: each row's features times L_q(s(t)) of its thickness.
+pub(crate) struct NormalEquations {
+    ata: DMatrix<f64>,
+    aty: DVector<f64>,
+    wide: Vec<(usize, f64)>,
+    /// Rows added.
+    pub cells: usize,
+}
+
+impl NormalEquations {
+    /// For `n` parameters (form parameters × Q).
+    pub fn new(n: usize) -> Self {
+        Self {
+            ata: DMatrix::zeros(n, n),
+            aty: DVector::zeros(n),
+            wide: Vec::new(),
+            cells: 0,
+        }
+    }
+
+    /// Adds one weighted row at a thickness whose Legendre values in ln t are `lq`.
+    pub fn add(&mut self, r: &Row, lq: &[f64]) {
+        let q = lq.len();
+        self.wide.clear();
+        for &(col, v) in r.features {
+            self.wide.extend(
+                lq.iter()
+                    .enumerate()
+                    .map(|(qi, l)| (col * q + qi, r.w * v * l)),
+            );
+        }
+        let y = r.w * r.y;
+        // The upper triangle of the outer product of the sparse row.
+        for &(a, va) in &self.wide {
+            self.aty[a] += va * y;
+            for &(b, vb) in &self.wide {
+                if b >= a {
+                    self.ata[(a, b)] += va * vb;
+                }
+            }
+        }
+        self.cells += 1;
+    }
+
+    /// The least-squares parameters (ridge 10⁻¹⁰ of the mean diagonal, Cholesky).
+    pub fn solve(mut self, what: &str) -> Result<Vec<f64>> {
+        let n = self.aty.len();
+        for a in 0..n {
+            for b in 0..a {
+                self.ata[(a, b)] = self.ata[(b, a)];
+            }
+        }
+        let ridge = 1e-10 * (0..n).map(|i| self.ata[(i, i)]).sum::<f64>() / n as f64;
+        for i in 0..n {
+            self.ata[(i, i)] += ridge.max(1e-300);
+        }
+        let chol = self
+            .ata
+            .cholesky()
+            .ok_or_else(|| anyhow!("{what}: normal equations not positive definite"))?;
+        Ok(chol.solve(&self.aty).iter().copied().collect())
+    }
+}
+
+/// The form's parameters at thickness `t` from their Legendre coefficients `beta`
+/// (parameter-major, Q per parameter) over the ln t span `range`.
+pub(crate) fn coef_at(beta: &[f64], q: usize, range: (f64, f64), t: f64) -> Vec<f64> {
+    let lq = legendre_in_ln_t(range, t, q);
+    beta.chunks(q)
+        .map(|b| b.iter().zip(&lq).map(|(x, l)| x * l).sum())
+        .collect()
+}
+
+/// Fits group `g` over every thickness not in `skip_t`, without the sun cosines in `skip_l`.
+pub fn fit_joint(
+    tab: &SlabTables,
+    form: &LogAdditive,
+    g: usize,
+    q: usize,
+    skip_t: &[usize],
+    skip_l: &[usize],
+) -> Result<JointFit> {
+    let [_, nt, nl, _, nm, _] = tab.shape;
+    let mut ne = NormalEquations::new(form.n_params(nm, nl) * q);
+    let mut row = Vec::new();
+    let mut u_range = vec![vec![(f64::INFINITY, f64::NEG_INFINITY); nl * nm]; nt];
+    let (spanned, ln_t_range) = spanned(tab, g, skip_t)?;
     for it in (0..nt).filter(|it| !skip_t.contains(it)) {
         let lq = legendre_in_ln_t(ln_t_range, tab.thickness[it], q);
         let in_fit = spanned.contains(&it);
         for_each_row(tab, form, g, it, skip_l, &mut row, |r| {
             let range = &mut u_range[it][r.pair];
             *range = (range.0.min(r.u), range.1.max(r.u));
-            if !in_fit {
-                return;
+            if in_fit {
+                ne.add(&r, &lq);
             }
-            wide.clear();
-            for &(col, v) in r.features {
-                wide.extend(
-                    lq.iter()
-                        .enumerate()
-                        .map(|(qi, l)| (col * q + qi, r.w * v * l)),
-                );
-            }
-            let y = r.w * r.y;
-            // The upper triangle of the outer product of the sparse row.
-            for &(a, va) in &wide {
-                aty[a] += va * y;
-                for &(b, vb) in &wide {
-                    if b >= a {
-                        ata[(a, b)] += va * vb;
-                    }
-                }
-            }
-            cells += 1;
         });
     }
-    for a in 0..n {
-        for b in 0..a {
-            ata[(a, b)] = ata[(b, a)];
-        }
-    }
-    let ridge = 1e-10 * (0..n).map(|i| ata[(i, i)]).sum::<f64>() / n as f64;
-    for i in 0..n {
-        ata[(i, i)] += ridge.max(1e-300);
-    }
-    let chol = ata
-        .cholesky()
-        .ok_or_else(|| anyhow!("group {g}: normal equations not positive definite"))?;
-    let beta = chol.solve(&aty).iter().copied().collect();
+    let cells = ne.cells;
+    let beta = ne.solve(&format!("group {g}"))?;
     // Held-out thicknesses: the depth ranges both fitted neighbours cover.
     let fitted: Vec<usize> = (0..nt).filter(|it| !skip_t.contains(it)).collect();
     for it in skip_t.iter().copied() {
@@ -151,16 +204,10 @@ pub fn fit_joint(
 impl JointFit {
     /// The form's parameters at thickness index `it` (its thickness), as a per-thickness fit.
     pub fn at(&self, tab: &SlabTables, it: usize) -> GroupFit {
-        let lq = legendre_in_ln_t(self.ln_t_range, tab.thickness[it], self.q);
-        let coef = self
-            .beta
-            .chunks(self.q)
-            .map(|b| b.iter().zip(&lq).map(|(x, l)| x * l).sum())
-            .collect();
         GroupFit {
             group: self.group,
             it,
-            coef,
+            coef: coef_at(&self.beta, self.q, self.ln_t_range, tab.thickness[it]),
             cells: self.cells,
             u_range: self.u_range[it].clone(),
         }

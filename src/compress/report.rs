@@ -135,3 +135,138 @@ pub fn group_error_on(
         worst: worst.into_iter().take(5).map(|(_, c)| c).collect(),
     }
 }
+
+/// One collector cell named in a report.
+#[derive(Clone, Debug, Serialize)]
+pub struct WorstCollectorCell {
+    /// Where: thickness (mfp), sun cosine, depth (mfp), view cosine, view azimuth (degrees).
+    pub at: [f64; 5],
+    /// Table (c_x, c_z, σ) (mfp).
+    pub table: [f64; 3],
+    /// The form's (c_x, c_z, σ).
+    pub form: [f64; 3],
+    /// |ĉ − c|/σ.
+    pub c_error_in_sigma: f64,
+}
+
+/// The collector error of one group: T-weighted RMS over the cells where T and σ are usable
+/// (relative SE < 30 %) and the form gives T > 0.
+#[derive(Clone, Debug, Serialize)]
+pub struct CollectorError {
+    /// Group index.
+    pub group: usize,
+    /// First order of the group.
+    pub first_order: f64,
+    /// √(Σ T (σ̂/σ − 1)² / Σ T).
+    pub sigma_rel: f64,
+    /// The tables' relative noise of σ on the same cells.
+    pub sigma_noise: f64,
+    /// √(Σ T |ĉ − c|²/σ² / Σ T): the collector's error in units of σ.
+    pub c_in_sigma: f64,
+    /// The same for c_x and c_z apart.
+    pub cx_in_sigma: f64,
+    /// See `cx_in_sigma`.
+    pub cz_in_sigma: f64,
+    /// The tables' noise of c in units of σ, √(Σ T (SE_x² + SE_z²)/σ² / Σ T).
+    pub c_noise: f64,
+    /// Cells measured.
+    pub cells: usize,
+    /// Cells where T is usable but the form gives T = 0 (left out).
+    pub cells_without_form: usize,
+    /// `c_in_sigma` per thickness.
+    pub c_in_sigma_by_t: Vec<f64>,
+    /// The five largest |ĉ − c|/σ among cells ≥ 1 % of their slice's largest T.
+    pub worst: Vec<WorstCollectorCell>,
+}
+
+/// The collector error of group `g` from `pred` = (σ̂, ĉ_x, ĉ_z) over the table layout (NaN
+/// where the form gives none), on the slices (t index, μ_L index) that `include` accepts.
+pub fn collector_error_on(
+    tab: &SlabTables,
+    pred: &[Vec<f64>; 3],
+    g: usize,
+    include: &dyn Fn(usize, usize) -> bool,
+) -> CollectorError {
+    let [_, nt, nl, nd, nm, nk] = tab.shape;
+    let c = &tab.collector;
+    let per_slice = nl * nd * nm * nk;
+    let mut acc = [0.0; 6]; // T·(σ rel², σ noise², c², cx², cz², c noise²)
+    let (mut w, mut cells, mut without) = (0.0, 0, 0);
+    let mut by_t = Vec::new();
+    let mut worst: Vec<WorstCollectorCell> = Vec::new();
+    for it in 0..nt {
+        let start = (g * nt + it) * per_slice;
+        let slice_max = tab.t[start..start + per_slice]
+            .iter()
+            .copied()
+            .fold(0.0, f64::max);
+        let (mut et, mut wt) = (0.0, 0.0);
+        for r in 0..per_slice {
+            let i = start + r;
+            let (t, s) = (tab.t[i], c.sigma[i]);
+            let usable = t > 0.0
+                && tab.t_se[i] < 0.3 * t
+                && s > 0.0
+                && c.sigma_se[i] < 0.3 * s
+                && c.cx[i].is_finite()
+                && c.cz[i].is_finite();
+            if !usable || !include(it, r / (nd * nm * nk)) {
+                continue;
+            }
+            let [ps, px, pz] = [pred[0][i], pred[1][i], pred[2][i]];
+            if !ps.is_finite() {
+                without += 1;
+                continue;
+            }
+            let (dx, dz) = ((px - c.cx[i]) / s, (pz - c.cz[i]) / s);
+            let terms = [
+                (ps / s - 1.0).powi(2),
+                (c.sigma_se[i] / s).powi(2),
+                dx * dx + dz * dz,
+                dx * dx,
+                dz * dz,
+                (c.cx_se[i].powi(2) + c.cz_se[i].powi(2)) / (s * s),
+            ];
+            for (a, v) in acc.iter_mut().zip(terms) {
+                *a += t * v;
+            }
+            w += t;
+            et += t * terms[2];
+            wt += t;
+            cells += 1;
+            if t >= 0.01 * slice_max {
+                let (il, j, m, k) = (r / (nd * nm * nk), r / (nm * nk) % nd, r / nk % nm, r % nk);
+                worst.push(WorstCollectorCell {
+                    at: [
+                        tab.thickness[it],
+                        tab.mu_l[il],
+                        tab.depth[it * nd + j],
+                        tab.mu_v(m),
+                        tab.psi_v(k).to_degrees(),
+                    ],
+                    table: [c.cx[i], c.cz[i], s],
+                    form: [px, pz, ps],
+                    c_error_in_sigma: terms[2].sqrt(),
+                });
+                worst.sort_by(|a, b| b.c_error_in_sigma.total_cmp(&a.c_error_in_sigma));
+                worst.truncate(5);
+            }
+        }
+        by_t.push(if wt > 0.0 { (et / wt).sqrt() } else { 0.0 });
+    }
+    let rms = |a: f64| if w > 0.0 { (a / w).sqrt() } else { 0.0 };
+    CollectorError {
+        group: g,
+        first_order: tab.group_first[g],
+        sigma_rel: rms(acc[0]),
+        sigma_noise: rms(acc[1]),
+        c_in_sigma: rms(acc[2]),
+        cx_in_sigma: rms(acc[3]),
+        cz_in_sigma: rms(acc[4]),
+        c_noise: rms(acc[5]),
+        cells,
+        cells_without_form: without,
+        c_in_sigma_by_t: by_t,
+        worst,
+    }
+}

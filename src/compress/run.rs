@@ -3,16 +3,20 @@
 //! latter loaded back by the runtime and compared with the fit).
 
 use super::figure;
-use super::fit::{fit_all, predict, predict_held_out, GroupFit};
-use super::joint::{fit_all_joint, fit_joint_groups, JointFit};
-use super::report::{group_error, group_error_on, GroupError};
+use super::collector::{fit_collector, predict_collector, CollectorFit};
+use super::fit::{fit_all, held_out_l, predict, predict_held_out, GroupFit};
+use super::form::Lerp;
+use super::joint::{fit_all_joint, fit_joint_groups, spanned, JointFit};
+use super::report::{collector_error_on, group_error, group_error_on, CollectorError, GroupError};
 use super::ship::{ntt_bytes, phase_angles};
 use super::{LogAdditive, SlabTables};
 use crate::io::{write_atomic, AtomicFiles, Npz};
 use crate::slab::tables::PhaseModel;
 use crate::slab::PhaseSpec;
 use anyhow::{anyhow, ensure, Context, Result};
+use nephele_runtime::transport::collector::{CollectorForm, Statistic};
 use nephele_runtime::transport::tables::TransportTables;
+use rayon::prelude::*;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -26,6 +30,10 @@ pub struct Options {
     pub smooth_t: usize,
     /// Whether to run the held-out study.
     pub held_out: bool,
+    /// The collector form's sizes (fitted with joint fits only).
+    pub collector: CollectorForm,
+    /// Legendre terms in ln t of the collector's parameters.
+    pub collector_q: usize,
 }
 
 /// The held-out study: which slices were left out, and the errors there.
@@ -37,6 +45,8 @@ pub struct HeldOut {
     pub mu_l: Vec<f64>,
     /// Errors on the held-out slices, per group then for the sum.
     pub errors: Vec<GroupError>,
+    /// Collector errors on the held-out slices, per group.
+    pub collector: Vec<CollectorError>,
 }
 
 /// What a compression produced.
@@ -46,8 +56,12 @@ pub struct Outcome {
     pub errors: Vec<GroupError>,
     /// The held-out study, if run.
     pub held_out: Option<HeldOut>,
+    /// Collector errors per group (joint fits only).
+    pub collector: Vec<CollectorError>,
     /// Parameters of T.
     pub params: usize,
+    /// Parameters of σ, c_z and c_x.
+    pub collector_params: usize,
     /// Seconds spent fitting (the first fit).
     pub fit_seconds: f64,
     /// transport.ntt: path, bytes and the largest relative difference of the runtime's f32
@@ -62,10 +76,26 @@ pub fn compress(tables: &Path, out: &Path, opt: &Options) -> Result<Outcome> {
     let [ng, _, nl, _, nm, _] = tab.shape;
     let t0 = Instant::now();
     let (fits, joint) = fit(&tab, opt, &[], &[])?;
+    let coll = fit_collectors(&tab, opt, &[], &[])?;
     let fit_seconds = t0.elapsed().as_secs_f64();
     let pred = predict_everywhere(&tab, &opt.form, &fits);
     let mut errors: Vec<_> = (1..ng).map(|g| group_error(&tab, &pred, Some(g))).collect();
     errors.push(group_error(&tab, &pred, None));
+    let pred_c = predict_collector(&tab, &opt.form, &opt.collector, &coll, &pred, &Lerp::at);
+    let collector: Vec<_> = coll
+        .iter()
+        .map(|f| collector_error_on(&tab, &pred_c, f.group, &|_, _| true))
+        .collect();
+    let collector_params = if coll.is_empty() {
+        0
+    } else {
+        Statistic::ALL
+            .iter()
+            .map(|&s| opt.collector.n_params(s, nm, nl))
+            .sum::<usize>()
+            * (ng - 1)
+            * opt.collector_q
+    };
     let held_out = opt
         .held_out
         .then(|| held_out_study(&tab, opt))
@@ -84,6 +114,15 @@ pub fn compress(tables: &Path, out: &Path, opt: &Options) -> Result<Outcome> {
         "parameters": params,
         "fit_seconds": fit_seconds,
         "errors": errors,
+        "collector": {
+            "form": {
+                "legendre": opt.collector.legendre,
+                "harmonics": opt.collector.harmonics,
+                "theta_nodes": opt.collector.theta_nodes,
+            },
+            "parameters": collector_params,
+            "errors": collector,
+        },
         "held_out": held_out,
         "version": crate::VERSION,
         "git_commit": option_env!("NEPHELE_GIT_COMMIT"),
@@ -94,6 +133,11 @@ pub fn compress(tables: &Path, out: &Path, opt: &Options) -> Result<Outcome> {
     })?;
     let mut npz = Npz::new();
     npz.add("T_form", &tab.shape, &pred);
+    if !coll.is_empty() {
+        for (name, v) in ["sigma_form", "cx_form", "cz_form"].iter().zip(&pred_c) {
+            npz.add(name, &tab.shape, v);
+        }
+    }
     for f in &fits {
         npz.add(
             &format!("coef_g{}_t{}", f.group, f.it),
@@ -118,12 +162,14 @@ pub fn compress(tables: &Path, out: &Path, opt: &Options) -> Result<Outcome> {
     let ntt = if joint.is_empty() {
         None
     } else {
-        Some(write_ntt(tables, out, &tab, opt, &joint, &pred)?)
+        Some(write_ntt(tables, out, &tab, opt, (&joint, &coll), &pred)?)
     };
     Ok(Outcome {
         errors,
+        collector,
         held_out,
         params,
+        collector_params,
         fit_seconds,
         ntt,
     })
@@ -146,6 +192,28 @@ fn fit(
         .flat_map(|j| (0..tab.shape[1]).map(move |it| j.at(tab, it)))
         .collect();
     Ok((fits, joint))
+}
+
+/// The collector fits of every group of orders ≥ 2 (none with per-thickness fits of T), over
+/// the thicknesses T's joint fit spans.
+fn fit_collectors(
+    tab: &SlabTables,
+    opt: &Options,
+    skip_t: &[usize],
+    skip_l: &[usize],
+) -> Result<Vec<CollectorFit>> {
+    if opt.smooth_t == 0 || opt.collector_q == 0 {
+        return Ok(Vec::new());
+    }
+    let groups: Vec<usize> = (1..tab.shape[0]).collect();
+    groups
+        .par_iter()
+        .map(|&g| {
+            let (span, range) = spanned(tab, g, skip_t)?;
+            let form = &opt.collector;
+            fit_collector(tab, &opt.form, form, g, opt.collector_q, (&span, range), skip_l)
+        })
+        .collect()
 }
 
 /// The form's T over the whole table layout.
@@ -184,10 +252,18 @@ fn held_out_study(tab: &SlabTables, opt: &Options) -> Result<HeldOut> {
         .map(|g| group_error_on(tab, &pred, Some(g), &held))
         .collect();
     errors.push(group_error_on(tab, &pred, None, &held));
+    let coll = fit_collectors(tab, opt, &skip_t, &skip_l)?;
+    let l_of = held_out_l(tab, &skip_l);
+    let pred_c = predict_collector(tab, &opt.form, &opt.collector, &coll, &pred, &l_of);
+    let collector = coll
+        .iter()
+        .map(|f| collector_error_on(tab, &pred_c, f.group, &held))
+        .collect();
     Ok(HeldOut {
         thicknesses: skip_t.iter().map(|&i| tab.thickness[i]).collect(),
         mu_l: skip_l.iter().map(|&i| tab.mu_l[i]).collect(),
         errors,
+        collector,
     })
 }
 
@@ -218,10 +294,12 @@ fn write_ntt(
     out: &Path,
     tab: &SlabTables,
     opt: &Options,
-    joint: &[JointFit],
+    (joint, coll): (&[JointFit], &[CollectorFit]),
     pred: &[f64],
 ) -> Result<(PathBuf, usize, f64)> {
-    let bytes = ntt_bytes(tab, &opt.form, opt.smooth_t, joint, &phase_of_run(tables)?)?;
+    let phase = phase_of_run(tables)?;
+    let collector = (!coll.is_empty()).then_some((&opt.collector, coll));
+    let bytes = ntt_bytes(tab, &opt.form, opt.smooth_t, joint, collector, &phase)?;
     let rt = TransportTables::from_bytes(&bytes).map_err(|e| anyhow!("{e}"))?;
     let [_, nt, nl, nd, nm, nk] = tab.shape;
     let mut worst = 0.0f64;

@@ -2,11 +2,13 @@
 //! arrays that [`nephele_runtime::transport::tables::TransportTables`] reads (table in its module
 //! docs): the joint fits of the groups of orders ≥ 2 and the phase function for order 1.
 
+use super::collector::CollectorFit;
 use super::joint::JointFit;
 use super::tables::SlabTables;
 use super::LogAdditive;
 use crate::io::container::{container_bytes, Array};
 use anyhow::{ensure, Result};
+use nephele_runtime::transport::collector::{CollectorForm, Statistic};
 
 /// Angles (degrees) at which the phase function is stored: 0.01° steps to 5° (the Mie forward
 /// peak), 0.1° beyond.
@@ -23,6 +25,7 @@ pub fn ntt_bytes(
     form: &LogAdditive,
     q: usize,
     fits: &[JointFit],
+    collector: Option<(&CollectorForm, &[CollectorFit])>,
     phase: &[f64],
 ) -> Result<Vec<u8>> {
     let theta = phase_angles();
@@ -67,56 +70,41 @@ pub fn ntt_bytes(
     let phase32 = f32s(&mut phase.iter().copied());
     let g = fits.len();
     let p = form.n_params(nm, nl);
-    container_bytes(&[
-        Array {
-            name: "form",
-            dims: &[5],
-            values: &form_v,
-        },
-        Array {
-            name: "group_first",
-            dims: &[g],
-            values: &first,
-        },
-        Array {
-            name: "mu_l_nodes",
-            dims: &[nl],
-            values: &mu_l,
-        },
-        Array {
-            name: "mu_v_nodes",
-            dims: &[nm],
-            values: &mu_v,
-        },
-        Array {
-            name: "thickness",
-            dims: &[nt],
-            values: &thickness,
-        },
-        Array {
-            name: "ln_t_range",
-            dims: &[g, 2],
-            values: &ln_t,
-        },
-        Array {
-            name: "beta",
-            dims: &[g, p, q],
-            values: &beta,
-        },
-        Array {
-            name: "u_range",
-            dims: &[g, nt, nl * nm, 2],
-            values: &u_range,
-        },
-        Array {
-            name: "phase_theta",
-            dims: &[theta32.len()],
-            values: &theta32,
-        },
-        Array {
-            name: "phase",
-            dims: &[phase32.len()],
-            values: &phase32,
-        },
-    ])
+    let mut arrays: Vec<(&str, Vec<usize>, Vec<f32>)> = vec![
+        ("form", vec![5], form_v),
+        ("group_first", vec![g], first),
+        ("mu_l_nodes", vec![nl], mu_l),
+        ("mu_v_nodes", vec![nm], mu_v),
+        ("thickness", vec![nt], thickness),
+        ("ln_t_range", vec![g, 2], ln_t),
+        ("beta", vec![g, p, q], beta),
+        ("u_range", vec![g, nt, nl * nm, 2], u_range),
+        ("phase_theta", vec![theta32.len()], theta32),
+        ("phase", vec![phase32.len()], phase32),
+    ];
+    if let Some((cf, coll)) = collector {
+        ensure!(
+            coll.len() == g
+                && coll.iter().zip(fits).all(|(c, f)| c.group == f.group
+                    && c.q == coll[0].q
+                    && c.ln_t_range == f.ln_t_range),
+            "the collector fits do not match the transport fits"
+        );
+        let cq = coll[0].q;
+        let sizes = [cf.legendre, cf.harmonics, cf.theta_nodes, cq].map(|x| x as f32);
+        arrays.push(("collector_form", vec![4], sizes.to_vec()));
+        for (s, (stat, name)) in Statistic::ALL
+            .iter()
+            .zip(["sigma_beta", "cz_beta", "cx_beta"])
+            .enumerate()
+        {
+            let values = f32s(&mut coll.iter().flat_map(|c| c.beta[s].iter().copied()));
+            arrays.push((name, vec![g, cf.n_params(*stat, nm, nl), cq], values));
+        }
+    }
+    let views: Vec<Array> = arrays
+        .iter()
+        .map(|(name, dims, values)| Array { name, dims, values })
+        .collect();
+    container_bytes(&views)
 }

@@ -24,6 +24,25 @@ pub struct SlabTables {
     pub psi_v_edges: Vec<f64>,
     /// First order of each group.
     pub group_first: Vec<f64>,
+    /// The collector statistics over the same layout (NaN where undefined).
+    pub collector: Collector,
+}
+
+/// The collector (mfp) and its spread σ (mfp) per cell, with standard errors (spec 40).
+#[derive(Clone, Debug, Default)]
+pub struct Collector {
+    /// c_x, across the sun's horizontal travel.
+    pub cx: Vec<f64>,
+    /// Its standard error.
+    pub cx_se: Vec<f64>,
+    /// c_z, along the sun's horizontal travel.
+    pub cz: Vec<f64>,
+    /// Its standard error.
+    pub cz_se: Vec<f64>,
+    /// σ.
+    pub sigma: Vec<f64>,
+    /// Its standard error.
+    pub sigma_se: Vec<f64>,
 }
 
 impl SlabTables {
@@ -38,11 +57,25 @@ impl SlabTables {
             "mu_v_edges",
             "psi_v_edges",
             "group_first",
+            "cx",
+            "cx_se",
+            "cz",
+            "cz_se",
+            "sigma",
+            "sigma_se",
         ];
         let mut a = read_arrays(path, &names)?.into_iter();
         let mut next = || a.next().unwrap_or_default();
         let (t, t_se, thickness, mu_l, depth) = (next(), next(), next(), next(), next());
         let (mu_v_edges, psi_v_edges, group_first) = (next(), next(), next());
+        let collector = Collector {
+            cx: next(),
+            cx_se: next(),
+            cz: next(),
+            cz_se: next(),
+            sigma: next(),
+            sigma_se: next(),
+        };
         let (nt, nl) = (thickness.len(), mu_l.len());
         ensure!(
             nt > 0 && nl > 0 && depth.len() % nt == 0,
@@ -58,9 +91,13 @@ impl SlabTables {
             psi_v_edges.len().saturating_sub(1),
         ];
         let n: usize = shape.iter().product();
+        let c = &collector;
         ensure!(
-            n > 0 && t.len() == n && t_se.len() == n,
-            "'{}': T has {} values, the grids say {shape:?}",
+            n > 0
+                && [&t, &t_se, &c.cx, &c.cx_se, &c.cz, &c.cz_se, &c.sigma, &c.sigma_se]
+                    .iter()
+                    .all(|a| a.len() == n),
+            "'{}': T has {} values, the grids say {shape:?} (or a collector array differs)",
             path.display(),
             t.len()
         );
@@ -74,6 +111,7 @@ impl SlabTables {
             mu_v_edges,
             psi_v_edges,
             group_first,
+            collector,
         })
     }
 

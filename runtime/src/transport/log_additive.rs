@@ -88,7 +88,7 @@ impl<F: Real> Lerp<F> {
     }
 
     /// Calls `f(node, weight)` for its one or two nodes.
-    fn each(&self, mut f: impl FnMut(usize, F)) {
+    pub(crate) fn each(&self, mut f: impl FnMut(usize, F)) {
         if self.hi != self.lo && self.w > F::of(0.0) {
             f(self.lo, F::of(1.0) - self.w);
             f(self.hi, self.w);
@@ -117,6 +117,23 @@ pub struct Cell<F> {
     pub d: F,
     /// Slab thickness (mfp).
     pub t: F,
+}
+
+impl<F: Real> Cell<F> {
+    /// A cell at zero everything (for counting features).
+    pub(crate) fn zero() -> Self {
+        let z = F::of(0.0);
+        Self {
+            l: Lerp::at(0),
+            mu_l: z,
+            v: Lerp::at(0),
+            mu_v: z,
+            psi_v: z,
+            u: z,
+            d: z,
+            t: z,
+        }
+    }
 }
 
 impl LogAdditive {
@@ -163,24 +180,10 @@ impl LogAdditive {
         };
         let x = F::of(2.0) * c.u - F::of(1.0);
         let mut col = 0;
-        let both = |f: &mut dyn FnMut(usize, F), col: usize, val: F| {
-            c.v.each(|m, w| f(col + m, w * val));
-            c.l.each(|il, w| f(col + nm + il, w * val));
-        };
-        let (mut p0, mut p1) = (F::of(1.0), x);
-        for j in 0..self.legendre.min(MAX_LEGENDRE) {
-            let p = match j {
-                0 => F::of(1.0),
-                1 => x,
-                _ => {
-                    // P_j = ((2j − 1) x P_{j−1} − (j − 1) P_{j−2}) / j.
-                    let next = (F::of((2 * j - 1) as f64) * x * p1 - F::of((j - 1) as f64) * p0)
-                        / F::of(j as f64);
-                    (p0, p1) = (p1, next);
-                    next
-                }
-            };
-            both(&mut f, col, p);
+        let both = |f: &mut dyn FnMut(usize, F), col: usize, val: F| on_nodes(c, nm, col, val, f);
+        let p = legendre(x, self.legendre);
+        for &pj in &p[..self.legendre.min(MAX_LEGENDRE)] {
+            both(&mut f, col, pj);
             col += nm + nl;
         }
         if self.pairs {
@@ -198,11 +201,7 @@ impl LogAdditive {
             c.v.each(|m, w| f(col + m, w * ln_f1));
             col += nm;
         }
-        let (i, w) = self.theta_hat(c);
-        for (node, h) in [(i - 1, F::of(1.0) - w), (i, w)] {
-            f(col + 2 * node, h);
-            f(col + 2 * node + 1, h * x);
-        }
+        theta_hats(self.theta_nodes, c, F::of(1.0), col, &mut f);
         col += 2 * self.theta_nodes;
         let one = F::of(1.0);
         let s = ((one - c.mu_v * c.mu_v) * (one - c.mu_l * c.mu_l))
@@ -231,23 +230,65 @@ impl LogAdditive {
         self.for_each_feature(c, nm, nl, |col, v| sum = sum + v * coef(col))
             .then_some(sum)
     }
+}
 
-    /// (i, w): Θ of `c` lies between nodes i − 1 and i, at weight w on node i.
-    fn theta_hat<F: Real>(&self, c: &Cell<F>) -> (usize, F) {
-        let cos = scattering_cosine(c.mu_l, c.mu_v, c.psi_v);
-        let half = (F::of(0.5) * cos.one_minus_mu).sqrt();
-        let theta = F::of(2.0) * (if half > F::of(1.0) { F::of(1.0) } else { half }).asin();
-        let n = self.theta_nodes.max(2);
-        let node = |i: usize| {
-            let r = i as f64 / (n - 1) as f64;
-            F::of(core::f64::consts::PI * r * r)
+/// P_0(x) … P_{n−1}(x) (Legendre polynomials; n ≤ [`MAX_LEGENDRE`], the rest 0).
+pub(crate) fn legendre<F: Real>(x: F, n: usize) -> [F; MAX_LEGENDRE] {
+    let mut p = [F::of(0.0); MAX_LEGENDRE];
+    for j in 0..n.min(MAX_LEGENDRE) {
+        p[j] = match j {
+            0 => F::of(1.0),
+            1 => x,
+            // P_j = ((2j − 1) x P_{j−1} − (j − 1) P_{j−2}) / j.
+            _ => {
+                (F::of((2 * j - 1) as f64) * x * p[j - 1] - F::of((j - 1) as f64) * p[j - 2])
+                    / F::of(j as f64)
+            }
         };
-        let mut i = 1;
-        while i < n - 1 && node(i) < theta {
-            i += 1;
-        }
-        let (a, b) = (node(i - 1), node(i));
-        (i, ((theta - a) / (b - a)).clamp_to(F::of(0.0), F::of(1.0)))
+    }
+    p
+}
+
+/// `f(col + node, weight · val)` for the μ_V nodes of `c` (columns col … col + nm − 1) and the
+/// μ_L nodes (columns col + nm …): a parameter a(μ_V) + b(μ_L) read between its nodes.
+pub(crate) fn on_nodes<F: Real>(
+    c: &Cell<F>,
+    nm: usize,
+    col: usize,
+    val: F,
+    f: &mut dyn FnMut(usize, F),
+) {
+    c.v.each(|m, w| f(col + m, w * val));
+    c.l.each(|il, w| f(col + nm + il, w * val));
+}
+
+/// The Θ-table features `val · h_i(Θ) · (1, 2u − 1)` at columns col + 2i, col + 2i + 1: h_i the
+/// hat functions of the nodes Θ_i = π (i/(n − 1))², n = `nodes` (dense at the forward peak).
+pub(crate) fn theta_hats<F: Real>(
+    nodes: usize,
+    c: &Cell<F>,
+    val: F,
+    col: usize,
+    f: &mut dyn FnMut(usize, F),
+) {
+    let cos = scattering_cosine(c.mu_l, c.mu_v, c.psi_v);
+    let half = (F::of(0.5) * cos.one_minus_mu).sqrt();
+    let theta = F::of(2.0) * (if half > F::of(1.0) { F::of(1.0) } else { half }).asin();
+    let n = nodes.max(2);
+    let node = |i: usize| {
+        let r = i as f64 / (n - 1) as f64;
+        F::of(core::f64::consts::PI * r * r)
+    };
+    let mut i = 1;
+    while i < n - 1 && node(i) < theta {
+        i += 1;
+    }
+    let (a, b) = (node(i - 1), node(i));
+    let w = ((theta - a) / (b - a)).clamp_to(F::of(0.0), F::of(1.0));
+    let x = F::of(2.0) * c.u - F::of(1.0);
+    for (k, h) in [(i - 1, F::of(1.0) - w), (i, w)] {
+        f(col + 2 * k, val * h);
+        f(col + 2 * k + 1, val * h * x);
     }
 }
 

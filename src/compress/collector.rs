@@ -1,0 +1,172 @@
+//! Fits of the collector form ([`nephele_runtime::transport::collector`], equations there) to
+//! the tables' c_x, c_z and σ, per order group and jointly across thicknesses (the same
+//! polynomials in ln t and span as the group's T, [`super::joint`]). First ln σ, weighted by
+//! 1/max(rel SE, 0.2 %) like T; then c_z/σ̂ and c_x/σ̂ with σ̂ the fitted σ, weighted by
+//! σ̂/max(SE, 0.002 σ̂): the residuals are the error in units of σ that the report gives. Cells
+//! enter where T is usable (as for T's fit) and σ's relative SE is below 30 %.
+
+use super::fit::{cells_of, Row, MAX_REL_SE, MIN_REL_SE};
+use super::form::{Cell, Lerp, LogAdditive};
+use super::joint::{coef_at, legendre_in_ln_t, NormalEquations};
+use super::tables::SlabTables;
+use anyhow::Result;
+use nephele_runtime::transport::collector::{CollectorForm, Statistic};
+
+/// The collector fit of one group over all thicknesses.
+pub struct CollectorFit {
+    /// Group index (≥ 1).
+    pub group: usize,
+    /// Legendre terms in ln t.
+    pub q: usize,
+    /// ln t span (the group's T fit's).
+    pub ln_t_range: (f64, f64),
+    /// β of ln σ, c_z/σ̂, c_x/σ̂ (parameter-major, Q per parameter).
+    pub beta: [Vec<f64>; 3],
+    /// Cells fitted.
+    pub cells: usize,
+}
+
+/// A usable cell of thickness `it`: its form cell, flat table index.
+fn usable_cells(
+    tab: &SlabTables,
+    t_form: &LogAdditive,
+    g: usize,
+    it: usize,
+    skip_l: &[usize],
+) -> Vec<(Cell, usize)> {
+    let c = &tab.collector;
+    cells_of(tab, t_form, it)
+        .into_iter()
+        .filter(|(_, [il, ..], _)| !skip_l.contains(il))
+        .map(|(cell, [il, j, m, k], _)| (cell, tab.index(g, it, il, j, m, k)))
+        .filter(|&(_, i)| {
+            let (t, s) = (tab.t[i], c.sigma[i]);
+            t > 0.0
+                && tab.t_se[i] < MAX_REL_SE * t
+                && s > 0.0
+                && c.sigma_se[i] < MAX_REL_SE * s
+                && c.cx[i].is_finite()
+                && c.cz[i].is_finite()
+        })
+        .collect()
+}
+
+/// Fits group `g` at the thicknesses `fit_t` (those T's fit spans), without the sun cosines
+/// `skip_l`, with polynomials of `q` terms over `ln_t_range`.
+pub fn fit_collector(
+    tab: &SlabTables,
+    t_form: &LogAdditive,
+    form: &CollectorForm,
+    g: usize,
+    q: usize,
+    (fit_t, ln_t_range): (&[usize], (f64, f64)),
+    skip_l: &[usize],
+) -> Result<CollectorFit> {
+    let [_, _, nl, _, nm, _] = tab.shape;
+    let c = &tab.collector;
+    let cells: Vec<Vec<(Cell, usize)>> = fit_t
+        .iter()
+        .map(|&it| usable_cells(tab, t_form, g, it, skip_l))
+        .collect();
+    let lq = |it: usize| legendre_in_ln_t(ln_t_range, tab.thickness[it], q);
+    let mut row = Vec::new();
+    let mut solve = |stat: Statistic, target: &dyn Fn(&Cell, usize, usize) -> (f64, f64, f64)| {
+        let mut ne = NormalEquations::new(form.n_params(stat, nm, nl) * q);
+        for (&it, cells) in fit_t.iter().zip(&cells) {
+            let l = lq(it);
+            for (cell, i) in cells {
+                let (sigma, y, w) = target(cell, *i, it);
+                row.clear();
+                form.for_each_feature(stat, cell, sigma, nm, nl, |col, v| row.push((col, v)));
+                let r = Row {
+                    pair: 0,
+                    u: cell.u,
+                    features: &row,
+                    w,
+                    y,
+                };
+                ne.add(&r, &l);
+            }
+        }
+        let n = ne.cells;
+        ne.solve(&format!("group {g}, {stat:?}")).map(|b| (b, n))
+    };
+    let (ln_sigma, n) = solve(Statistic::LnSigma, &|_, i, _| {
+        let w = 1.0 / (c.sigma_se[i] / c.sigma[i]).max(MIN_REL_SE);
+        (0.0, c.sigma[i].ln(), w)
+    })?;
+    let sigma_coef: Vec<Vec<f64>> = (0..tab.shape[1])
+        .map(|it| coef_at(&ln_sigma, q, ln_t_range, tab.thickness[it]))
+        .collect();
+    let sigma_hat = |cell: &Cell, it: usize| {
+        let coef = &sigma_coef[it];
+        form.value(Statistic::LnSigma, cell, 0.0, nm, nl, |k| coef[k])
+            .exp()
+    };
+    let ratio = |v: &[f64], se: &[f64], cell: &Cell, i: usize, it: usize| {
+        let s = sigma_hat(cell, it);
+        (s, v[i] / s, 1.0 / (se[i] / s).max(MIN_REL_SE))
+    };
+    let (cz, _) = solve(Statistic::Cz, &|cell, i, it| ratio(&c.cz, &c.cz_se, cell, i, it))?;
+    let (cx, _) = solve(Statistic::Cx, &|cell, i, it| ratio(&c.cx, &c.cx_se, cell, i, it))?;
+    Ok(CollectorFit {
+        group: g,
+        q,
+        ln_t_range,
+        beta: [ln_sigma, cz, cx],
+        cells: n,
+    })
+}
+
+impl CollectorFit {
+    /// The parameters of ln σ, c_z/σ̂, c_x/σ̂ at thickness `t`.
+    pub fn at(&self, t: f64) -> [Vec<f64>; 3] {
+        [0, 1, 2].map(|s| coef_at(&self.beta[s], self.q, self.ln_t_range, t))
+    }
+}
+
+/// The fitted (σ, c_x, c_z) (mfp) at cell `c` from the parameters `coef` at its thickness.
+pub fn predict_at(
+    form: &CollectorForm,
+    coef: &[Vec<f64>; 3],
+    c: &Cell,
+    nm: usize,
+    nl: usize,
+) -> [f64; 3] {
+    let sigma = form
+        .value(Statistic::LnSigma, c, 0.0, nm, nl, |k| coef[0][k])
+        .exp();
+    let cz = sigma * form.value(Statistic::Cz, c, sigma, nm, nl, |k| coef[1][k]);
+    let cx = sigma * form.value(Statistic::Cx, c, sigma, nm, nl, |k| coef[2][k]);
+    [sigma, cx, cz]
+}
+
+/// (σ, c_x, c_z) of the form over the whole table layout where `t_pred` (the form's T) is
+/// positive, NaN elsewhere; the sun cosine of index il read at `l_of(il)` among the nodes.
+pub fn predict_collector(
+    tab: &SlabTables,
+    t_form: &LogAdditive,
+    form: &CollectorForm,
+    fits: &[CollectorFit],
+    t_pred: &[f64],
+    l_of: &dyn Fn(usize) -> Lerp,
+) -> [Vec<f64>; 3] {
+    let [_, nt, nl, _, nm, _] = tab.shape;
+    let mut out = [0, 1, 2].map(|_| vec![f64::NAN; tab.t.len()]);
+    for fit in fits {
+        for it in 0..nt {
+            let coef = fit.at(tab.thickness[it]);
+            for (mut cell, [il, j, m, k], _) in cells_of(tab, t_form, it) {
+                let i = tab.index(fit.group, it, il, j, m, k);
+                if t_pred[i] > 0.0 {
+                    cell.l = l_of(il);
+                    let v = predict_at(form, &coef, &cell, nm, nl);
+                    for (o, v) in out.iter_mut().zip(v) {
+                        o[i] = v;
+                    }
+                }
+            }
+        }
+    }
+    out
+}
