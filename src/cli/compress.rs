@@ -39,8 +39,11 @@ pub struct CompressArgs {
     /// Azimuth harmonics of the collector form.
     #[arg(long, default_value_t = 2)]
     pub collector_harmonics: usize,
+    /// Θ nodes of the collector form.
+    #[arg(long, default_value_t = 12)]
+    pub collector_theta_nodes: usize,
     /// Legendre terms in ln t of the collector's parameters (0: no collector).
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 4)]
     pub collector_smooth_t: usize,
     /// Skip the held-out study (a second fit without two thicknesses and two sun cosines,
     /// evaluated there by interpolation).
@@ -57,9 +60,11 @@ pub fn run(args: CompressArgs) -> Result<()> {
             && (2..=512).contains(&args.theta_nodes)
             && (1..=16).contains(&args.collector_legendre)
             && args.collector_harmonics <= 8
-            && args.collector_smooth_t <= 9,
+            && args.collector_smooth_t <= 9
+            && (2..=512).contains(&args.collector_theta_nodes),
         "--smooth-t in 0..=9, --legendre and --collector-legendre in 1..=16, --harmonics and \
-         --collector-harmonics in 0..=8, --theta-nodes in 2..=512, --collector-smooth-t in 0..=9"
+         --collector-harmonics in 0..=8, --theta-nodes and --collector-theta-nodes in 2..=512, \
+         --collector-smooth-t in 0..=9"
     );
     let opt = Options {
         form: LogAdditive {
@@ -73,7 +78,7 @@ pub fn run(args: CompressArgs) -> Result<()> {
         collector: CollectorForm {
             legendre: args.collector_legendre,
             harmonics: args.collector_harmonics,
-            theta_nodes: args.theta_nodes,
+            theta_nodes: args.collector_theta_nodes,
         },
         collector_q: args.collector_smooth_t,
     };
@@ -95,11 +100,17 @@ pub fn run(args: CompressArgs) -> Result<()> {
         "wrote {}/report.json, compressed.npz, fit_vs_tables.png, error_by_thickness.png",
         args.out.display()
     );
-    if let Some((path, bytes, worst)) = &o.ntt {
+    if let Some(n) = &o.ntt {
         println!(
-            "wrote {} ({:.0} KB); the runtime's f32 evaluation within {worst:.1e} of the fitted form",
-            path.display(),
-            *bytes as f64 / 1024.0
+            "wrote {} ({:.0} KB); the runtime's f32 evaluation against the fit: T within {:.1e}, \
+             σ within {:.1e}, c within {:.1e} σ; order 1 from the stored phase table within {:.1e} \
+             of the phase function's",
+            n.path.display(),
+            n.bytes as f64 / 1024.0,
+            n.worst_t,
+            n.worst_sigma,
+            n.worst_c_in_sigma,
+            n.worst_order1
         );
     }
     Ok(())

@@ -15,7 +15,8 @@ use crate::slab::tables::PhaseModel;
 use crate::slab::PhaseSpec;
 use anyhow::{anyhow, ensure, Context, Result};
 use nephele_runtime::transport::collector::{CollectorForm, Statistic};
-use nephele_runtime::transport::tables::TransportTables;
+use nephele_runtime::transport::single_scattering;
+use nephele_runtime::transport::tables::{Transport, TransportTables};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -64,9 +65,8 @@ pub struct Outcome {
     pub collector_params: usize,
     /// Seconds spent fitting (the first fit).
     pub fit_seconds: f64,
-    /// transport.ntt: path, bytes and the largest relative difference of the runtime's f32
-    /// evaluation from the fit (joint fits only).
-    pub ntt: Option<(PathBuf, usize, f64)>,
+    /// transport.ntt and the runtime's agreement with the fit (joint fits only).
+    pub ntt: Option<NttCheck>,
 }
 
 /// Fits, measures and writes everything into `out`.
@@ -107,6 +107,11 @@ pub fn compress(tables: &Path, out: &Path, opt: &Options) -> Result<Outcome> {
             (ng - 1) * opt.smooth_t
         };
     std::fs::create_dir_all(out).with_context(|| format!("cannot create '{}'", out.display()))?;
+    let ntt = if joint.is_empty() {
+        None
+    } else {
+        Some(write_ntt(tables, out, &tab, opt, (&joint, &coll), (&pred, &pred_c))?)
+    };
     let report = serde_json::json!({
         "tables": tables,
         "form": super::form::to_json(&opt.form),
@@ -124,6 +129,7 @@ pub fn compress(tables: &Path, out: &Path, opt: &Options) -> Result<Outcome> {
             "errors": collector,
         },
         "held_out": held_out,
+        "transport_ntt": ntt,
         "version": crate::VERSION,
         "git_commit": option_env!("NEPHELE_GIT_COMMIT"),
     });
@@ -159,11 +165,6 @@ pub fn compress(tables: &Path, out: &Path, opt: &Options) -> Result<Outcome> {
         )
     })?;
     figures.commit()?;
-    let ntt = if joint.is_empty() {
-        None
-    } else {
-        Some(write_ntt(tables, out, &tab, opt, (&joint, &coll), &pred)?)
-    };
     Ok(Outcome {
         errors,
         collector,
@@ -267,8 +268,8 @@ fn held_out_study(tab: &SlabTables, opt: &Options) -> Result<HeldOut> {
     })
 }
 
-/// The phase function of the slab run (its tables.json's config.phase) at [`phase_angles`].
-fn phase_of_run(tables: &Path) -> Result<Vec<f64>> {
+/// The phase function of the slab run (its tables.json's config.phase).
+fn phase_model_of_run(tables: &Path) -> Result<PhaseModel> {
     let json = tables.with_extension("json");
     let text = std::fs::read_to_string(&json).with_context(|| {
         format!(
@@ -280,11 +281,25 @@ fn phase_of_run(tables: &Path) -> Result<Vec<f64>> {
         serde_json::from_str(&text).with_context(|| format!("'{}' is not JSON", json.display()))?;
     let spec: PhaseSpec = serde_json::from_value(doc["config"]["phase"].clone())
         .with_context(|| format!("'{}': no config.phase", json.display()))?;
-    let model = PhaseModel::build(&spec)?;
-    Ok(phase_angles()
-        .iter()
-        .map(|deg| model.with(|p| p.eval(deg.to_radians().cos())))
-        .collect())
+    PhaseModel::build(&spec)
+}
+
+/// transport.ntt as written, and how closely the runtime follows the fit.
+#[derive(Clone, Debug, Serialize)]
+pub struct NttCheck {
+    /// Where.
+    pub path: PathBuf,
+    /// Its size.
+    pub bytes: usize,
+    /// Largest |T_runtime/T_fit − 1| over the cells where both are positive.
+    pub worst_t: f64,
+    /// Largest |σ_runtime/σ_fit − 1| and |c_runtime − c_fit|/σ_fit.
+    pub worst_sigma: f64,
+    /// See `worst_sigma`.
+    pub worst_c_in_sigma: f64,
+    /// Largest |T₁/T₁_exact − 1| of order 1 from the stored phase table against the phase
+    /// function itself, over the cells' centres where T₁_exact > 10⁻⁶ of its slice maximum.
+    pub worst_order1: f64,
 }
 
 /// Writes transport.ntt (joint fits and the phase function) after loading it back with the
@@ -295,44 +310,70 @@ fn write_ntt(
     tab: &SlabTables,
     opt: &Options,
     (joint, coll): (&[JointFit], &[CollectorFit]),
-    pred: &[f64],
-) -> Result<(PathBuf, usize, f64)> {
-    let phase = phase_of_run(tables)?;
+    (pred, pred_c): (&[f64], &[Vec<f64>; 3]),
+) -> Result<NttCheck> {
+    let model = phase_model_of_run(tables)?;
+    let phase: Vec<f64> = phase_angles()
+        .iter()
+        .map(|deg| model.with(|p| p.eval(deg.to_radians().cos())))
+        .collect();
     let collector = (!coll.is_empty()).then_some((&opt.collector, coll));
     let bytes = ntt_bytes(tab, &opt.form, opt.smooth_t, joint, collector, &phase)?;
     let rt = TransportTables::from_bytes(&bytes).map_err(|e| anyhow!("{e}"))?;
     let [_, nt, nl, nd, nm, nk] = tab.shape;
-    let mut worst = 0.0f64;
-    let mut all = vec![0.0f32; joint.len()];
+    let mut check = NttCheck {
+        path: out.join("transport.ntt"),
+        bytes: bytes.len(),
+        worst_t: 0.0,
+        worst_sigma: 0.0,
+        worst_c_in_sigma: 0.0,
+        worst_order1: 0.0,
+    };
+    let mut all = vec![Transport::default(); joint.len()];
     for it in 0..nt {
         for il in 0..nl {
+            let mut order1 = Vec::new();
             for j in 0..nd {
                 for m in 0..nm {
                     for k in 0..nk {
                         let (d, t) = (tab.depth[it * nd + j], tab.thickness[it]);
-                        rt.transport_all(
-                            d as f32,
-                            t as f32,
-                            tab.mu_v(m) as f32,
-                            tab.psi_v(k) as f32,
-                            tab.mu_l[il] as f32,
-                            &mut all,
-                        );
-                        for (f, &got) in joint.iter().zip(&all) {
-                            let want = pred[tab.index(f.group, it, il, j, m, k)];
-                            if want > 0.0 && got > 0.0 {
-                                worst = worst.max((got as f64 / want - 1.0).abs());
-                            }
+                        let (mu_v, psi, mu_l) = (tab.mu_v(m), tab.psi_v(k), tab.mu_l[il]);
+                        let at = [d, t, mu_v, psi, mu_l].map(|x| x as f32);
+                        rt.evaluate_all(at[0], at[1], at[2], at[3], at[4], &mut all);
+                        for (f, got) in joint.iter().zip(&all) {
+                            let i = tab.index(f.group, it, il, j, m, k);
+                            compare(&mut check, (pred[i], pred_c[0][i], pred_c[1][i], pred_c[2][i]), got);
                         }
+                        let exact = model.with(|p| single_scattering(p, 1.0, mu_l, t, d, mu_v, psi));
+                        let stored = rt.order1(at[0], at[1], at[2], at[3], at[4]) as f64;
+                        order1.push((exact, stored));
                     }
+                }
+            }
+            let top = order1.iter().map(|o| o.0).fold(0.0, f64::max);
+            for (exact, stored) in order1 {
+                if exact > 1e-6 * top {
+                    check.worst_order1 = check.worst_order1.max((stored / exact - 1.0).abs());
                 }
             }
         }
     }
-    let path = out.join("transport.ntt");
-    write_atomic(&path, |w| {
+    write_atomic(&check.path, |w| {
         std::io::Write::write_all(w, &bytes)?;
         Ok(())
     })?;
-    Ok((path, bytes.len(), worst))
+    Ok(check)
+}
+
+/// Folds one cell's runtime values `got` against the fit's (T, σ, c_x, c_z) into `check`.
+fn compare(check: &mut NttCheck, (t, sigma, cx, cz): (f64, f64, f64, f64), got: &Transport) {
+    if !(t > 0.0 && got.t > 0.0) {
+        return;
+    }
+    check.worst_t = check.worst_t.max((got.t as f64 / t - 1.0).abs());
+    if sigma.is_finite() && sigma > 0.0 {
+        check.worst_sigma = check.worst_sigma.max((got.sigma as f64 / sigma - 1.0).abs());
+        let dc = (got.c_x as f64 - cx).hypot(got.c_z as f64 - cz) / sigma;
+        check.worst_c_in_sigma = check.worst_c_in_sigma.max(dc);
+    }
 }

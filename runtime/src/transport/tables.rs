@@ -18,7 +18,12 @@
 //! | `u_range` | [G, N, L·M, 2] | per thickness and (μ_L, μ_V) pair, the stretched depths fitted |
 //! | `phase_theta` | [n] | phase function angles (degrees, increasing, 0 … 180) |
 //! | `phase` | [n] | phase function p(θ) (sr⁻¹) |
+//! | `collector_form` | [4] | optional: the collector form's J, K, Θ nodes, Q |
+//! | `sigma_beta`, `cz_beta`, `cx_beta` | [G, P_s, Q] | with it: ln σ, c_z/σ̂, c_x/σ̂ ([`super::collector`]) |
+//!
+//! Files without the collector arrays load too; their [`Transport`] has c = 0, σ = 0.
 
+use super::collector::{CollectorForm, Statistic};
 use super::log_additive::{Cell, Lerp, LogAdditive, MAX_LEGENDRE};
 use super::single::{single_scattering, PhaseValue};
 use crate::container::{ArrayView, Container, FormatError};
@@ -35,9 +40,39 @@ pub const MAX_HARMONICS: usize = 8;
 /// γ and the pair terms on four (μ_V, μ_L) pairs, two Θ hats, K ≤ 8 harmonics.
 const MAX_FEATURES: usize = 16 * 4 + 4 * 3 + 4 + MAX_HARMONICS * 4;
 
+/// Most Legendre terms in depth and azimuth harmonics of a loadable collector form.
+const MAX_COLLECTOR_LEGENDRE: usize = 8;
+const MAX_COLLECTOR_HARMONICS: usize = 4;
+/// Room for the features of a collector statistic at one point: at most 2K + 4 blocks, each
+/// J values on two μ_V and two μ_L nodes (a Θ block has 4).
+const MAX_COLLECTOR_FEATURES: usize = (2 * MAX_COLLECTOR_HARMONICS + 4) * MAX_COLLECTOR_LEGENDRE * 4;
+
+/// Transport of one order group at a point: T = L/E⊥ (sr⁻¹), the collector c = (c_x, c_z) and
+/// its spread σ (mfp; spec 40).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Transport {
+    /// T (sr⁻¹).
+    pub t: f32,
+    /// c_x (mfp), across the sun's horizontal travel.
+    pub c_x: f32,
+    /// c_z (mfp), along it.
+    pub c_z: f32,
+    /// σ (mfp).
+    pub sigma: f32,
+}
+
+/// The collector part of the tables.
+#[derive(Clone, Copy, Debug)]
+struct CollectorPart<'a> {
+    form: CollectorForm,
+    q: usize,
+    beta: [ArrayView<'a>; 3],
+}
+
 /// Validated compressed tables, borrowing the container's bytes.
 #[derive(Clone, Copy, Debug)]
 pub struct TransportTables<'a> {
+    collector: Option<CollectorPart<'a>>,
     form: LogAdditive,
     q: usize,
     group_first: ArrayView<'a>,
@@ -124,6 +159,7 @@ impl<'a> TransportTables<'a> {
         let p = form.n_params(m, l);
         let theta_len = count("phase_theta")?;
         let t = TransportTables {
+            collector: collector_part(&c, g, m, l)?,
             form,
             q,
             group_first: need(&c, "group_first", g)?,
@@ -183,11 +219,77 @@ impl<'a> TransportTables<'a> {
     pub fn transport_all(&self, d: f32, t: f32, mu_v: f32, psi_v: f32, mu_l: f32, out: &mut [f32]) {
         let groups = self.groups().min(out.len());
         out[..groups].iter_mut().for_each(|v| *v = 0.0);
-        if !(t > 0.0) || !(d >= 0.0 && d <= t) {
+        if let Some(pt) = self.point(d, t, mu_v, psi_v, mu_l) {
+            for (g, slot) in out[..groups].iter_mut().enumerate() {
+                *slot = self.t_of(&pt, g);
+            }
+        }
+    }
+
+    /// T, c and σ of every group at one point into `out[..groups()]` (the rest untouched); c
+    /// and σ are 0 where T is, or when the file holds no collector.
+    pub fn evaluate_all(
+        &self,
+        d: f32,
+        t: f32,
+        mu_v: f32,
+        psi_v: f32,
+        mu_l: f32,
+        out: &mut [Transport],
+    ) {
+        let groups = self.groups().min(out.len());
+        out[..groups].iter_mut().for_each(|v| *v = Transport::default());
+        let Some(pt) = self.point(d, t, mu_v, psi_v, mu_l) else {
             return;
+        };
+        let (nl, nm) = (self.mu_l.len(), self.mu_v.len());
+        let mut rows = [[(0usize, 0.0f32); MAX_COLLECTOR_FEATURES]; 3];
+        let mut lens = [0usize; 3];
+        let fill = |stat: Statistic, sigma: f32, row: &mut [(usize, f32)], n: &mut usize| {
+            if let Some(cp) = &self.collector {
+                *n = 0;
+                cp.form.for_each_feature(stat, &pt.cell, sigma, nm, nl, |col, v| {
+                    if *n < row.len() {
+                        row[*n] = (col, v);
+                        *n += 1;
+                    }
+                });
+            }
+        };
+        let [r_sigma, r_z, r_x] = &mut rows;
+        fill(Statistic::LnSigma, 0.0, r_sigma, &mut lens[0]);
+        for (g, slot) in out[..groups].iter_mut().enumerate() {
+            slot.t = self.t_of(&pt, g);
+            let Some(cp) = &self.collector else { continue };
+            if !(slot.t > 0.0) {
+                continue;
+            }
+            let lq = legendre_in(&self.ln_t_range, g, pt.ln_t, cp.q);
+            let dot = |s: usize, row: &[(usize, f32)]| {
+                let p = cp.form.n_params(Statistic::ALL[s], nm, nl);
+                dot_at_t(&cp.beta[s], g * p, cp.q, &lq, row)
+            };
+            let sigma = Real::exp(dot(0, &r_sigma[..lens[0]]));
+            fill(Statistic::Cz, sigma, r_z, &mut lens[1]);
+            fill(Statistic::Cx, sigma, r_x, &mut lens[2]);
+            slot.sigma = sigma;
+            slot.c_z = sigma * dot(1, &r_z[..lens[1]]);
+            slot.c_x = sigma * dot(2, &r_x[..lens[2]]);
+        }
+    }
+
+    /// Whether the tables hold the collector (c, σ).
+    pub fn has_collector(&self) -> bool {
+        self.collector.is_some()
+    }
+
+    /// The features of T at a point, or None where every group is 0.
+    fn point(&self, d: f32, t: f32, mu_v: f32, psi_v: f32, mu_l: f32) -> Option<Point> {
+        if !(t > 0.0) || !(d >= 0.0 && d <= t) {
+            return None;
         }
         let (nl, nm) = (self.mu_l.len(), self.mu_v.len());
-        let c = Cell {
+        let cell = Cell {
             l: lerp(&self.mu_l, mu_l),
             mu_l,
             v: lerp(&self.mu_v, mu_v),
@@ -197,64 +299,39 @@ impl<'a> TransportTables<'a> {
             d,
             t,
         };
-        let Some(offset) = self.form.ln_boundary(&c) else {
-            return;
-        };
+        let offset = self.form.ln_boundary(&cell)?;
         let mut row = [(0usize, 0.0f32); MAX_FEATURES];
         let mut n = 0;
-        let ok = self.form.for_each_feature(&c, nm, nl, |col, v| {
+        let ok = self.form.for_each_feature(&cell, nm, nl, |col, v| {
             if n < MAX_FEATURES {
                 row[n] = (col, v);
                 n += 1;
             }
         });
-        if !ok {
-            return;
+        ok.then(|| Point {
+            cell,
+            offset,
+            row,
+            n,
+            near_t: lerp(&self.thickness, t),
+            ln_t: Real::ln(t),
+        })
+    }
+
+    /// T of group `g` at `pt`.
+    fn t_of(&self, pt: &Point, g: usize) -> f32 {
+        if !self.inside_fitted_depths(g, pt.near_t, &pt.cell) {
+            return 0.0;
         }
-        let (p, q) = (self.form.n_params(nm, nl), self.q);
-        let (near_t, ln_t_point) = (lerp(&self.thickness, t), Real::ln(t));
-        for (g, slot) in out[..groups].iter_mut().enumerate() {
-            if !self.inside_fitted_depths(g, near_t, &c) {
-                continue;
-            }
-            let lq = self.legendre_in_ln_t(g, ln_t_point);
-            let mut ln_t = offset;
-            for &(col, v) in &row[..n] {
-                let base = (g * p + col) * q;
-                let mut coef = 0.0;
-                for (k, l) in lq[..q].iter().enumerate() {
-                    coef += self.beta.get(base + k).unwrap_or(0.0) * l;
-                }
-                ln_t += v * coef;
-            }
-            *slot = Real::exp(ln_t);
-        }
+        let (nl, nm) = (self.mu_l.len(), self.mu_v.len());
+        let lq = legendre_in(&self.ln_t_range, g, pt.ln_t, self.q);
+        let p = self.form.n_params(nm, nl);
+        Real::exp(pt.offset + dot_at_t(&self.beta, g * p, self.q, &lq, &pt.row[..pt.n]))
     }
 
     /// Order 1 (single scattering of the sun beam, sr⁻¹) at the same point, albedo 1.
     pub fn order1(&self, d: f32, t: f32, mu_v: f32, psi_v: f32, mu_l: f32) -> f32 {
         single_scattering(&StoredPhase(self), 1.0, mu_l, t, d, mu_v, psi_v)
-    }
-
-    fn legendre_in_ln_t(&self, g: usize, ln_t: f32) -> [f32; MAX_Q] {
-        let (a, b) = (
-            self.ln_t_range.get(2 * g).unwrap_or(0.0),
-            self.ln_t_range.get(2 * g + 1).unwrap_or(0.0),
-        );
-        let s = if b > a {
-            (2.0 * (ln_t - a) / (b - a) - 1.0).clamp(-1.0, 1.0)
-        } else {
-            0.0
-        };
-        let mut p = [0.0f32; MAX_Q];
-        for j in 0..self.q {
-            p[j] = match j {
-                0 => 1.0,
-                1 => s,
-                _ => ((2 * j - 1) as f32 * s * p[j - 1] - (j - 1) as f32 * p[j - 2]) / j as f32,
-            };
-        }
-        p
     }
 
     /// Whether u lies within the fitted depths of the thickness nodes `k` around t and of the
@@ -302,6 +379,97 @@ impl<'a> TransportTables<'a> {
             0.0
         };
         pa + w * (pb - pa)
+    }
+}
+
+/// The features of T at one point.
+struct Point {
+    cell: Cell<f32>,
+    offset: f32,
+    row: [(usize, f32); MAX_FEATURES],
+    n: usize,
+    near_t: Lerp<f32>,
+    ln_t: f32,
+}
+
+/// Σ_features v · Σ_k β[(first + col) · q + k] L_k: a dot product with the parameters at t.
+fn dot_at_t(beta: &ArrayView, first: usize, q: usize, lq: &[f32; MAX_Q], row: &[(usize, f32)]) -> f32 {
+    let mut sum = 0.0;
+    for &(col, v) in row {
+        let base = (first + col) * q;
+        let mut coef = 0.0;
+        for (k, l) in lq[..q].iter().enumerate() {
+            coef += beta.get(base + k).unwrap_or(0.0) * l;
+        }
+        sum += v * coef;
+    }
+    sum
+}
+
+/// L_0 … L_{q−1} of s ∈ [−1, 1], s the place of ln t in group g's span (`ranges`, [G, 2]).
+fn legendre_in(ranges: &ArrayView, g: usize, ln_t: f32, q: usize) -> [f32; MAX_Q] {
+    let (a, b) = (
+        ranges.get(2 * g).unwrap_or(0.0),
+        ranges.get(2 * g + 1).unwrap_or(0.0),
+    );
+    let s = if b > a {
+        (2.0 * (ln_t - a) / (b - a) - 1.0).clamp(-1.0, 1.0)
+    } else {
+        0.0
+    };
+    let mut p = [0.0f32; MAX_Q];
+    for j in 0..q.min(MAX_Q) {
+        p[j] = match j {
+            0 => 1.0,
+            1 => s,
+            _ => ((2 * j - 1) as f32 * s * p[j - 1] - (j - 1) as f32 * p[j - 2]) / j as f32,
+        };
+    }
+    p
+}
+
+/// The optional collector arrays, checked like the others.
+fn collector_part<'a>(
+    c: &Container<'a>,
+    g: usize,
+    m: usize,
+    l: usize,
+) -> Result<Option<CollectorPart<'a>>, FormatError> {
+    let Some(sizes) = c.find("collector_form") else {
+        return Ok(None);
+    };
+    let bad = FormatError::BadArray("collector_form");
+    if sizes.len() != 4 || sizes.iter().any(|v| !(v >= 0.0 && v <= 512.0 && v == (v as u32) as f32)) {
+        return Err(bad);
+    }
+    let int = |i: usize| sizes.get(i).map_or(0, |v| v as usize);
+    let form = CollectorForm {
+        legendre: int(0),
+        harmonics: int(1),
+        theta_nodes: int(2),
+    };
+    let q = int(3);
+    if !(1..=MAX_COLLECTOR_LEGENDRE).contains(&form.legendre)
+        || form.theta_nodes < 2
+        || form.harmonics > MAX_COLLECTOR_HARMONICS
+        || !(1..=MAX_Q).contains(&q)
+    {
+        return Err(bad);
+    }
+    let mut beta = [None; 3];
+    for (slot, (stat, name)) in beta
+        .iter_mut()
+        .zip(Statistic::ALL.iter().zip(["sigma_beta", "cz_beta", "cx_beta"]))
+    {
+        *slot = Some(need(c, name, g * form.n_params(*stat, m, l) * q)?);
+    }
+    match beta {
+        [Some(a), Some(b), Some(x)] => Ok(Some(CollectorPart {
+            form,
+            q,
+            beta: [a, b, x],
+        })),
+        _ => Err(bad),
     }
 }
 
