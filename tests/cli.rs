@@ -414,6 +414,23 @@ fn slab_quick_config_writes_tables_and_refuses_bad_configs() {
     assert!(errors
         .iter()
         .all(|e| e["rel_rms"].as_f64().unwrap().is_finite()));
+    let collector = report["collector"]["errors"].as_array().unwrap();
+    assert_eq!(collector.len(), 8, "c and σ of the 8 groups of orders ≥ 2");
+    assert!(collector
+        .iter()
+        .all(|e| e["c_in_sigma"].as_f64().unwrap().is_finite() && e["cells"].as_u64().unwrap() > 0));
+    // The runtime, loading the file written, follows the fit to f32 precision, and order 1
+    // from the stored phase table follows the phase function.
+    let ntt = &report["transport_ntt"];
+    for (key, limit) in [
+        ("worst_t", 1e-4),
+        ("worst_sigma", 1e-4),
+        ("worst_c_in_sigma", 1e-4),
+        ("worst_order1", 1e-2),
+    ] {
+        let v = ntt[key].as_f64().unwrap();
+        assert!(v < limit, "{key} = {v}");
+    }
     let missing = nephele(&[
         "compress",
         "--tables",
@@ -577,7 +594,7 @@ fn a_killed_slab_run_resumes_to_the_same_bits() {
     assert!(a == b, "the resumed run differs from the uninterrupted one");
 }
 
-/// `nephele transport` on the quick tables' transport.ntt: JSON with a finite T per group and
+/// `nephele transport` on the quick tables' transport.ntt: JSON with T, c and σ per group and
 /// order 1; bad points and damaged files are errors. The runtime loader, fed truncations and
 /// thousands of bit flips of the same file, errs and never panics.
 fn transport_tables_answer_and_refuse(ntt: &Path) {
@@ -593,6 +610,10 @@ fn transport_tables_answer_and_refuse(ntt: &Path) {
     assert_eq!(groups.len(), 8);
     assert!(groups.iter().all(|g| g["T"].as_f64().unwrap() >= 0.0));
     assert!(v["order1"].as_f64().unwrap() > 0.0);
+    // Order 2 at this point is resolved: a collector with a positive spread.
+    assert!(groups[0]["T"].as_f64().unwrap() > 0.0);
+    assert!(groups[0]["sigma"].as_f64().unwrap() > 0.0);
+    assert!(groups[0]["c_z"].as_f64().unwrap().is_finite());
     let bad = nephele(&[
         "transport",
         "--tables",

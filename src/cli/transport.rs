@@ -2,7 +2,7 @@
 
 use anyhow::{ensure, Context, Result};
 use clap::Args;
-use nephele_runtime::transport::tables::TransportTables;
+use nephele_runtime::transport::tables::{Transport, TransportTables};
 use std::path::PathBuf;
 
 /// Options of `nephele transport`.
@@ -43,20 +43,29 @@ pub fn run(a: TransportArgs) -> Result<()> {
     let tab = TransportTables::from_bytes(&bytes)
         .map_err(|e| anyhow::anyhow!("'{}': {e}", a.tables.display()))?;
     let psi = a.psi.to_radians();
-    let groups: Vec<serde_json::Value> = (0..tab.groups())
-        .map(|g| {
-            serde_json::json!({
+    let mut all = vec![Transport::default(); tab.groups()];
+    tab.evaluate_all(a.depth, a.t, a.mu_v, psi, a.mu_l, &mut all);
+    let groups: Vec<serde_json::Value> = all
+        .iter()
+        .enumerate()
+        .map(|(g, v)| {
+            let mut e = serde_json::json!({
                 "first_order": tab.group_first_order(g),
-                "T": tab.transport(g, a.depth, a.t, a.mu_v, psi, a.mu_l),
-            })
+                "T": v.t,
+            });
+            if tab.has_collector() {
+                e["c_x"] = v.c_x.into();
+                e["c_z"] = v.c_z.into();
+                e["sigma"] = v.sigma.into();
+            }
+            e
         })
         .collect();
     let out = serde_json::json!({
         "point": {"t": a.t, "mu_l": a.mu_l, "depth": a.depth, "mu_v": a.mu_v, "psi_deg": a.psi},
-        "units": "T = L / E_perp (1/sr); orders >= 2 per group from the compressed form, order 1 in closed form",
+        "units": "T = L / E_perp (1/sr); c_x, c_z, sigma in mean free paths (the collector: where the light entered, from the viewpoint's horizontal position, z along the sun's horizontal travel; 0 where T is 0); orders >= 2 per group from the compressed form, order 1 (T only) in closed form",
         "order1": tab.order1(a.depth, a.t, a.mu_v, psi, a.mu_l),
         "groups": groups,
-        "collector": "not in this version of the tables (issue 7)",
     });
     println!("{}", serde_json::to_string_pretty(&out)?);
     Ok(())
