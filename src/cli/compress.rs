@@ -3,10 +3,10 @@
 use anyhow::{ensure, Result};
 use clap::Args;
 use nephele::compress::report::{CollectorError, GroupError};
-use nephele::compress::run::{compress, Options};
+use nephele::compress::run::{compress, Options, Outcome};
 use nephele::compress::LogAdditive;
 use nephele_runtime::transport::collector::CollectorForm;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Options of `nephele compress`.
 #[derive(Args, Debug)]
@@ -18,32 +18,32 @@ pub struct CompressArgs {
     #[arg(long)]
     pub out: PathBuf,
     /// Legendre terms in depth.
-    #[arg(long, default_value_t = 6)]
+    #[arg(long, default_value_t = Options::default().form.legendre)]
     pub legendre: usize,
     /// Azimuth harmonics.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = Options::default().form.harmonics)]
     pub harmonics: usize,
     /// Nodes in the scattering angle.
-    #[arg(long, default_value_t = 24)]
+    #[arg(long, default_value_t = Options::default().form.theta_nodes)]
     pub theta_nodes: usize,
     /// Per-(μ_V, μ_L) γ, offset and depth slope.
     #[arg(long)]
     pub pairs: bool,
     /// Parameters as polynomials of degree Q − 1 in ln t fitted over all thicknesses at once
     /// (interpolates in t); 0 fits each thickness on its own (and writes no transport.ntt).
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = Options::default().smooth_t)]
     pub smooth_t: usize,
     /// Legendre terms in depth of the collector form (c, σ).
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = Options::default().collector.legendre)]
     pub collector_legendre: usize,
     /// Azimuth harmonics of the collector form.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = Options::default().collector.harmonics)]
     pub collector_harmonics: usize,
     /// Θ nodes of the collector form.
-    #[arg(long, default_value_t = 12)]
+    #[arg(long, default_value_t = Options::default().collector.theta_nodes)]
     pub collector_theta_nodes: usize,
     /// Legendre terms in ln t of the collector's parameters (0: no collector).
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = Options::default().collector_q)]
     pub collector_smooth_t: usize,
     /// Skip the held-out study (a second fit without two thicknesses and two sun cosines,
     /// evaluated there by interpolation).
@@ -83,6 +83,12 @@ pub fn run(args: CompressArgs) -> Result<()> {
         collector_q: args.collector_smooth_t,
     };
     let o = compress(&args.tables, &args.out, &opt)?;
+    print_outcome(&o, &args.out);
+    Ok(())
+}
+
+/// Prints what a compression measured and wrote.
+pub fn print_outcome(o: &Outcome, out: &Path) {
     print_errors("fitted slices", &o.errors);
     print_collector("fitted slices", &o.collector);
     if let Some(h) = &o.held_out {
@@ -97,8 +103,9 @@ pub fn run(args: CompressArgs) -> Result<()> {
         o.fit_seconds
     );
     println!(
-        "wrote {}/report.json, compressed.npz, fit_vs_tables.png, error_by_thickness.png",
-        args.out.display()
+        "wrote {}/report.json, manifest.json, compressed.npz, fit_vs_tables.png, \
+         error_by_thickness.png",
+        out.display()
     );
     if let Some(n) = &o.ntt {
         println!(
@@ -113,7 +120,6 @@ pub fn run(args: CompressArgs) -> Result<()> {
             n.worst_order1
         );
     }
-    Ok(())
 }
 
 fn print_errors(what: &str, errors: &[GroupError]) {

@@ -1,11 +1,13 @@
-//! Command-line definitions. Without a subcommand, `nephele` runs the main job: the paper's
-//! setup (fit-configs/paper.json) — Mie tables for d = 5…50 µm and every model fitted to them —
-//! into outputs/.
+//! Command-line definitions. Without a subcommand, `nephele` runs the main job
+//! ([`pipeline`]): the paper's setup (fit-configs/paper.json) — Mie tables for d = 5…50 µm and
+//! every model fitted to them — then slab tables of 10 µm droplets and their compression, into
+//! outputs/.
 
 mod compress;
 mod fit;
 mod mie;
 mod phase;
+mod pipeline;
 mod slab;
 mod sphere;
 mod transport;
@@ -22,6 +24,10 @@ pub struct Cli {
     /// Worker threads (default: all cores). Results do not depend on it.
     #[arg(long, global = true)]
     threads: Option<usize>,
+    /// Main job only: the default slab tables (fit-configs/slab-default.json, ~17 min on 2
+    /// cores) instead of the quick preset, compressed into outputs/transport/mie10um.
+    #[arg(long)]
+    full: bool,
 }
 
 #[derive(Subcommand, Debug)]
@@ -52,6 +58,10 @@ pub fn run(cli: Cli) -> Result<()> {
             .num_threads(n)
             .build_global()?;
     }
+    anyhow::ensure!(
+        !(cli.full && cli.command.is_some()),
+        "--full belongs to the main job (no subcommand)"
+    );
     match cli.command {
         Some(Command::Mie(args)) => mie::run(args),
         Some(Command::Sphere(args)) => sphere::run(args),
@@ -61,6 +71,6 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Merge(args)) => slab::merge_shards(args),
         Some(Command::Compress(args)) => compress::run(args),
         Some(Command::Transport(args)) => transport::run(args),
-        None => fit::run_main_job(),
+        None => pipeline::run(cli.full),
     }
 }

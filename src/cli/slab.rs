@@ -55,10 +55,14 @@ pub struct MergeArgs {
 fn load_config(path: &Path) -> Result<SlabConfig> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("cannot read config '{}'", path.display()))?;
+    parse_config(&text, &path.display().to_string())
+}
+
+/// A slab config from its JSON text (`name` for messages), validated.
+pub fn parse_config(text: &str, name: &str) -> Result<SlabConfig> {
     let cfg: SlabConfig =
-        serde_json::from_str(&text).with_context(|| format!("config '{}'", path.display()))?;
-    cfg.validate()
-        .with_context(|| format!("config '{}'", path.display()))?;
+        serde_json::from_str(text).with_context(|| format!("config '{name}'"))?;
+    cfg.validate().with_context(|| format!("config '{name}'"))?;
     Ok(cfg)
 }
 
@@ -83,14 +87,26 @@ pub fn run(args: SlabArgs) -> Result<()> {
         bail!("--save-every must be ≥ 0 seconds");
     }
     let out = args.out.unwrap_or_else(|| PathBuf::from("outputs/slab"));
+    run_config(&cfg, &out, shard, args.save_every, !args.no_plot)
+}
+
+/// Runs the slab Monte Carlo of `cfg` into `out` (checkpointed there; one shard (K − 1, N) of
+/// it, or all), then writes the tables (and the figure if `plot`).
+pub fn run_config(
+    cfg: &SlabConfig,
+    out: &Path,
+    shard: Option<(usize, usize)>,
+    save_every: f64,
+    plot: bool,
+) -> Result<()> {
     let t0 = Instant::now();
     let phase = PhaseModel::build(&cfg.phase)?;
     let phase_s = t0.elapsed().as_secs_f64();
-    let checkpoint = Checkpoint::open(&out.join("checkpoint"), &cfg)?;
+    let checkpoint = Checkpoint::open(&out.join("checkpoint"), cfg)?;
     let control = Control {
         shard,
         checkpoint: Some(&checkpoint),
-        save_every_s: args.save_every,
+        save_every_s: save_every,
     };
     let total = cfg.thicknesses.len() * cfg.mu_l.len();
     let bar = ProgressBar::new(total as u64).with_style(
@@ -100,7 +116,7 @@ pub fn run(args: SlabArgs) -> Result<()> {
         .expect("static template"),
     );
     let t1 = Instant::now();
-    let run = run_all(&cfg, &phase, &control, &|slice, _, photons, worst| {
+    let run = run_all(cfg, &phase, &control, &|slice, _, photons, worst| {
         bar.set_position(slice as u64);
         let rate = photons as f64 / t1.elapsed().as_secs_f64().max(1e-9);
         bar.set_message(format!(
@@ -123,7 +139,7 @@ pub fn run(args: SlabArgs) -> Result<()> {
     }
     let timings =
         json!({"phase_s": phase_s, "monte_carlo_s": mc_s, "threads": rayon::current_num_threads()});
-    write_tables(&cfg, &run, &out, !args.no_plot, timings)?;
+    write_tables(cfg, &run, out, plot, timings)?;
     checkpoint.remove()?;
     summary(&run, mc_s);
     println!("wrote {}/tables.npz, tables.json", out.display());

@@ -7,7 +7,7 @@
 
 use super::fit::{cells_of, Row, MAX_REL_SE, MIN_REL_SE};
 use super::form::{Cell, Lerp, LogAdditive};
-use super::joint::{coef_at, legendre_in_ln_t, NormalEquations};
+use super::joint::{coef_at, effective_q, legendre_in_ln_t, pad_q, NormalEquations};
 use super::tables::SlabTables;
 use anyhow::Result;
 use nephele_runtime::transport::collector::{CollectorForm, Statistic};
@@ -68,10 +68,11 @@ pub fn fit_collector(
         .iter()
         .map(|&it| usable_cells(tab, t_form, g, it, skip_l))
         .collect();
-    let lq = |it: usize| legendre_in_ln_t(ln_t_range, tab.thickness[it], q);
+    let qe = effective_q(q, fit_t.len());
+    let lq = |it: usize| legendre_in_ln_t(ln_t_range, tab.thickness[it], qe);
     let mut row = Vec::new();
     let mut solve = |stat: Statistic, target: &dyn Fn(&Cell, usize, usize) -> (f64, f64, f64)| {
-        let mut ne = NormalEquations::new(form.n_params(stat, nm, nl) * q);
+        let mut ne = NormalEquations::new(form.n_params(stat, nm, nl) * qe);
         for (&it, cells) in fit_t.iter().zip(&cells) {
             let l = lq(it);
             for (cell, i) in cells {
@@ -89,7 +90,8 @@ pub fn fit_collector(
             }
         }
         let n = ne.cells;
-        ne.solve(&format!("group {g}, {stat:?}")).map(|b| (b, n))
+        let beta = ne.solve(&format!("group {g}, {stat:?}"))?;
+        Ok::<_, anyhow::Error>((pad_q(&beta, qe, q), n))
     };
     let (ln_sigma, n) = solve(Statistic::LnSigma, &|_, i, _| {
         let w = 1.0 / (c.sigma_se[i] / c.sigma[i]).max(MIN_REL_SE);

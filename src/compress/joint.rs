@@ -142,6 +142,21 @@ impl NormalEquations {
     }
 }
 
+/// The degree in ln t a group can carry: Q terms, but fewer than the thicknesses it spans (a
+/// polynomial through every point would not smooth, and one with more terms than points is
+/// undetermined: on a coarse grid with held-out thicknesses it swings).
+pub(crate) fn effective_q(q: usize, spanned: usize) -> usize {
+    q.min(spanned.saturating_sub(1)).max(1)
+}
+
+/// β fitted with `qe` terms per parameter, stored with `q` (the missing ones 0: the same
+/// polynomial).
+pub(crate) fn pad_q(beta: &[f64], qe: usize, q: usize) -> Vec<f64> {
+    beta.chunks(qe)
+        .flat_map(|b| b.iter().copied().chain(std::iter::repeat(0.0)).take(q))
+        .collect()
+}
+
 /// The form's parameters at thickness `t` from their Legendre coefficients `beta`
 /// (parameter-major, Q per parameter) over the ln t span `range`.
 pub(crate) fn coef_at(beta: &[f64], q: usize, range: (f64, f64), t: f64) -> Vec<f64> {
@@ -161,12 +176,13 @@ pub fn fit_joint(
     skip_l: &[usize],
 ) -> Result<JointFit> {
     let [_, nt, nl, _, nm, _] = tab.shape;
-    let mut ne = NormalEquations::new(form.n_params(nm, nl) * q);
+    let (spanned, ln_t_range) = spanned(tab, g, skip_t)?;
+    let qe = effective_q(q, spanned.len());
+    let mut ne = NormalEquations::new(form.n_params(nm, nl) * qe);
     let mut row = Vec::new();
     let mut u_range = vec![vec![(f64::INFINITY, f64::NEG_INFINITY); nl * nm]; nt];
-    let (spanned, ln_t_range) = spanned(tab, g, skip_t)?;
     for it in (0..nt).filter(|it| !skip_t.contains(it)) {
-        let lq = legendre_in_ln_t(ln_t_range, tab.thickness[it], q);
+        let lq = legendre_in_ln_t(ln_t_range, tab.thickness[it], qe);
         let in_fit = spanned.contains(&it);
         for_each_row(tab, form, g, it, skip_l, &mut row, |r| {
             let range = &mut u_range[it][r.pair];
@@ -177,7 +193,7 @@ pub fn fit_joint(
         });
     }
     let cells = ne.cells;
-    let beta = ne.solve(&format!("group {g}"))?;
+    let beta = pad_q(&ne.solve(&format!("group {g}"))?, qe, q);
     // Held-out thicknesses: the depth ranges both fitted neighbours cover.
     let fitted: Vec<usize> = (0..nt).filter(|it| !skip_t.contains(it)).collect();
     for it in skip_t.iter().copied() {

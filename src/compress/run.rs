@@ -37,6 +37,19 @@ pub struct Options {
     pub collector_q: usize,
 }
 
+impl Default for Options {
+    /// The defaults of `nephele compress` (docs/compress.md has the study behind them).
+    fn default() -> Self {
+        Self {
+            form: LogAdditive::default(),
+            smooth_t: 5,
+            held_out: true,
+            collector: CollectorForm::default(),
+            collector_q: 4,
+        }
+    }
+}
+
 /// The held-out study: which slices were left out, and the errors there.
 #[derive(Clone, Debug, Serialize)]
 pub struct HeldOut {
@@ -165,6 +178,11 @@ pub fn compress(tables: &Path, out: &Path, opt: &Options) -> Result<Outcome> {
         )
     })?;
     figures.commit()?;
+    let manifest = manifest(tables, opt, &errors, &collector, held_out.as_ref(), ntt.as_ref())?;
+    write_atomic(&out.join("manifest.json"), |w| {
+        serde_json::to_writer_pretty(&mut *w, &manifest)?;
+        Ok(())
+    })?;
     Ok(Outcome {
         errors,
         collector,
@@ -376,4 +394,67 @@ fn compare(check: &mut NttCheck, (t, sigma, cx, cz): (f64, f64, f64, f64), got: 
         let dc = (got.c_x as f64 - cx).hypot(got.c_z as f64 - cz) / sigma;
         check.worst_c_in_sigma = check.worst_c_in_sigma.max(dc);
     }
+}
+
+/// What shipped tables are: the slab run they come from (its config, seed, photons, tool
+/// version), the compressor's version and options, the file's size and CRC-32, and the error
+/// summary (per group, fitted and held out, T and the collector).
+fn manifest(
+    tables: &Path,
+    opt: &Options,
+    errors: &[GroupError],
+    collector: &[CollectorError],
+    held_out: Option<&HeldOut>,
+    ntt: Option<&NttCheck>,
+) -> Result<serde_json::Value> {
+    let slab: serde_json::Value = std::fs::read_to_string(tables.with_extension("json"))
+        .ok()
+        .and_then(|t| serde_json::from_str(&t).ok())
+        .unwrap_or_default();
+    let pick = |keys: &[&str]| -> serde_json::Value {
+        keys.iter().map(|k| (k.to_string(), slab[*k].clone())).collect()
+    };
+    let summary = |e: &[GroupError]| -> Vec<serde_json::Value> {
+        e.iter()
+            .map(|e| {
+                serde_json::json!({"first_order": e.first_order, "rel_rms": e.rel_rms, "noise": e.noise})
+            })
+            .collect()
+    };
+    let coll = |c: &[CollectorError]| -> Vec<serde_json::Value> {
+        c.iter()
+            .map(|c| {
+                serde_json::json!({"first_order": c.first_order, "sigma_rel": c.sigma_rel,
+                    "c_in_sigma": c.c_in_sigma, "sigma_noise": c.sigma_noise, "c_noise": c.c_noise})
+            })
+            .collect()
+    };
+    let file = match ntt {
+        Some(n) => {
+            let bytes = std::fs::read(&n.path)?;
+            serde_json::json!({"name": "transport.ntt", "bytes": bytes.len(),
+                "crc32": format!("{:08x}", nephele_runtime::container::crc32(&bytes))})
+        }
+        None => serde_json::Value::Null,
+    };
+    Ok(serde_json::json!({
+        "what": "compressed slab transport tables: T, c, sigma per order group of orders >= 2 (docs/compress.md); order 1 in closed form from the stored phase function",
+        "file": file,
+        "slab_run": pick(&["config", "seed", "photons", "events", "converged_slices", "version", "git_commit"]),
+        "compressor": {
+            "version": crate::VERSION,
+            "git_commit": option_env!("NEPHELE_GIT_COMMIT"),
+            "form": super::form::to_json(&opt.form),
+            "smooth_t": opt.smooth_t,
+            "collector": {"legendre": opt.collector.legendre, "harmonics": opt.collector.harmonics,
+                "theta_nodes": opt.collector.theta_nodes, "smooth_t": opt.collector_q},
+        },
+        "errors": {
+            "definition": "T-weighted relative RMS of T per group and for the sum of groups (last); sigma relative, c in units of sigma; noise = the tables' own on the same cells",
+            "fitted": {"T": summary(errors), "collector": coll(collector)},
+            "held_out": held_out.map(|h| serde_json::json!({
+                "thicknesses": h.thicknesses, "mu_l": h.mu_l,
+                "T": summary(&h.errors), "collector": coll(&h.collector)})),
+        },
+    }))
 }

@@ -42,7 +42,7 @@ impl Default for CollectorForm {
         Self {
             legendre: 4,
             harmonics: 2,
-            theta_nodes: 24,
+            theta_nodes: 12,
         }
     }
 }
