@@ -12,6 +12,8 @@
 #![cfg_attr(not(feature = "std"), no_std)]
 
 pub mod container;
+#[cfg(feature = "embed")]
+pub mod embedded;
 pub mod frame;
 pub mod phase;
 pub mod presets;
