@@ -113,6 +113,11 @@ impl<'a> ArrayView<'a> {
         Some(f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
     }
 
+    /// Its little-endian bytes (4 per value).
+    pub fn bytes(&self) -> &'a [u8] {
+        self.data
+    }
+
     /// Every value, in row-major order.
     pub fn iter(&self) -> impl Iterator<Item = f32> + 'a {
         self.data

@@ -86,6 +86,15 @@ impl CollectorForm {
             .sum()
     }
 
+    /// The first column of c_z's ℓ/σ̂ terms (its last blocks): features computed with σ̂ = 1
+    /// give c_z/σ̂ = Σ_{col < R} v β + (1/σ̂) Σ_{col ≥ R} v β, so that one set of features
+    /// serves every group.
+    pub fn cz_reach_start(&self, nm: usize, nl: usize) -> usize {
+        self.n_params(Statistic::Cz, nm, nl)
+            - 2 * self.theta_nodes
+            - self.legendre.min(MAX_LEGENDRE) * (nm + nl)
+    }
+
     /// The blocks of `stat` at `c` with their multipliers; `inv_sigma` = 1/σ̂ (c only).
     fn blocks<F: Real>(
         &self,

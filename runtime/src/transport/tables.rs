@@ -43,9 +43,9 @@ const MAX_FEATURES: usize = 16 * 4 + 4 * 3 + 4 + MAX_HARMONICS * 4;
 /// Most Legendre terms in depth and azimuth harmonics of a loadable collector form.
 const MAX_COLLECTOR_LEGENDRE: usize = 8;
 const MAX_COLLECTOR_HARMONICS: usize = 4;
-/// Room for the features of a collector statistic at one point: at most 2K + 4 blocks, each
-/// J values on two μ_V and two μ_L nodes (a Θ block has 4).
-const MAX_COLLECTOR_FEATURES: usize = (2 * MAX_COLLECTOR_HARMONICS + 4) * MAX_COLLECTOR_LEGENDRE * 4;
+/// Room for the features of a collector statistic at one point: at most two Θ blocks (4 values
+/// each) and K + 2 depth blocks of J values on two μ_V and two μ_L nodes.
+const MAX_C_FEATURES: usize = 8 + (MAX_COLLECTOR_HARMONICS + 2) * MAX_COLLECTOR_LEGENDRE * 4;
 
 /// Transport of one order group at a point: T = L/E⊥ (sr⁻¹), the collector c = (c_x, c_z) and
 /// its spread σ (mfp; spec 40).
@@ -243,21 +243,26 @@ impl<'a> TransportTables<'a> {
             return;
         };
         let (nl, nm) = (self.mu_l.len(), self.mu_v.len());
-        let mut rows = [[(0usize, 0.0f32); MAX_COLLECTOR_FEATURES]; 3];
+        // The features are the same for every group: c_z's ℓ/σ̂ terms are computed with σ̂ = 1
+        // and divided by the group's σ̂ after the dot product.
+        let mut rows = [[(0u32, 0.0f32); MAX_C_FEATURES]; 3];
         let mut lens = [0usize; 3];
-        let fill = |stat: Statistic, sigma: f32, row: &mut [(usize, f32)], n: &mut usize| {
-            if let Some(cp) = &self.collector {
-                *n = 0;
-                cp.form.for_each_feature(stat, &pt.cell, sigma, nm, nl, |col, v| {
-                    if *n < row.len() {
-                        row[*n] = (col, v);
-                        *n += 1;
-                    }
-                });
+        if let Some(cp) = &self.collector {
+            for ((stat, row), n) in Statistic::ALL.iter().zip(&mut rows).zip(&mut lens) {
+                cp.form
+                    .for_each_feature(*stat, &pt.cell, 1.0, nm, nl, |col, v| {
+                        if *n < MAX_C_FEATURES {
+                            row[*n] = (col as u32, v);
+                            *n += 1;
+                        }
+                    });
             }
-        };
-        let [r_sigma, r_z, r_x] = &mut rows;
-        fill(Statistic::LnSigma, 0.0, r_sigma, &mut lens[0]);
+        }
+        // The ℓ/σ̂ terms are c_z's last blocks: a suffix of its row.
+        let split = self.collector.map_or(0, |cp| {
+            let reach = cp.form.cz_reach_start(nm, nl) as u32;
+            rows[1][..lens[1]].partition_point(|&(col, _)| col < reach)
+        });
         for (g, slot) in out[..groups].iter_mut().enumerate() {
             slot.t = self.t_of(&pt, g);
             let Some(cp) = &self.collector else { continue };
@@ -265,16 +270,16 @@ impl<'a> TransportTables<'a> {
                 continue;
             }
             let lq = legendre_in(&self.ln_t_range, g, pt.ln_t, cp.q);
-            let dot = |s: usize, row: &[(usize, f32)]| {
-                let p = cp.form.n_params(Statistic::ALL[s], nm, nl);
-                dot_at_t(&cp.beta[s], g * p, cp.q, &lq, row)
+            let dot = |s: usize, row: &[(u32, f32)]| {
+                let first = g * cp.form.n_params(Statistic::ALL[s], nm, nl);
+                dot_at_t(&cp.beta[s], first, cp.q, &lq, row)
             };
-            let sigma = Real::exp(dot(0, &r_sigma[..lens[0]]));
-            fill(Statistic::Cz, sigma, r_z, &mut lens[1]);
-            fill(Statistic::Cx, sigma, r_x, &mut lens[2]);
+            let sigma = Real::exp(dot(0, &rows[0][..lens[0]]));
+            let (near, reach) = rows[1][..lens[1]].split_at(split);
+            let cz = dot(1, near) + dot(1, reach) / sigma;
             slot.sigma = sigma;
-            slot.c_z = sigma * dot(1, &r_z[..lens[1]]);
-            slot.c_x = sigma * dot(2, &r_x[..lens[2]]);
+            slot.c_z = sigma * cz;
+            slot.c_x = sigma * dot(2, &rows[2][..lens[2]]);
         }
     }
 
@@ -300,11 +305,11 @@ impl<'a> TransportTables<'a> {
             t,
         };
         let offset = self.form.ln_boundary(&cell)?;
-        let mut row = [(0usize, 0.0f32); MAX_FEATURES];
+        let mut row = [(0u32, 0.0f32); MAX_FEATURES];
         let mut n = 0;
         let ok = self.form.for_each_feature(&cell, nm, nl, |col, v| {
             if n < MAX_FEATURES {
-                row[n] = (col, v);
+                row[n] = (col as u32, v);
                 n += 1;
             }
         });
@@ -386,24 +391,32 @@ impl<'a> TransportTables<'a> {
 struct Point {
     cell: Cell<f32>,
     offset: f32,
-    row: [(usize, f32); MAX_FEATURES],
+    row: [(u32, f32); MAX_FEATURES],
     n: usize,
     near_t: Lerp<f32>,
     ln_t: f32,
 }
 
 /// Σ_features v · Σ_k β[(first + col) · q + k] L_k: a dot product with the parameters at t.
-fn dot_at_t(beta: &ArrayView, first: usize, q: usize, lq: &[f32; MAX_Q], row: &[(usize, f32)]) -> f32 {
+fn dot_at_t(beta: &ArrayView, first: usize, q: usize, lq: &[f32; MAX_Q], row: &[(u32, f32)]) -> f32 {
     let mut sum = 0.0;
     for &(col, v) in row {
-        let base = (first + col) * q;
-        let mut coef = 0.0;
-        for (k, l) in lq[..q].iter().enumerate() {
-            coef += beta.get(base + k).unwrap_or(0.0) * l;
-        }
-        sum += v * coef;
+        sum += v * coef_at_t(beta, first + col as usize, q, lq);
     }
     sum
+}
+
+/// Parameter `p` of a [G·P, Q] array at t: Σ_k β[p · q + k] L_k.
+#[inline(always)]
+fn coef_at_t(beta: &ArrayView, p: usize, q: usize, lq: &[f32; MAX_Q]) -> f32 {
+    let Some(run) = beta.bytes().get(4 * p * q..4 * (p + 1) * q) else {
+        return 0.0;
+    };
+    let mut coef = 0.0;
+    for (b, l) in run.chunks_exact(4).zip(lq) {
+        coef += f32::from_le_bytes([b[0], b[1], b[2], b[3]]) * l;
+    }
+    coef
 }
 
 /// L_0 … L_{q−1} of s ∈ [−1, 1], s the place of ln t in group g's span (`ranges`, [G, 2]).
