@@ -402,6 +402,7 @@ fn slab_quick_config_writes_tables_and_refuses_bad_configs() {
         [
             "compressed.npz",
             "error_by_thickness.png",
+            "error_map.png",
             "fit_vs_tables.png",
             "manifest.json",
             "report.json",

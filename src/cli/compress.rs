@@ -104,7 +104,7 @@ pub fn print_outcome(o: &Outcome, out: &Path) {
     );
     println!(
         "wrote {}/report.json, manifest.json, compressed.npz, fit_vs_tables.png, \
-         error_by_thickness.png",
+         error_by_thickness.png, error_map.png",
         out.display()
     );
     if let Some(n) = &o.ntt {

@@ -1,9 +1,9 @@
-//! Figures of a compression: the form against the tables along depth for a few slices, and the
-//! error per thickness of every group (fitted and held-out slices).
+//! Figures of a compression: the form against the tables along depth for a few slices, the
+//! error per thickness of every group (fitted and held-out slices), and the error per slice.
 
 use super::report::GroupError;
 use super::tables::SlabTables;
-use crate::io::plot::{panels_plot, Panel, Series, Style};
+use crate::io::plot::{heat_maps, panels_plot, HeatMap, Panel, Series, Style};
 use anyhow::Result;
 use std::path::Path;
 
@@ -137,4 +137,36 @@ pub fn error_by_thickness(
         })
         .collect();
     panels_plot(path, (1600, 700), panels.len(), &panels)
+}
+
+/// error_map.png: E of every group and of their sum per (thickness, sun cosine) slice, in %,
+/// fitted slices (each cell a slice of 16 depths × 16 μ_V × 12 ψ_V for the default tables).
+pub fn error_map(path: &Path, tab: &SlabTables, errors: &[GroupError]) -> Result<()> {
+    let maps: Vec<HeatMap> = errors
+        .iter()
+        .map(|e| HeatMap {
+            title: e.first_order.map_or("sum of orders ≥ 2".to_string(), |o| {
+                format!("orders from {o}")
+            }),
+            x_labels: tab.thickness.iter().map(|t| format!("{t}")).collect(),
+            x_name: "t (mfp)",
+            y_labels: tab.mu_l.iter().map(|m| format!("{m}")).collect(),
+            y_name: "μ_L",
+            values: {
+                // [t, μ_L] → rows μ_L, columns t.
+                let (nt, nl) = (tab.thickness.len(), tab.mu_l.len());
+                (0..nl * nt)
+                    .map(|i| 100.0 * e.rel_rms_by_slice[(i % nt) * nl + i / nt])
+                    .collect()
+            },
+        })
+        .collect();
+    heat_maps(
+        path,
+        (1800, 1500),
+        3,
+        (8.0, 20.0),
+        &|v| format!("{v:.1}"),
+        &maps,
+    )
 }

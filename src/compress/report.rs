@@ -48,6 +48,8 @@ pub struct GroupError {
     pub cells: usize,
     /// E per thickness.
     pub rel_rms_by_t: Vec<f64>,
+    /// E per (thickness, sun cosine) slice, [t, μ_L] row-major (NaN: no cell measured).
+    pub rel_rms_by_slice: Vec<f64>,
     /// The five largest relative errors among cells ≥ 1 % of their slice's maximum.
     pub worst: Vec<WorstCell>,
 }
@@ -86,6 +88,7 @@ pub fn group_error_on(
     let per_slice = nl * nd * nm * nk;
     let (mut e, mut n, mut w, mut cells) = (0.0, 0.0, 0.0, 0);
     let mut by_t = Vec::new();
+    let mut by_slice = vec![(0.0, 0.0); nt * nl];
     let mut worst: Vec<(f64, WorstCell)> = Vec::new();
     for it in 0..nt {
         let (mut et, mut wt) = (0.0, 0.0);
@@ -98,6 +101,9 @@ pub fn group_error_on(
                 continue;
             }
             let rel = f / t - 1.0;
+            let slice = &mut by_slice[it * nl + r / (nd * nm * nk)];
+            slice.0 += t * rel * rel;
+            slice.1 += t;
             e += t * rel * rel;
             n += t * (se / t).powi(2);
             w += t;
@@ -132,6 +138,10 @@ pub fn group_error_on(
         noise: if w > 0.0 { (n / w).sqrt() } else { 0.0 },
         cells,
         rel_rms_by_t: by_t,
+        rel_rms_by_slice: by_slice
+            .iter()
+            .map(|&(e, w)| if w > 0.0 { (e / w).sqrt() } else { f64::NAN })
+            .collect(),
         worst: worst.into_iter().take(5).map(|(_, c)| c).collect(),
     }
 }

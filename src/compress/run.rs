@@ -177,6 +177,9 @@ pub fn compress(tables: &Path, out: &Path, opt: &Options) -> Result<Outcome> {
             held_out.as_ref().map(|h| h.errors.as_slice()),
         )
     })?;
+    figures.write_via_path(&out.join("error_map.png"), |p| {
+        figure::error_map(p, &tab, &errors)
+    })?;
     figures.commit()?;
     let manifest = manifest(tables, opt, &errors, &collector, held_out.as_ref(), ntt.as_ref())?;
     write_atomic(&out.join("manifest.json"), |w| {

@@ -293,3 +293,109 @@ where
         .border_style(BLACK)
         .draw()
 }
+
+/// One heat map: `values` over a grid of `x_labels.len()` columns and `y_labels.len()` rows,
+/// row-major with row 0 at the bottom (NaN: no value, drawn grey).
+pub struct HeatMap<'a> {
+    /// Title.
+    pub title: String,
+    /// Column labels (left to right) and axis name.
+    pub x_labels: Vec<String>,
+    /// See `x_labels`.
+    pub x_name: &'a str,
+    /// Row labels (bottom to top) and axis name.
+    pub y_labels: Vec<String>,
+    /// See `y_labels`.
+    pub y_name: &'a str,
+    /// [row][column] flattened.
+    pub values: Vec<f64>,
+}
+
+/// Heat maps on a grid of `cols` columns, each cell coloured from white (0) through yellow
+/// (`mid`) to red (≥ `top`) and labelled with its value (`format`).
+pub fn heat_maps(
+    path: &Path,
+    size: (u32, u32),
+    cols: usize,
+    (mid, top): (f64, f64),
+    format: &dyn Fn(f64) -> String,
+    maps: &[HeatMap],
+) -> Result<()> {
+    register_font();
+    let err = |e: &dyn std::fmt::Display| anyhow!("plot '{}': {e}", path.display());
+    let root = BitMapBackend::new(path, size).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| err(&e))?;
+    let rows = maps.len().div_ceil(cols.max(1));
+    for (map, area) in maps.iter().zip(root.split_evenly((rows, cols.max(1))).iter()) {
+        draw_heat_map(area, map, (mid, top), format).map_err(|e| err(&e))?;
+    }
+    root.present().map_err(|e| err(&e))?;
+    Ok(())
+}
+
+/// White → yellow at `mid` → red at `top`.
+fn heat_colour(v: f64, (mid, top): (f64, f64)) -> RGBColor {
+    if !v.is_finite() {
+        return RGBColor(200, 200, 200);
+    }
+    let lerp = |a: f64, b: f64, w: f64| (a + (b - a) * w.clamp(0.0, 1.0)).round() as u8;
+    if v <= mid {
+        let w = v / mid;
+        RGBColor(255, 255, lerp(255.0, 60.0, w))
+    } else {
+        let w = (v - mid) / (top - mid);
+        RGBColor(lerp(255.0, 215.0, w), lerp(255.0, 40.0, w), lerp(60.0, 40.0, w))
+    }
+}
+
+fn draw_heat_map<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    map: &HeatMap,
+    scale: (f64, f64),
+    format: &dyn Fn(f64) -> String,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let (nx, ny) = (map.x_labels.len(), map.y_labels.len());
+    let mut chart = ChartBuilder::on(area)
+        .caption(&map.title, ("sans-serif", 22))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0.0..nx as f64, 0.0..ny as f64)?;
+    let label = |labels: &[String], v: f64| {
+        let i = v.floor() as usize;
+        if (v - i as f64 - 0.5).abs() < 1e-6 {
+            labels.get(i).cloned().unwrap_or_default()
+        } else {
+            String::new()
+        }
+    };
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .x_labels(2 * nx + 1)
+        .y_labels(2 * ny + 1)
+        .x_label_formatter(&|v| label(&map.x_labels, *v))
+        .y_label_formatter(&|v| label(&map.y_labels, *v))
+        .x_desc(map.x_name)
+        .y_desc(map.y_name)
+        .label_style(("sans-serif", 16))
+        .draw()?;
+    for row in 0..ny {
+        for col in 0..nx {
+            let v = map.values.get(row * nx + col).copied().unwrap_or(f64::NAN);
+            let (x, y) = (col as f64, row as f64);
+            chart.draw_series(std::iter::once(Rectangle::new(
+                [(x, y), (x + 1.0, y + 1.0)],
+                heat_colour(v, scale).filled(),
+            )))?;
+            if v.is_finite() {
+                chart.draw_series(std::iter::once(Text::new(
+                    format(v),
+                    (x + 0.2, y + 0.65),
+                    ("sans-serif", 14),
+                )))?;
+            }
+        }
+    }
+    Ok(())
+}
