@@ -33,6 +33,10 @@ pub struct CompressArgs {
     /// (interpolates in t); 0 fits each thickness on its own (and writes no transport.ntt).
     #[arg(long, default_value_t = Options::default().smooth_t)]
     pub smooth_t: usize,
+    /// Smooth view × sun interaction terms of T: polynomials of degree < A in each cosine
+    /// (0: none).
+    #[arg(long, default_value_t = Options::default().form.cross)]
+    pub cross: usize,
     /// Legendre terms in depth of the collector form (c, σ).
     #[arg(long, default_value_t = Options::default().collector.legendre)]
     pub collector_legendre: usize,
@@ -59,12 +63,13 @@ pub fn run(args: CompressArgs) -> Result<()> {
             && args.harmonics <= 8
             && (2..=512).contains(&args.theta_nodes)
             && (1..=16).contains(&args.collector_legendre)
+            && args.cross <= 6
             && args.collector_harmonics <= 8
             && args.collector_smooth_t <= 9
             && (2..=512).contains(&args.collector_theta_nodes),
         "--smooth-t in 0..=9, --legendre and --collector-legendre in 1..=16, --harmonics and \
          --collector-harmonics in 0..=8, --theta-nodes and --collector-theta-nodes in 2..=512, \
-         --collector-smooth-t in 0..=9"
+         --collector-smooth-t in 0..=9, --cross in 0..=6"
     );
     let opt = Options {
         form: LogAdditive {
@@ -72,6 +77,7 @@ pub fn run(args: CompressArgs) -> Result<()> {
             harmonics: args.harmonics,
             theta_nodes: args.theta_nodes,
             pairs: args.pairs,
+            cross: args.cross,
         },
         smooth_t: args.smooth_t,
         held_out: !args.no_held_out,

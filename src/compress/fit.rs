@@ -317,6 +317,7 @@ pub(crate) mod tests {
             harmonics: 2,
             theta_nodes: 6,
             pairs: false,
+            cross: 2,
         };
         let np = form.n_params(nm, nl);
         let mut truth = GroupFit {

@@ -32,5 +32,6 @@ pub fn to_json(form: &LogAdditive) -> serde_json::Value {
         "harmonics": form.harmonics,
         "theta_nodes": form.theta_nodes,
         "pairs": form.pairs,
+        "cross": form.cross,
     })
 }

@@ -9,6 +9,7 @@ use super::LogAdditive;
 use crate::io::container::{container_bytes, Array};
 use anyhow::{ensure, Result};
 use nephele_runtime::transport::collector::{CollectorForm, Statistic};
+use nephele_runtime::transport::tables::pack_u_range;
 
 /// Angles (degrees) at which the phase function is stored: 0.02° steps to 5° (the Mie forward
 /// peak, ~1° wide at 10 µm), 0.2° beyond; linear between them (the compressor reports the
@@ -49,6 +50,7 @@ pub fn ntt_bytes(
             form.theta_nodes,
             form.pairs as usize,
             q,
+            form.cross,
         ]
         .into_iter()
         .map(|x| x as f64),
@@ -59,27 +61,24 @@ pub fn ntt_bytes(
     let thickness = f32s(&mut tab.thickness.iter().copied());
     let ln_t = f32s(&mut fits.iter().flat_map(|f| [f.ln_t_range.0, f.ln_t_range.1]));
     let beta = f32s(&mut fits.iter().flat_map(|f| f.beta.iter().copied()));
-    // An empty range (no fitted cell) is stored as (1, 0): nothing lies inside.
-    let u_range = f32s(&mut fits.iter().flat_map(|f| {
-        f.u_range.iter().flat_map(|per_t| {
-            per_t
-                .iter()
-                .flat_map(|&(lo, hi)| if lo <= hi { [lo, hi] } else { [1.0, 0.0] })
-        })
-    }));
+    // An empty range (no fitted cell) stays empty.
+    let u_range: Vec<f32> = fits
+        .iter()
+        .flat_map(|f| f.u_range.iter().flatten().map(|&(lo, hi)| pack_u_range(lo, hi)))
+        .collect();
     let theta32 = f32s(&mut theta.iter().copied());
     let phase32 = f32s(&mut phase.iter().copied());
     let g = fits.len();
     let p = form.n_params(nm, nl);
     let mut arrays: Vec<(&str, Vec<usize>, Vec<f32>)> = vec![
-        ("form", vec![5], form_v),
+        ("form", vec![6], form_v),
         ("group_first", vec![g], first),
         ("mu_l_nodes", vec![nl], mu_l),
         ("mu_v_nodes", vec![nm], mu_v),
         ("thickness", vec![nt], thickness),
         ("ln_t_range", vec![g, 2], ln_t),
         ("beta", vec![g, p, q], beta),
-        ("u_range", vec![g, nt, nl * nm, 2], u_range),
+        ("u_range", vec![g, nt, nl * nm], u_range),
         ("phase_theta", vec![theta32.len()], theta32),
         ("phase", vec![phase32.len()], phase32),
     ];

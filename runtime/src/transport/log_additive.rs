@@ -35,7 +35,14 @@ pub struct LogAdditive {
     pub theta_nodes: usize,
     /// Per-(μ_V, μ_L) γ, offset and depth slope.
     pub pairs: bool,
+    /// Smooth (μ_V, μ_L) interaction terms of degree < A (0: none; at most [`MAX_CROSS`]).
+    pub cross: usize,
 }
+
+/// Most polynomial terms per cosine in the interaction terms.
+pub const MAX_CROSS: usize = 6;
+/// Depth terms (P_0 … P_2) of the interaction.
+const CROSS_DEPTH: usize = 3;
 
 impl Default for LogAdditive {
     fn default() -> Self {
@@ -44,6 +51,7 @@ impl Default for LogAdditive {
             harmonics: 3,
             theta_nodes: 24,
             pairs: false,
+            cross: 0,
         }
     }
 }
@@ -146,6 +154,18 @@ impl LogAdditive {
             + pairs
             + 2 * self.theta_nodes
             + self.harmonics * (nm + nl)
+            + self.n_cross(nl)
+    }
+
+    /// Parameters of the interaction terms: γ_L(μ_L) on the sun-cosine nodes and
+    /// 3 depth terms × 2 hemispheres × A × A polynomial products.
+    fn n_cross(&self, nl: usize) -> usize {
+        let a = self.cross.min(MAX_CROSS);
+        if a == 0 {
+            0
+        } else {
+            nl + CROSS_DEPTH * 2 * a * a
+        }
     }
 
     /// ln B at `c`, or None where the form says T = 0 (no medium behind the viewpoint).
@@ -181,7 +201,7 @@ impl LogAdditive {
         let x = F::of(2.0) * c.u - F::of(1.0);
         let mut col = 0;
         let both = |f: &mut dyn FnMut(usize, F), col: usize, val: F| on_nodes(c, nm, col, val, f);
-        let p = legendre(x, self.legendre);
+        let p = legendre(x, self.legendre.max(CROSS_DEPTH));
         for &pj in &p[..self.legendre.min(MAX_LEGENDRE)] {
             both(&mut f, col, pj);
             col += nm + nl;
@@ -213,6 +233,26 @@ impl LogAdditive {
             let (_, cos_k) = (F::of(k as f64) * c.psi_v).sin_cos();
             both(&mut f, col, s_k * cos_k);
             col += nm + nl;
+        }
+        let a = self.cross.min(MAX_CROSS);
+        if a > 0 {
+            // γ_L(μ_L) ln F₁, and Σ e_jab P_j(x) P_a(2|μ_V| − 1) P_b(2μ_L − 1) per hemisphere:
+            // the view × sun interaction the additive terms lack, smooth in both cosines so
+            // that it interpolates (per-pair terms do not).
+            c.l.each(|il, w| f(col + il, w * ln_f1));
+            col += nl;
+            let two = F::of(2.0);
+            let pv = legendre(two * c.mu_v.abs() - one, a);
+            let pl = legendre(two * c.mu_l - one, a);
+            let hemi = if c.mu_v > F::of(0.0) { 0 } else { a * a };
+            for (j, &pj) in p[..CROSS_DEPTH].iter().enumerate() {
+                let base = col + j * 2 * a * a + hemi;
+                for (ia, &va) in pv[..a].iter().enumerate() {
+                    for (ib, &vb) in pl[..a].iter().enumerate() {
+                        f(base + ia * a + ib, pj * va * vb);
+                    }
+                }
+            }
         }
         true
     }

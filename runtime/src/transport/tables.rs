@@ -8,14 +8,14 @@
 //!
 //! | name | shape | content |
 //! |---|---|---|
-//! | `form` | [5] | J, K, Θ nodes, pairs (0/1), Q |
+//! | `form` | [5] or [6] | J, K, Θ nodes, pairs (0/1), Q, and the interaction's A (0 if absent) |
 //! | `group_first` | [G] | first order of each group |
 //! | `mu_l_nodes` | [L] | sun cosines of the μ_L parameters |
 //! | `mu_v_nodes` | [M] | view cosines of the μ_V parameters |
 //! | `thickness` | [N] | thicknesses of the depth ranges |
 //! | `ln_t_range` | [G, 2] | ln t span of each group's polynomials in ln t |
 //! | `beta` | [G, P, Q] | the parameters' Legendre coefficients in s(ln t) |
-//! | `u_range` | [G, N, L·M, 2] | per thickness and (μ_L, μ_V) pair, the stretched depths fitted |
+//! | `u_range` | [G, N, L·M] | per thickness and (μ_L, μ_V) pair, the stretched depths fitted: [`U_STEPS`]-step integers lo · 4096 + hi (u = step/4095, widened outward; lo > hi: none) |
 //! | `phase_theta` | [n] | phase function angles (degrees, increasing, 0 … 180) |
 //! | `phase` | [n] | phase function p(θ) (sr⁻¹) |
 //! | `collector_form` | [4] | optional: the collector form's J, K, Θ nodes, Q |
@@ -24,7 +24,7 @@
 //! Files without the collector arrays load too; their [`Transport`] has c = 0, σ = 0.
 
 use super::collector::{CollectorForm, Statistic};
-use super::log_additive::{Cell, Lerp, LogAdditive, MAX_LEGENDRE};
+use super::log_additive::{Cell, Lerp, LogAdditive, MAX_CROSS, MAX_LEGENDRE};
 use super::single::{single_scattering, PhaseValue};
 use crate::container::{ArrayView, Container, FormatError};
 use crate::phase::Cosine;
@@ -37,8 +37,9 @@ pub const MAX_GROUPS: usize = 64;
 /// Most azimuth harmonics of a loadable form (bounds the features of a point).
 pub const MAX_HARMONICS: usize = 8;
 /// Room for the features of one point: J ≤ 16 Legendre terms on two μ_V and two μ_L nodes,
-/// γ and the pair terms on four (μ_V, μ_L) pairs, two Θ hats, K ≤ 8 harmonics.
-const MAX_FEATURES: usize = 16 * 4 + 4 * 3 + 4 + MAX_HARMONICS * 4;
+/// γ and the pair terms on four (μ_V, μ_L) pairs, two Θ hats, K ≤ 8 harmonics, γ_L on two
+/// μ_L nodes and 3 A² interaction products.
+const MAX_FEATURES: usize = 16 * 4 + 4 * 3 + 4 + MAX_HARMONICS * 4 + 2 + 3 * MAX_CROSS * MAX_CROSS;
 
 /// Most Legendre terms in depth and azimuth harmonics of a loadable collector form.
 const MAX_COLLECTOR_LEGENDRE: usize = 8;
@@ -113,7 +114,7 @@ impl<'a> TransportTables<'a> {
                 .map(|v| v as usize)
                 .ok_or(FormatError::BadArray("form"))
         };
-        if form_a.len() != 5
+        if !(5..=6).contains(&form_a.len())
             || form_a
                 .iter()
                 .any(|v| !(v >= 0.0 && v <= 4096.0 && v == (v as u32) as f32))
@@ -125,11 +126,13 @@ impl<'a> TransportTables<'a> {
             harmonics: int(1)?,
             theta_nodes: int(2)?,
             pairs: int(3)? == 1,
+            cross: if form_a.len() == 6 { int(5)? } else { 0 },
         };
         let q = int(4)?;
         if !(1..=MAX_LEGENDRE).contains(&form.legendre)
             || form.theta_nodes < 2
             || form.harmonics > MAX_HARMONICS
+            || form.cross > MAX_CROSS
             || !(1..=MAX_Q).contains(&q)
         {
             return Err(FormatError::BadArray("form"));
@@ -174,7 +177,7 @@ impl<'a> TransportTables<'a> {
                     .and_then(|x| x.checked_mul(q))
                     .ok_or(FormatError::BadArray("beta"))?,
             )?,
-            u_range: need(&c, "u_range", 2 * g * n * l * m)?,
+            u_range: need(&c, "u_range", g * n * l * m)?,
             phase_theta: need(&c, "phase_theta", theta_len)?,
             phase: need(&c, "phase", theta_len)?,
         };
@@ -187,6 +190,14 @@ impl<'a> TransportTables<'a> {
             if !increasing(a) {
                 return Err(FormatError::BadArray(name));
             }
+        }
+        let packed_max = (U_STEPS * U_STEPS - 1) as f32;
+        if t
+            .u_range
+            .iter()
+            .any(|v| !(v >= 0.0 && v <= packed_max && v == (v as u32) as f32))
+        {
+            return Err(FormatError::BadArray("u_range"));
         }
         if theta_len < 2 || t.phase.iter().any(|v| v < 0.0) {
             return Err(FormatError::BadArray("phase"));
@@ -347,10 +358,13 @@ impl<'a> TransportTables<'a> {
         [k.lo, k.hi].iter().all(|&it| {
             [c.l.lo, c.l.hi].iter().all(|&il| {
                 [c.v.lo, c.v.hi].iter().all(|&m| {
-                    let at = 2 * (((g * n + it) * nl + il) * nm + m);
-                    match (self.u_range.get(at), self.u_range.get(at + 1)) {
-                        (Some(lo), Some(hi)) => c.u >= lo - 1e-6 && c.u <= hi + 1e-6,
-                        _ => false,
+                    let at = ((g * n + it) * nl + il) * nm + m;
+                    match self.u_range.get(at) {
+                        Some(v) => {
+                            let (lo, hi) = unpack_u_range(v);
+                            c.u >= lo - 1e-6 && c.u <= hi + 1e-6
+                        }
+                        None => false,
                     }
                 })
             })
@@ -484,6 +498,29 @@ fn collector_part<'a>(
         })),
         _ => Err(bad),
     }
+}
+
+/// Steps of the packed depth ranges: u = step / (U_STEPS − 1).
+pub const U_STEPS: u32 = 4096;
+
+/// A depth range (lo, hi) of stretched depths in [0, 1] as one exact f32: the steps
+/// ⌊lo (U_STEPS − 1)⌋ · U_STEPS + ⌈hi (U_STEPS − 1)⌉ (widened outward by less than a step; an
+/// empty range, lo > hi, stays empty).
+pub fn pack_u_range(lo: f64, hi: f64) -> f32 {
+    let top = (U_STEPS - 1) as f64;
+    if !(lo <= hi) {
+        return ((U_STEPS - 1) * U_STEPS) as f32;
+    }
+    let a = (lo * top).floor().clamp(0.0, top) as u32;
+    let b = (hi * top).ceil().clamp(0.0, top) as u32;
+    (a * U_STEPS + b) as f32
+}
+
+/// The inverse of [`pack_u_range`].
+pub fn unpack_u_range(v: f32) -> (f32, f32) {
+    let v = v as u32;
+    let top = (U_STEPS - 1) as f32;
+    ((v / U_STEPS) as f32 / top, (v % U_STEPS) as f32 / top)
 }
 
 /// Where x sits among the values of `a` (held at the ends).
