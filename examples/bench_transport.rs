@@ -57,11 +57,14 @@ fn main() {
             black_box(sum).is_finite()
         );
     };
-    time("T of all groups of orders ≥ 2", &mut |&[d, t, mu_v, psi, mu_l]| {
-        let mut all = [0.0f32; 16];
-        tab.transport_all(d, t, mu_v, psi, mu_l, &mut all);
-        all.iter().sum()
-    });
+    time(
+        "T of all groups of orders ≥ 2",
+        &mut |&[d, t, mu_v, psi, mu_l]| {
+            let mut all = [0.0f32; 16];
+            tab.transport_all(d, t, mu_v, psi, mu_l, &mut all);
+            all.iter().sum()
+        },
+    );
     time("T, c, σ of all groups", &mut |&[d, t, mu_v, psi, mu_l]| {
         let mut all = [Transport::default(); 16];
         tab.evaluate_all(d, t, mu_v, psi, mu_l, &mut all);

@@ -418,9 +418,12 @@ fn slab_quick_config_writes_tables_and_refuses_bad_configs() {
         .all(|e| e["rel_rms"].as_f64().unwrap().is_finite()));
     let collector = report["collector"]["errors"].as_array().unwrap();
     assert_eq!(collector.len(), 8, "c and σ of the 8 groups of orders ≥ 2");
-    assert!(collector
-        .iter()
-        .all(|e| e["c_in_sigma"].as_f64().unwrap().is_finite() && e["cells"].as_u64().unwrap() > 0));
+    assert!(
+        collector
+            .iter()
+            .all(|e| e["c_in_sigma"].as_f64().unwrap().is_finite()
+                && e["cells"].as_u64().unwrap() > 0)
+    );
     // The runtime, loading the file written, follows the fit to f32 precision, and order 1
     // from the stored phase table follows the phase function.
     let ntt = &report["transport_ntt"];

@@ -20,7 +20,10 @@ fn the_embedded_tables_are_the_committed_file_its_manifest_describes() {
     let on_disk = std::fs::read(dir.join("transport.ntt")).unwrap();
     assert!(on_disk == MIE_10UM);
     let m = manifest();
-    assert_eq!(m["file"]["bytes"].as_u64().unwrap() as usize, MIE_10UM.len());
+    assert_eq!(
+        m["file"]["bytes"].as_u64().unwrap() as usize,
+        MIE_10UM.len()
+    );
     assert_eq!(
         m["file"]["crc32"].as_str().unwrap(),
         format!("{:08x}", crc32(MIE_10UM))

@@ -60,8 +60,7 @@ fn load_config(path: &Path) -> Result<SlabConfig> {
 
 /// A slab config from its JSON text (`name` for messages), validated.
 pub fn parse_config(text: &str, name: &str) -> Result<SlabConfig> {
-    let cfg: SlabConfig =
-        serde_json::from_str(text).with_context(|| format!("config '{name}'"))?;
+    let cfg: SlabConfig = serde_json::from_str(text).with_context(|| format!("config '{name}'"))?;
     cfg.validate().with_context(|| format!("config '{name}'"))?;
     Ok(cfg)
 }

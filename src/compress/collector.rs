@@ -109,8 +109,12 @@ pub fn fit_collector(
         let s = sigma_hat(cell, it);
         (s, v[i] / s, 1.0 / (se[i] / s).max(MIN_REL_SE))
     };
-    let (cz, _) = solve(Statistic::Cz, &|cell, i, it| ratio(&c.cz, &c.cz_se, cell, i, it))?;
-    let (cx, _) = solve(Statistic::Cx, &|cell, i, it| ratio(&c.cx, &c.cx_se, cell, i, it))?;
+    let (cz, _) = solve(Statistic::Cz, &|cell, i, it| {
+        ratio(&c.cz, &c.cz_se, cell, i, it)
+    })?;
+    let (cx, _) = solve(Statistic::Cx, &|cell, i, it| {
+        ratio(&c.cx, &c.cx_se, cell, i, it)
+    })?;
     Ok(CollectorFit {
         group: g,
         q,

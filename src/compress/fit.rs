@@ -224,7 +224,9 @@ pub fn predict_ln(
 /// Where sun cosine il sits among the fitted ones (all but `skip_l`): its own node, or between
 /// its fitted neighbours.
 pub fn held_out_l<'a>(tab: &'a SlabTables, skip_l: &[usize]) -> impl Fn(usize) -> Lerp + use<'a> {
-    let kept_l: Vec<usize> = (0..tab.shape[2]).filter(|il| !skip_l.contains(il)).collect();
+    let kept_l: Vec<usize> = (0..tab.shape[2])
+        .filter(|il| !skip_l.contains(il))
+        .collect();
     let kept_mu: Vec<f64> = kept_l.iter().map(|&il| tab.mu_l[il]).collect();
     move |il: usize| {
         let p = Lerp::between(&kept_mu, tab.mu_l[il]);

@@ -2,8 +2,8 @@
 //! cell and on held-out slices, and write report.json, compressed.npz and transport.ntt (the
 //! latter loaded back by the runtime and compared with the fit).
 
-use super::figure;
 use super::collector::{fit_collector, predict_collector, CollectorFit};
+use super::figure;
 use super::fit::{fit_all, held_out_l, predict, predict_held_out, GroupFit};
 use super::form::Lerp;
 use super::joint::{fit_all_joint, fit_joint_groups, spanned, JointFit};
@@ -123,7 +123,14 @@ pub fn compress(tables: &Path, out: &Path, opt: &Options) -> Result<Outcome> {
     let ntt = if joint.is_empty() {
         None
     } else {
-        Some(write_ntt(tables, out, &tab, opt, (&joint, &coll), (&pred, &pred_c))?)
+        Some(write_ntt(
+            tables,
+            out,
+            &tab,
+            opt,
+            (&joint, &coll),
+            (&pred, &pred_c),
+        )?)
     };
     let report = serde_json::json!({
         "tables": tables,
@@ -181,7 +188,14 @@ pub fn compress(tables: &Path, out: &Path, opt: &Options) -> Result<Outcome> {
         figure::error_map(p, &tab, &errors)
     })?;
     figures.commit()?;
-    let manifest = manifest(tables, opt, &errors, &collector, held_out.as_ref(), ntt.as_ref())?;
+    let manifest = manifest(
+        tables,
+        opt,
+        &errors,
+        &collector,
+        held_out.as_ref(),
+        ntt.as_ref(),
+    )?;
     write_atomic(&out.join("manifest.json"), |w| {
         serde_json::to_writer_pretty(&mut *w, &manifest)?;
         Ok(())
@@ -233,7 +247,15 @@ fn fit_collectors(
         .map(|&g| {
             let (span, range) = spanned(tab, g, skip_t)?;
             let form = &opt.collector;
-            fit_collector(tab, &opt.form, form, g, opt.collector_q, (&span, range), skip_l)
+            fit_collector(
+                tab,
+                &opt.form,
+                form,
+                g,
+                opt.collector_q,
+                (&span, range),
+                skip_l,
+            )
         })
         .collect()
 }
@@ -363,9 +385,14 @@ fn write_ntt(
                         rt.evaluate_all(at[0], at[1], at[2], at[3], at[4], &mut all);
                         for (f, got) in joint.iter().zip(&all) {
                             let i = tab.index(f.group, it, il, j, m, k);
-                            compare(&mut check, (pred[i], pred_c[0][i], pred_c[1][i], pred_c[2][i]), got);
+                            compare(
+                                &mut check,
+                                (pred[i], pred_c[0][i], pred_c[1][i], pred_c[2][i]),
+                                got,
+                            );
                         }
-                        let exact = model.with(|p| single_scattering(p, 1.0, mu_l, t, d, mu_v, psi));
+                        let exact =
+                            model.with(|p| single_scattering(p, 1.0, mu_l, t, d, mu_v, psi));
                         let stored = rt.order1(at[0], at[1], at[2], at[3], at[4]) as f64;
                         order1.push((exact, stored));
                     }
@@ -393,7 +420,9 @@ fn compare(check: &mut NttCheck, (t, sigma, cx, cz): (f64, f64, f64, f64), got: 
     }
     check.worst_t = check.worst_t.max((got.t as f64 / t - 1.0).abs());
     if sigma.is_finite() && sigma > 0.0 {
-        check.worst_sigma = check.worst_sigma.max((got.sigma as f64 / sigma - 1.0).abs());
+        check.worst_sigma = check
+            .worst_sigma
+            .max((got.sigma as f64 / sigma - 1.0).abs());
         let dc = (got.c_x as f64 - cx).hypot(got.c_z as f64 - cz) / sigma;
         check.worst_c_in_sigma = check.worst_c_in_sigma.max(dc);
     }
@@ -415,7 +444,9 @@ fn manifest(
         .and_then(|t| serde_json::from_str(&t).ok())
         .unwrap_or_default();
     let pick = |keys: &[&str]| -> serde_json::Value {
-        keys.iter().map(|k| (k.to_string(), slab[*k].clone())).collect()
+        keys.iter()
+            .map(|k| (k.to_string(), slab[*k].clone()))
+            .collect()
     };
     let summary = |e: &[GroupError]| -> Vec<serde_json::Value> {
         e.iter()

@@ -64,7 +64,12 @@ pub fn ntt_bytes(
     // An empty range (no fitted cell) stays empty.
     let u_range: Vec<f32> = fits
         .iter()
-        .flat_map(|f| f.u_range.iter().flatten().map(|&(lo, hi)| pack_u_range(lo, hi)))
+        .flat_map(|f| {
+            f.u_range
+                .iter()
+                .flatten()
+                .map(|&(lo, hi)| pack_u_range(lo, hi))
+        })
         .collect();
     let theta32 = f32s(&mut theta.iter().copied());
     let phase32 = f32s(&mut phase.iter().copied());

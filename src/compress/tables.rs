@@ -94,9 +94,18 @@ impl SlabTables {
         let c = &collector;
         ensure!(
             n > 0
-                && [&t, &t_se, &c.cx, &c.cx_se, &c.cz, &c.cz_se, &c.sigma, &c.sigma_se]
-                    .iter()
-                    .all(|a| a.len() == n),
+                && [
+                    &t,
+                    &t_se,
+                    &c.cx,
+                    &c.cx_se,
+                    &c.cz,
+                    &c.cz_se,
+                    &c.sigma,
+                    &c.sigma_se
+                ]
+                .iter()
+                .all(|a| a.len() == n),
             "'{}': T has {} values, the grids say {shape:?} (or a collector array differs)",
             path.display(),
             t.len()

@@ -326,7 +326,10 @@ pub fn heat_maps(
     let root = BitMapBackend::new(path, size).into_drawing_area();
     root.fill(&WHITE).map_err(|e| err(&e))?;
     let rows = maps.len().div_ceil(cols.max(1));
-    for (map, area) in maps.iter().zip(root.split_evenly((rows, cols.max(1))).iter()) {
+    for (map, area) in maps
+        .iter()
+        .zip(root.split_evenly((rows, cols.max(1))).iter())
+    {
         draw_heat_map(area, map, (mid, top), format).map_err(|e| err(&e))?;
     }
     root.present().map_err(|e| err(&e))?;
@@ -344,7 +347,11 @@ fn heat_colour(v: f64, (mid, top): (f64, f64)) -> RGBColor {
         RGBColor(255, 255, lerp(255.0, 60.0, w))
     } else {
         let w = (v - mid) / (top - mid);
-        RGBColor(lerp(255.0, 215.0, w), lerp(255.0, 40.0, w), lerp(60.0, 40.0, w))
+        RGBColor(
+            lerp(255.0, 215.0, w),
+            lerp(255.0, 40.0, w),
+            lerp(60.0, 40.0, w),
+        )
     }
 }
 

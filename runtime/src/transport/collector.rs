@@ -123,7 +123,11 @@ impl CollectorForm {
                 }
             }
             Statistic::Cz => {
-                let mu_l = if c.mu_l > F::of(0.05) { c.mu_l } else { F::of(0.05) };
+                let mu_l = if c.mu_l > F::of(0.05) {
+                    c.mu_l
+                } else {
+                    F::of(0.05)
+                };
                 let lam = F::of(8.0);
                 let reach = s_l * lam * -super::single::exp_m1(-c.d / (mu_l * lam)) * inv_sigma;
                 push(Block::Theta(one));
@@ -265,7 +269,10 @@ mod tests {
                 t: 4.0,
             };
             let b = form.value(stat, &c32, 1.7f32, 4, 4, |i| coef(i) as f32);
-            assert!((b as f64 - a).abs() < 1e-5 * (1.0 + a.abs()), "{stat:?}: {a} vs {b}");
+            assert!(
+                (b as f64 - a).abs() < 1e-5 * (1.0 + a.abs()),
+                "{stat:?}: {a} vs {b}"
+            );
         }
     }
 }

@@ -10,7 +10,13 @@
 //! [`super::single`] without its phase function), held at e⁻¹⁰ (deep in thick slabs it falls
 //! like e^{−d/μ_L} while multiple scattering does not), h_i the hat functions of the nodes
 //! Θ_i = π (i/(n − 1))² (dense at the forward peak), s = sin of the polar angles. With `pairs`,
-//! γ becomes γ(μ_V, μ_L) and an offset and a depth slope per (μ_V, μ_L) pair are added.
+//! γ becomes γ(μ_V, μ_L) and an offset and a depth slope per (μ_V, μ_L) pair are added. With
+//! `cross` = A > 0, the view × sun interaction that the additive terms lack:
+//!
+//!   + γ_L(μ_L) max(ln F₁, −10) + Σ_{j<3} Σ_{a,b<A} e_{jab}^± P_j(2u − 1) P_a(2|μ_V| − 1) P_b(2μ_L − 1)
+//!
+//! (± a set per hemisphere of μ_V), smooth in both cosines so that it interpolates between
+//! their nodes — unlike the per-pair terms.
 //!
 //! Linear in its parameters; parameters indexed by μ_V or μ_L are read between their grid nodes
 //! with [`Lerp`] weights. The toolchain fits it (`nephele compress`) with these very features.
@@ -47,11 +53,11 @@ const CROSS_DEPTH: usize = 3;
 impl Default for LogAdditive {
     fn default() -> Self {
         Self {
-            legendre: 6,
+            legendre: 7,
             harmonics: 3,
             theta_nodes: 24,
             pairs: false,
-            cross: 0,
+            cross: 3,
         }
     }
 }

@@ -192,8 +192,7 @@ impl<'a> TransportTables<'a> {
             }
         }
         let packed_max = (U_STEPS * U_STEPS - 1) as f32;
-        if t
-            .u_range
+        if t.u_range
             .iter()
             .any(|v| !(v >= 0.0 && v <= packed_max && v == (v as u32) as f32))
         {
@@ -249,7 +248,9 @@ impl<'a> TransportTables<'a> {
         out: &mut [Transport],
     ) {
         let groups = self.groups().min(out.len());
-        out[..groups].iter_mut().for_each(|v| *v = Transport::default());
+        out[..groups]
+            .iter_mut()
+            .for_each(|v| *v = Transport::default());
         let Some(pt) = self.point(d, t, mu_v, psi_v, mu_l) else {
             return;
         };
@@ -412,7 +413,13 @@ struct Point {
 }
 
 /// Σ_features v · Σ_k β[(first + col) · q + k] L_k: a dot product with the parameters at t.
-fn dot_at_t(beta: &ArrayView, first: usize, q: usize, lq: &[f32; MAX_Q], row: &[(u32, f32)]) -> f32 {
+fn dot_at_t(
+    beta: &ArrayView,
+    first: usize,
+    q: usize,
+    lq: &[f32; MAX_Q],
+    row: &[(u32, f32)],
+) -> f32 {
     let mut sum = 0.0;
     for &(col, v) in row {
         sum += v * coef_at_t(beta, first + col as usize, q, lq);
@@ -466,7 +473,11 @@ fn collector_part<'a>(
         return Ok(None);
     };
     let bad = FormatError::BadArray("collector_form");
-    if sizes.len() != 4 || sizes.iter().any(|v| !(v >= 0.0 && v <= 512.0 && v == (v as u32) as f32)) {
+    if sizes.len() != 4
+        || sizes
+            .iter()
+            .any(|v| !(v >= 0.0 && v <= 512.0 && v == (v as u32) as f32))
+    {
         return Err(bad);
     }
     let int = |i: usize| sizes.get(i).map_or(0, |v| v as usize);
@@ -484,9 +495,12 @@ fn collector_part<'a>(
         return Err(bad);
     }
     let mut beta = [None; 3];
-    for (slot, (stat, name)) in beta
-        .iter_mut()
-        .zip(Statistic::ALL.iter().zip(["sigma_beta", "cz_beta", "cx_beta"]))
+    for (slot, (stat, name)) in
+        beta.iter_mut().zip(
+            Statistic::ALL
+                .iter()
+                .zip(["sigma_beta", "cz_beta", "cx_beta"]),
+        )
     {
         *slot = Some(need(c, name, g * form.n_params(*stat, m, l) * q)?);
     }
