@@ -96,6 +96,10 @@ pub fn run(args: CompressArgs) -> Result<()> {
 /// Prints what a compression measured and wrote.
 pub fn print_outcome(o: &Outcome, out: &Path) {
     print_errors("fitted slices", &o.errors);
+    print_errors(
+        &format!("reference (Bouthors-like, {} parameters)", o.reference.1),
+        &o.reference.0,
+    );
     print_collector("fitted slices", &o.collector);
     if let Some(h) = &o.held_out {
         print_errors("held-out slices", &h.errors);

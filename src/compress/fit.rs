@@ -86,16 +86,32 @@ pub(crate) fn for_each_row(
     it: usize,
     skip_l: &[usize],
     row: &mut Vec<(usize, f64)>,
-    mut f: impl FnMut(Row),
+    f: impl FnMut(Row),
 ) {
     let [_, _, nl, _, nm, _] = tab.shape;
-    for (c, [il, j, m, k], off) in cells_of(tab, form, it) {
+    let feats = |c: &Cell, row: &mut Vec<(usize, f64)>| features(form, c, nm, nl, row);
+    for_each_row_of(tab, &feats, g, it, skip_l, row, f)
+}
+
+/// As [`for_each_row`], for any form linear in ln T − ln B whose features `feats` gives
+/// (false: the form cannot represent the cell).
+pub(crate) fn for_each_row_of(
+    tab: &SlabTables,
+    feats: &dyn Fn(&Cell, &mut Vec<(usize, f64)>) -> bool,
+    g: usize,
+    it: usize,
+    skip_l: &[usize],
+    row: &mut Vec<(usize, f64)>,
+    mut f: impl FnMut(Row),
+) {
+    let nm = tab.shape[4];
+    for (c, [il, j, m, k], off) in cells_of(tab, &LogAdditive::default(), it) {
         if skip_l.contains(&il) {
             continue;
         }
         let i = tab.index(g, it, il, j, m, k);
         let (t, se) = (tab.t[i], tab.t_se[i]);
-        if !(t > 0.0 && se < MAX_REL_SE * t && features(form, &c, nm, nl, row)) {
+        if !(t > 0.0 && se < MAX_REL_SE * t && feats(&c, row)) {
             continue;
         }
         f(Row {

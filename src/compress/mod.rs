@@ -3,6 +3,7 @@
 //! Carlo tables by weighted least squares (weights from their standard errors: noise is never
 //! fitted), with the error measured on every cell against the tables' own noise.
 
+pub mod bouthors;
 pub mod collector;
 pub mod figure;
 pub mod fit;

@@ -70,6 +70,9 @@ pub struct Outcome {
     pub errors: Vec<GroupError>,
     /// The held-out study, if run.
     pub held_out: Option<HeldOut>,
+    /// The reference (Bouthors-like) form's errors on the fitted slices, per group then for the
+    /// sum, and its parameter count.
+    pub reference: (Vec<GroupError>, usize),
     /// Collector errors per group (joint fits only).
     pub collector: Vec<CollectorError>,
     /// Parameters of T.
@@ -94,6 +97,12 @@ pub fn compress(tables: &Path, out: &Path, opt: &Options) -> Result<Outcome> {
     let pred = predict_everywhere(&tab, &opt.form, &fits);
     let mut errors: Vec<_> = (1..ng).map(|g| group_error(&tab, &pred, Some(g))).collect();
     errors.push(group_error(&tab, &pred, None));
+    let pred_ref = super::bouthors::fit_and_predict(&tab)?;
+    let mut reference: Vec<_> = (1..ng)
+        .map(|g| group_error(&tab, &pred_ref, Some(g)))
+        .collect();
+    reference.push(group_error(&tab, &pred_ref, None));
+    let reference_params = super::bouthors::n_params(nm, nl) * (ng - 1) * tab.shape[1];
     let pred_c = predict_collector(&tab, &opt.form, &opt.collector, &coll, &pred, &Lerp::at);
     let collector: Vec<_> = coll
         .iter()
@@ -149,6 +158,11 @@ pub fn compress(tables: &Path, out: &Path, opt: &Options) -> Result<Outcome> {
             "errors": collector,
         },
         "held_out": held_out,
+        "reference_form": {
+            "kind": "bouthors_like (src/compress/bouthors.rs): ln T = ln B + a(mu_V) + x(mu_L) + [b_V(mu_V) + b_L(mu_L)] x + c2 P2(x) + c3 P3(x) + P(Theta) + sum_k [e_k(mu_V) + f_k(mu_L)] (s_V s_L)^k cos k psi, per (group, thickness)",
+            "parameters": reference_params,
+            "errors": reference,
+        },
         "transport_ntt": ntt,
         "version": crate::VERSION,
         "git_commit": option_env!("NEPHELE_GIT_COMMIT"),
@@ -202,6 +216,7 @@ pub fn compress(tables: &Path, out: &Path, opt: &Options) -> Result<Outcome> {
     })?;
     Ok(Outcome {
         errors,
+        reference: (reference, reference_params),
         collector,
         held_out,
         params,

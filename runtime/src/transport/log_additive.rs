@@ -279,7 +279,7 @@ impl LogAdditive {
 }
 
 /// P_0(x) … P_{n−1}(x) (Legendre polynomials; n ≤ [`MAX_LEGENDRE`], the rest 0).
-pub(crate) fn legendre<F: Real>(x: F, n: usize) -> [F; MAX_LEGENDRE] {
+pub fn legendre<F: Real>(x: F, n: usize) -> [F; MAX_LEGENDRE] {
     let mut p = [F::of(0.0); MAX_LEGENDRE];
     for j in 0..n.min(MAX_LEGENDRE) {
         p[j] = match j {
@@ -310,7 +310,7 @@ pub(crate) fn on_nodes<F: Real>(
 
 /// The Θ-table features `val · h_i(Θ) · (1, 2u − 1)` at columns col + 2i, col + 2i + 1: h_i the
 /// hat functions of the nodes Θ_i = π (i/(n − 1))², n = `nodes` (dense at the forward peak).
-pub(crate) fn theta_hats<F: Real>(
+pub fn theta_hats<F: Real>(
     nodes: usize,
     c: &Cell<F>,
     val: F,
