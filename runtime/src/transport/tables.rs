@@ -525,8 +525,10 @@ pub fn pack_u_range(lo: f64, hi: f64) -> f32 {
     if !(lo <= hi) {
         return ((U_STEPS - 1) * U_STEPS) as f32;
     }
-    let a = (lo * top).floor().clamp(0.0, top) as u32;
-    let b = (hi * top).ceil().clamp(0.0, top) as u32;
+    // Truncation of non-negative values is the floor (no `floor` in core).
+    let a = (lo * top).clamp(0.0, top) as u32;
+    let x = (hi * top).clamp(0.0, top);
+    let b = x as u32 + u32::from((x as u32 as f64) < x);
     (a * U_STEPS + b) as f32
 }
 
@@ -582,5 +584,29 @@ impl PhaseValue<f32> for StoredPhase<'_, '_> {
         let half = Real::sqrt((0.5 * c.one_minus_mu).max(0.0)).min(1.0);
         self.0
             .phase_at(2.0 * Real::asin(half) * (180.0 / core::f32::consts::PI))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Packed depth ranges contain the range packed, exceed it by less than a step, and an
+    /// empty range stays empty.
+    #[test]
+    fn packed_depth_ranges_widen_by_less_than_a_step() {
+        let step = 1.0 / (U_STEPS - 1) as f32;
+        for j in 0..16 {
+            for k in j..16 {
+                let (lo, hi) = (j as f64 / 15.0, k as f64 / 15.0);
+                let (a, b) = unpack_u_range(pack_u_range(lo, hi));
+                assert!(a <= lo as f32 + 1e-7 && a > lo as f32 - step, "{lo} → {a}");
+                assert!(b >= hi as f32 - 1e-7 && b < hi as f32 + step, "{hi} → {b}");
+            }
+        }
+        let (a, b) = unpack_u_range(pack_u_range(0.7, 0.2));
+        assert!(a > b);
+        let (a, b) = unpack_u_range(pack_u_range(f64::INFINITY, f64::NEG_INFINITY));
+        assert!(a > b);
     }
 }
