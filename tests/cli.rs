@@ -691,3 +691,66 @@ fn refuses_bad_configs(dir: &Path, cmd: &str, cases: &[(&str, &str)]) {
         );
     }
 }
+
+/// `nephele render` on a tiny cloud writes every output; bad scenes are one clear error line and
+/// no files.
+#[test]
+fn render_writes_its_outputs_and_refuses_bad_scenes() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/fit-configs/scenes/cloud.json"
+    ))
+    .unwrap();
+    let mut scene: serde_json::Value = serde_json::from_str(&text).unwrap();
+    scene["camera"]["width"] = 12.into();
+    scene["camera"]["height"] = 8.into();
+    scene["spp"] = 1.into();
+    let good = dir.path().join("good.json");
+    std::fs::write(&good, scene.to_string()).unwrap();
+    let out = dir.path().join("render");
+    succeeds(&[
+        "render",
+        "--scene",
+        good.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        files_in(&out),
+        [
+            "beauty.npy",
+            "beauty.png",
+            "groups.npy",
+            "opacity.npy",
+            "render.json",
+            "transmittance.npy",
+            "unscattered.npy"
+        ]
+    );
+    for (edit, needle) in [
+        (("sigma_t", serde_json::json!(-1)), "sigma_t"),
+        (("albedo", serde_json::json!(2)), "albedo"),
+        (("spp", serde_json::json!(0)), "spp"),
+        (("colour", serde_json::json!(1)), "colour"),
+    ] {
+        let mut bad = scene.clone();
+        bad[edit.0] = edit.1;
+        let path = dir.path().join("bad.json");
+        std::fs::write(&path, bad.to_string()).unwrap();
+        let out = dir.path().join("bad-out");
+        let o = nephele(&[
+            "render",
+            "--scene",
+            path.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains(needle),
+            "{needle}: {err}"
+        );
+        assert!(!out.exists(), "{needle}: files were written");
+    }
+}

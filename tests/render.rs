@@ -188,3 +188,50 @@ fn a_white_furnace_sees_the_sky_through_any_medium() {
     assert!((0.1..0.9).contains(&(t_sum / n as f64)));
     assert!((mean - 1.0).abs() < 4.0 * se && se < 0.01, "{mean} ± {se}");
 }
+
+fn small_cloud() -> nephele::render::scene::Scene {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/fit-configs/scenes/cloud.json"
+    ))
+    .unwrap();
+    let mut scene = nephele::render::scene::Scene::parse(&text).unwrap();
+    scene.camera.width = 24;
+    scene.camera.height = 16;
+    scene.spp = 2;
+    scene.phase = nephele::slab::PhaseSpec::Hg { g: 0.85 };
+    scene
+}
+
+/// Same scene and seed, 1 or 2 threads: the same bits; and the order groups and the unscattered
+/// sky add up to the beauty image.
+#[test]
+fn renders_are_bit_identical_for_any_thread_count_and_aovs_add_up() {
+    use nephele::render::run::render;
+    let scene = small_cloud();
+    let with = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| render(&scene, &|_| {}).unwrap())
+    };
+    let (a, b) = (with(1), with(2));
+    assert!(a.beauty == b.beauty && a.groups == b.groups && a.transmittance == b.transmittance);
+    let (w, h) = (a.width, a.height);
+    let ng = a.groups.len() / (w * h * 3);
+    let mut lit = 0;
+    for px in 0..w * h * 3 {
+        let sum: f64 = (0..ng)
+            .map(|g| a.groups[g * w * h * 3 + px] as f64)
+            .sum::<f64>()
+            + a.unscattered[px] as f64;
+        let beauty = a.beauty[px] as f64;
+        assert!(
+            (sum - beauty).abs() <= 1e-5 * beauty.max(1e-3),
+            "{sum} vs {beauty}"
+        );
+        lit += usize::from(sum > a.unscattered[px] as f64);
+    }
+    assert!(lit > 0, "the cloud must be in the picture");
+}

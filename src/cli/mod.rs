@@ -8,6 +8,7 @@ mod fit;
 mod mie;
 mod phase;
 mod pipeline;
+mod render;
 mod slab;
 mod sphere;
 mod transport;
@@ -42,6 +43,8 @@ enum Command {
     Compress(compress::CompressArgs),
     /// Evaluate compressed transport tables (transport.ntt) at one point: T per order group, as JSON.
     Transport(transport::TransportArgs),
+    /// Render a scene (slab or cloud) with the ground-truth path tracer: image and per-order AOVs.
+    Render(render::RenderArgs),
     /// Merge the shards of a slab run (`nephele slab --shard K/N`) into its tables.
     Merge(slab::MergeArgs),
     /// Tabulate and sample a phase model of nephele-runtime (or a Mie table); renderer LUTs.
@@ -71,6 +74,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Merge(args)) => slab::merge_shards(args),
         Some(Command::Compress(args)) => compress::run(args),
         Some(Command::Transport(args)) => transport::run(args),
+        Some(Command::Render(args)) => render::run(args),
         None => pipeline::run(cli.full),
     }
 }

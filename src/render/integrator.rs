@@ -42,8 +42,10 @@ pub struct Volume<'a> {
 /// One camera path's radiance, split by scattering order, and the camera ray's transmittance.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PathSample {
-    /// Radiance per order group (the first `group_first.len()` entries).
+    /// Sunlight per order group (the first `group_first.len()` entries).
     pub groups: [f64; MAX_GROUPS],
+    /// Skylight per order group (scattered at least once).
+    pub sky_groups: [f64; MAX_GROUPS],
     /// Radiance seen without scattering (the sky through the medium).
     pub unscattered: f64,
     /// Transmittance of the camera ray through the whole medium (1 − opacity).
@@ -53,7 +55,7 @@ pub struct PathSample {
 impl PathSample {
     /// The total radiance: the groups and the unscattered part.
     pub fn total(&self) -> f64 {
-        self.unscattered + self.groups.iter().sum::<f64>()
+        self.unscattered + self.groups.iter().sum::<f64>() + self.sky_groups.iter().sum::<f64>()
     }
 }
 
@@ -141,7 +143,7 @@ pub fn trace<R: Rng>(v: &Volume, o: Vec3, w: Vec3, rng: &mut R) -> PathSample {
         (o, w) = (x, normalize(w_new));
     }
     if order > 0 && v.sky > 0.0 {
-        out.groups[group_of(v.group_first, order).min(MAX_GROUPS - 1)] += beta * v.sky;
+        out.sky_groups[group_of(v.group_first, order).min(MAX_GROUPS - 1)] += beta * v.sky;
     }
     out
 }

@@ -1,5 +1,8 @@
-//! Stage 6 — the ground-truth volumetric path tracer (spec 60): participating media, the
-//! estimator, and (to come) scenes, the camera and the `nephele render` command.
+//! Stage 6 — the ground-truth volumetric path tracer (spec 60): scenes, participating media, the
+//! estimator, the camera and the outputs of `nephele render`.
 
 pub mod integrator;
 pub mod medium;
+pub mod output;
+pub mod run;
+pub mod scene;

@@ -1,0 +1,53 @@
+//! `nephele render`: renders a scene with the ground-truth path tracer.
+
+use anyhow::Result;
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use nephele::render::output::write_outputs;
+use nephele::render::run::render;
+use nephele::render::scene::Scene;
+use std::path::PathBuf;
+
+/// Options of `nephele render`.
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    /// Scene (JSON; keys in fit-configs/scenes/README.md).
+    #[arg(long, value_name = "FILE")]
+    pub scene: PathBuf,
+    /// Output directory: beauty.png, beauty.npy, groups.npy, unscattered.npy,
+    /// transmittance.npy, opacity.npy, render.json. [default: outputs/render]
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Samples per pixel, overriding the scene's.
+    #[arg(long)]
+    pub spp: Option<u32>,
+}
+
+/// Runs `nephele render`.
+pub fn run(args: RenderArgs) -> Result<()> {
+    let mut scene = Scene::load(&args.scene)?;
+    if let Some(spp) = args.spp {
+        scene.spp = spp;
+        scene.validate()?;
+    }
+    let out = args.out.unwrap_or_else(|| PathBuf::from("outputs/render"));
+    let bar = ProgressBar::new(scene.camera.height as u64).with_style(
+        ProgressStyle::with_template("render [{bar:30}] {pos}/{len} rows ({elapsed}, eta {eta})")
+            .expect("static template"),
+    );
+    let r = render(&scene, &|rows| bar.set_position(rows as u64))?;
+    bar.finish_and_clear();
+    write_outputs(&out, &scene, &r)?;
+    println!(
+        "{}×{} pixels, {} spp: {} camera paths in {:.1} s ({:.0} paths/s); wrote {}/beauty.png, \
+         beauty.npy, groups.npy, unscattered.npy, transmittance.npy, opacity.npy, render.json",
+        r.width,
+        r.height,
+        scene.spp,
+        r.paths,
+        r.seconds,
+        r.paths as f64 / r.seconds.max(1e-9),
+        out.display()
+    );
+    Ok(())
+}

@@ -1,0 +1,109 @@
+//! What `nephele render` writes: the beauty image as PNG (tone-mapped, sRGB-encoded) and as
+//! .npy (linear), the per-order-group radiance, the unscattered sky, the transmittance and the
+//! opacity as .npy (float32, row 0 at the top), and a JSON sidecar — all atomically.
+
+use super::run::{Rendered, GROUP_FIRST};
+use super::scene::Scene;
+use crate::io::AtomicFiles;
+use anyhow::{Context, Result};
+use npyz::WriterBuilder;
+use std::io::Write;
+use std::path::Path;
+
+/// A float32 .npy of `shape`.
+fn npy_bytes(shape: &[u64], data: &[f32]) -> Result<Vec<u8>> {
+    let mut bytes = Vec::new();
+    {
+        let mut w = npyz::WriteOptions::<f32>::new()
+            .default_dtype()
+            .shape(shape)
+            .writer(&mut bytes)
+            .begin_nd()?;
+        w.extend(data.iter().copied())?;
+        w.finish()?;
+    }
+    Ok(bytes)
+}
+
+/// Linear radiance to 8-bit sRGB: exposure so that the 90th percentile of the luminance maps to
+/// 0.75 before the curve 1 − e^{−x} (soft highlights; rare bright samples of a noisy image do
+/// not set the exposure), then the sRGB transfer function.
+pub fn tone_map(beauty: &[f32]) -> Vec<u8> {
+    let mut lum: Vec<f32> = beauty
+        .chunks_exact(3)
+        .map(|p| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2])
+        .collect();
+    lum.sort_by(f32::total_cmp);
+    let p90 = lum
+        .get(lum.len() * 9 / 10)
+        .copied()
+        .unwrap_or(1.0)
+        .max(1e-12);
+    // 1 − e^{−k p90} = 0.75.
+    let k = (4.0f32).ln() / p90;
+    beauty
+        .iter()
+        .map(|&v| {
+            let x = 1.0 - (-k * v.max(0.0)).exp();
+            let s = if x <= 0.003_130_8 {
+                12.92 * x
+            } else {
+                1.055 * x.powf(1.0 / 2.4) - 0.055
+            };
+            (s * 255.0 + 0.5).clamp(0.0, 255.0) as u8
+        })
+        .collect()
+}
+
+/// Writes every output of `r` into `out`.
+pub fn write_outputs(out: &Path, scene: &Scene, r: &Rendered) -> Result<()> {
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create '{}'", out.display()))?;
+    let (w, h) = (r.width as u64, r.height as u64);
+    let ng = GROUP_FIRST.len() as u64;
+    let mut files = AtomicFiles::new();
+    for (name, shape, data) in [
+        ("beauty.npy", vec![h, w, 3], &r.beauty),
+        ("groups.npy", vec![ng, h, w, 3], &r.groups),
+        ("unscattered.npy", vec![h, w, 3], &r.unscattered),
+        ("transmittance.npy", vec![h, w], &r.transmittance),
+    ] {
+        files.write_bytes(&out.join(name), &npy_bytes(&shape, data)?)?;
+    }
+    let opacity: Vec<f32> = r.transmittance.iter().map(|t| 1.0 - t).collect();
+    files.write_bytes(&out.join("opacity.npy"), &npy_bytes(&[h, w], &opacity)?)?;
+    let mut png = Vec::new();
+    image::ImageEncoder::write_image(
+        image::codecs::png::PngEncoder::new(&mut png),
+        &tone_map(&r.beauty),
+        w as u32,
+        h as u32,
+        image::ColorType::Rgb8,
+    )?;
+    files.write_bytes(&out.join("beauty.png"), &png)?;
+    let sidecar = serde_json::json!({
+        "scene": scene,
+        "width": w,
+        "height": h,
+        "spp": scene.spp,
+        "paths": r.paths,
+        "seconds": r.seconds,
+        "paths_per_second": r.paths as f64 / r.seconds.max(1e-9),
+        "threads": rayon::current_num_threads(),
+        "group_first_orders": GROUP_FIRST,
+        "units": "linear radiance, the sun's irradiance and the sky's radiance as given in the scene (RGB); row 0 at the top",
+        "files": {
+            "beauty.npy": "[H, W, 3] the sum of groups.npy over groups and unscattered.npy",
+            "groups.npy": "[group, H, W, 3] radiance scattered n times, n in the group (first orders in group_first_orders; sun and sky)",
+            "unscattered.npy": "[H, W, 3] the sky seen through the medium",
+            "transmittance.npy": "[H, W] transmittance of the camera ray through the medium",
+            "opacity.npy": "[H, W] 1 - transmittance",
+            "beauty.png": "tone-mapped (90th percentile of luminance at 0.75 of 1 - exp(-x)), sRGB",
+        },
+        "version": crate::VERSION,
+        "git_commit": option_env!("NEPHELE_GIT_COMMIT"),
+    });
+    let mut json = serde_json::to_vec_pretty(&sidecar)?;
+    json.write_all(b"\n")?;
+    files.write_bytes(&out.join("render.json"), &json)?;
+    files.commit()
+}

@@ -1,0 +1,241 @@
+//! Scenes of the path tracer (JSON; examples in fit-configs/scenes/): a medium (homogeneous slab
+//! or implicit cloud), its extinction scale, albedo and phase function, a directional sun, an
+//! optional constant sky, a pinhole camera, samples per pixel and a seed. World units are metres,
+//! z is up.
+
+use super::medium::{Cloud, Ellipsoid, Medium, Slab, Vec3};
+use crate::slab::PhaseSpec;
+use anyhow::{bail, ensure, Context, Result};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// A scene file.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Free text.
+    #[serde(default)]
+    pub description: String,
+    /// The medium's shape; its density (0…1) is scaled by `sigma_t`.
+    pub medium: MediumSpec,
+    /// Extinction coefficient at density 1 (1/m).
+    pub sigma_t: f64,
+    /// Single-scattering albedo.
+    #[serde(default = "one")]
+    pub albedo: f64,
+    /// Phase function: {"kind": "mie", "diameter_um": 10}, "hg", "hg_draine", "table".
+    pub phase: PhaseSpec,
+    /// The sun.
+    pub sun: Sun,
+    /// Constant sky radiance (linear RGB, W m⁻² sr⁻¹); none by default.
+    #[serde(default)]
+    pub sky: [f64; 3],
+    /// The camera.
+    pub camera: Camera,
+    /// Samples (camera paths) per pixel.
+    pub spp: u32,
+    /// Seed of every random stream.
+    #[serde(default)]
+    pub seed: u64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// The medium's shape.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum MediumSpec {
+    /// A homogeneous slab z ∈ [0, thickness] (m), unbounded in x and y, lit face on top.
+    Slab {
+        /// Thickness (m).
+        thickness: f64,
+    },
+    /// A union of ellipsoids whose boundary layer carries fBm noise (a hypertexture).
+    Cloud {
+        /// The ellipsoids: centre and semi-axes (m).
+        blobs: Vec<Ellipsoid>,
+        /// Width of the boundary layer over which the density rises from 0 to 1 (m).
+        edge: f64,
+        /// fBm displacement of the boundary: amplitude (m), base frequency (1/m), octaves.
+        noise: NoiseSpec,
+    },
+}
+
+/// fBm displacement of a cloud's boundary.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NoiseSpec {
+    /// Amplitude (m).
+    pub amplitude: f64,
+    /// Base frequency (1/m).
+    pub frequency: f64,
+    /// Octaves (1…10).
+    pub octaves: usize,
+}
+
+/// A directional sun.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Sun {
+    /// Direction toward the sun (normalised on load).
+    pub direction: Vec3,
+    /// Irradiance on a surface facing it (linear RGB, W/m²).
+    pub irradiance: [f64; 3],
+}
+
+/// A pinhole camera.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Camera {
+    /// Eye position (m).
+    pub position: Vec3,
+    /// Point looked at (m).
+    pub look_at: Vec3,
+    /// Up vector (default +z).
+    #[serde(default = "up")]
+    pub up: Vec3,
+    /// Vertical field of view (degrees).
+    pub fov_deg: f64,
+    /// Image width and height (pixels).
+    pub width: u32,
+    /// See `width`.
+    pub height: u32,
+}
+
+fn up() -> Vec3 {
+    [0.0, 0.0, 1.0]
+}
+
+fn finite(v: &[f64]) -> bool {
+    v.iter().all(|x| x.is_finite())
+}
+
+fn norm(v: Vec3) -> f64 {
+    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+}
+
+impl Scene {
+    /// Reads and validates a scene file.
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("cannot read scene '{}'", path.display()))?;
+        Self::parse(&text).with_context(|| format!("scene '{}'", path.display()))
+    }
+
+    /// Parses and validates scene JSON.
+    pub fn parse(text: &str) -> Result<Self> {
+        let mut s: Scene = serde_json::from_str(text)?;
+        s.validate()?;
+        let n = norm(s.sun.direction);
+        s.sun.direction = s.sun.direction.map(|x| x / n);
+        Ok(s)
+    }
+
+    /// Checks every value, naming the first bad one.
+    pub fn validate(&self) -> Result<()> {
+        ensure!(
+            self.sigma_t > 0.0 && self.sigma_t.is_finite(),
+            "sigma_t must be a positive extinction (1/m)"
+        );
+        ensure!(
+            (0.0..=1.0).contains(&self.albedo),
+            "albedo must be in [0, 1]"
+        );
+        ensure!(
+            finite(&self.sun.direction) && norm(self.sun.direction) > 0.0,
+            "sun.direction must be a non-zero vector"
+        );
+        ensure!(
+            self.sun
+                .irradiance
+                .iter()
+                .all(|&e| e >= 0.0 && e.is_finite()),
+            "sun.irradiance must be three non-negative numbers"
+        );
+        ensure!(
+            self.sky.iter().all(|&e| e >= 0.0 && e.is_finite()),
+            "sky must be three non-negative numbers"
+        );
+        let c = &self.camera;
+        ensure!(
+            finite(&c.position) && finite(&c.look_at) && finite(&c.up),
+            "camera vectors must be finite"
+        );
+        let fwd = [
+            c.look_at[0] - c.position[0],
+            c.look_at[1] - c.position[1],
+            c.look_at[2] - c.position[2],
+        ];
+        ensure!(
+            norm(fwd) > 0.0 && norm(cross(fwd, c.up)) > 1e-9 * norm(fwd) * norm(c.up),
+            "camera.look_at must differ from camera.position and not lie along camera.up"
+        );
+        ensure!(
+            c.fov_deg > 0.0 && c.fov_deg < 179.0,
+            "camera.fov_deg must be in (0, 179)"
+        );
+        ensure!(
+            (1..=16384).contains(&c.width) && (1..=16384).contains(&c.height),
+            "camera.width and camera.height must be 1…16384 pixels"
+        );
+        ensure!((1..=1 << 20).contains(&self.spp), "spp must be 1…1048576");
+        match &self.medium {
+            MediumSpec::Slab { thickness } => ensure!(
+                *thickness > 0.0 && thickness.is_finite(),
+                "medium.thickness must be positive (m)"
+            ),
+            MediumSpec::Cloud { blobs, edge, noise } => {
+                ensure!(
+                    !blobs.is_empty(),
+                    "medium.blobs must hold at least one ellipsoid"
+                );
+                for (i, b) in blobs.iter().enumerate() {
+                    if !(finite(&b.center) && b.radii.iter().all(|&r| r > 0.0 && r.is_finite())) {
+                        bail!("medium.blobs[{i}]: centre finite and radii positive");
+                    }
+                }
+                ensure!(
+                    *edge > 0.0 && edge.is_finite(),
+                    "medium.edge must be positive (m)"
+                );
+                ensure!(
+                    noise.amplitude >= 0.0
+                        && noise.amplitude.is_finite()
+                        && noise.frequency > 0.0
+                        && noise.frequency.is_finite()
+                        && (1..=10).contains(&noise.octaves),
+                    "medium.noise: amplitude ≥ 0, frequency > 0, octaves 1…10"
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// The medium, σ_t included.
+    pub fn build_medium(&self) -> Box<dyn Medium> {
+        match &self.medium {
+            MediumSpec::Slab { thickness } => Box::new(Slab {
+                h: *thickness,
+                sigma_t: self.sigma_t,
+            }),
+            MediumSpec::Cloud { blobs, edge, noise } => Box::new(Cloud::new(
+                blobs.clone(),
+                *edge,
+                (noise.amplitude, noise.frequency, noise.octaves),
+                self.sigma_t,
+                self.seed as u32,
+            )),
+        }
+    }
+}
+
+/// a × b.
+pub fn cross(a: Vec3, b: Vec3) -> Vec3 {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
