@@ -1,6 +1,6 @@
 //! The compression stage end to end: fit the form to a slab run's tables, measure it on every
-//! cell and on held-out slices, and write report.json, compressed.npz and transport.ntt (the
-//! latter loaded back by the runtime and compared with the fit).
+//! cell and on held-out slices, and write report.json, manifest.json, compressed.npz, the
+//! figures and transport.ntt (loaded back by the runtime and compared with the fit).
 
 use super::collector::{fit_collector, predict_collector, CollectorFit};
 use super::figure;
@@ -153,6 +153,7 @@ pub fn compress(tables: &Path, out: &Path, opt: &Options) -> Result<Outcome> {
                 "legendre": opt.collector.legendre,
                 "harmonics": opt.collector.harmonics,
                 "theta_nodes": opt.collector.theta_nodes,
+                "smooth_t": opt.collector_q,
             },
             "parameters": collector_params,
             "errors": collector,
