@@ -728,6 +728,44 @@ fn render_writes_its_outputs_and_refuses_bad_scenes() {
             "unscattered.npy"
         ]
     );
+    // A voxel grid from a float32 .npy beside the scene (relative path).
+    let mut npy = Vec::new();
+    {
+        use npyz::WriterBuilder;
+        let mut w = npyz::WriteOptions::<f32>::new()
+            .default_dtype()
+            .shape(&[4, 5, 6])
+            .writer(&mut npy)
+            .begin_nd()
+            .unwrap();
+        w.extend((0..120).map(|i| (i % 7) as f32 / 7.0)).unwrap();
+        w.finish().unwrap();
+    }
+    std::fs::write(dir.path().join("grid.npy"), npy).unwrap();
+    let mut voxels = scene.clone();
+    voxels["medium"] = serde_json::json!({"kind": "voxels", "npy": "grid.npy",
+        "origin": [-600, -500, 300], "size": [1200, 1000, 800]});
+    let voxel_scene = dir.path().join("voxels.json");
+    std::fs::write(&voxel_scene, voxels.to_string()).unwrap();
+    let voxel_out = dir.path().join("voxel-render");
+    succeeds(&[
+        "render",
+        "--scene",
+        voxel_scene.to_str().unwrap(),
+        "--out",
+        voxel_out.to_str().unwrap(),
+    ]);
+    assert!(voxel_out.join("beauty.png").exists());
+    voxels["medium"]["npy"] = "missing.npy".into();
+    std::fs::write(&voxel_scene, voxels.to_string()).unwrap();
+    let o = nephele(&[
+        "render",
+        "--scene",
+        voxel_scene.to_str().unwrap(),
+        "--out",
+        dir.path().join("none").to_str().unwrap(),
+    ]);
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("missing.npy"));
     for (edit, needle) in [
         (("sigma_t", serde_json::json!(-1)), "sigma_t"),
         (("albedo", serde_json::json!(2)), "albedo"),

@@ -235,3 +235,67 @@ fn renders_are_bit_identical_for_any_thread_count_and_aovs_add_up() {
     }
     assert!(lit > 0, "the cloud must be in the picture");
 }
+
+/// The voxel grid reads its values at the voxel centres, interpolates linearly between them,
+/// holds the border values out to the box's faces and is empty outside.
+#[test]
+fn voxel_densities_are_trilinear_between_centres() {
+    use nephele::render::medium::Voxels;
+    // 3 × 2 × 2 voxels (x fastest) over a 3 × 2 × 2 m box: centres at x = 0.5, 1.5, 2.5, …
+    let data: Vec<f32> = (0..12).map(|i| i as f32).collect();
+    let v = Voxels::new(data, [3, 2, 2], [0.0; 3], [3.0, 2.0, 2.0], 1.0);
+    let at = |x: f64, y: f64, z: f64| v.density([x, y, z]);
+    assert_eq!(at(0.5, 0.5, 0.5), 0.0);
+    assert_eq!(at(2.5, 0.5, 0.5), 2.0);
+    assert_eq!(at(0.5, 1.5, 0.5), 3.0);
+    assert_eq!(at(0.5, 0.5, 1.5), 6.0);
+    assert!((at(1.0, 0.5, 0.5) - 0.5).abs() < 1e-12);
+    assert!((at(1.5, 1.0, 1.0) - (1.0 + 1.5 + 3.0)).abs() < 1e-12);
+    assert_eq!(at(0.1, 0.5, 0.5), 0.0, "clamped at the border");
+    assert_eq!(at(2.9, 1.9, 1.9), 11.0, "clamped at the far corner");
+    assert_eq!(at(-0.1, 0.5, 0.5), 0.0, "outside");
+    assert_eq!(at(1.0, 2.1, 0.5), 0.0, "outside");
+}
+
+/// The white furnace through a random voxel grid (a majorant far above most voxels).
+#[test]
+fn a_white_furnace_sees_the_sky_through_a_voxel_grid() {
+    use nephele::render::medium::Voxels;
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(9);
+    let data: Vec<f32> = (0..8 * 8 * 8)
+        .map(|_| rng.random::<f32>().powi(3))
+        .collect();
+    let grid = Voxels::new(data, [8, 8, 8], [-1.0; 3], [2.0; 3], 3.0);
+    let hg = HenyeyGreenstein::new(0.8);
+    let volume = Volume {
+        medium: &grid,
+        albedo: 1.0,
+        phase: &hg,
+        sun_dir: [0.0, 0.0, 1.0],
+        sun_irradiance: 0.0,
+        sky: 1.0,
+        group_first: &GROUPS,
+    };
+    let n = 100_000;
+    let (mut sum, mut sum2, mut t_sum) = (0.0, 0.0, 0.0);
+    for _ in 0..n {
+        let o = [
+            2.0 * rng.random::<f64>() - 1.0,
+            -3.0,
+            2.0 * rng.random::<f64>() - 1.0,
+        ];
+        let p = trace(&volume, o, [0.0, 1.0, 0.0], &mut rng);
+        let v = p.total();
+        sum += v;
+        sum2 += v * v;
+        t_sum += p.transmittance;
+    }
+    let mean = sum / n as f64;
+    let se = ((sum2 / n as f64 - mean * mean) / (n - 1) as f64).sqrt();
+    println!(
+        "voxel furnace: {mean:.5} ± {se:.5}; mean transmittance {:.3}",
+        t_sum / n as f64
+    );
+    assert!((0.1..0.9).contains(&(t_sum / n as f64)));
+    assert!((mean - 1.0).abs() < 4.0 * se && se < 0.01, "{mean} ± {se}");
+}

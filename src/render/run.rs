@@ -50,7 +50,7 @@ fn pixel_seed(seed: u64, i: u64) -> u64 {
 
 /// Renders `scene`; `progress(rows done)` after each row.
 pub fn render(scene: &Scene, progress: &(dyn Fn(usize) + Sync)) -> Result<Rendered> {
-    let medium = scene.build_medium();
+    let medium = scene.build_medium()?;
     let model = PhaseModel::build(&scene.phase)?;
     let cam = &scene.camera;
     let (w, h) = (cam.width as usize, cam.height as usize);

@@ -1,13 +1,13 @@
-//! Scenes of the path tracer (JSON; examples in fit-configs/scenes/): a medium (homogeneous slab
-//! or implicit cloud), its extinction scale, albedo and phase function, a directional sun, an
+//! Scenes of the path tracer (JSON; examples in fit-configs/scenes/): a medium (homogeneous slab,
+//! implicit cloud or voxel grid), its extinction scale, albedo and phase function, a directional sun, an
 //! optional constant sky, a pinhole camera, samples per pixel and a seed. World units are metres,
 //! z is up.
 
-use super::medium::{Cloud, Ellipsoid, Medium, Slab, Vec3};
+use super::medium::{Cloud, Ellipsoid, Medium, Slab, Vec3, Voxels};
 use crate::slab::PhaseSpec;
 use anyhow::{bail, ensure, Context, Result};
 use serde::{Deserialize, Serialize};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// A scene file.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -60,6 +60,16 @@ pub enum MediumSpec {
         edge: f64,
         /// fBm displacement of the boundary: amplitude (m), base frequency (1/m), octaves.
         noise: NoiseSpec,
+    },
+    /// A voxel grid of densities: a float32 .npy [nz, ny, nx] (x fastest) over the box
+    /// [origin, origin + size] (m), trilinear between voxel centres (as Mitsuba's gridvolume).
+    Voxels {
+        /// The .npy (relative paths are taken from the scene file's directory).
+        npy: PathBuf,
+        /// The box's lowest corner (m).
+        origin: Vec3,
+        /// The box's extent (m).
+        size: Vec3,
     },
 }
 
@@ -121,7 +131,14 @@ impl Scene {
     pub fn load(path: &Path) -> Result<Self> {
         let text = std::fs::read_to_string(path)
             .with_context(|| format!("cannot read scene '{}'", path.display()))?;
-        Self::parse(&text).with_context(|| format!("scene '{}'", path.display()))
+        let mut scene =
+            Self::parse(&text).with_context(|| format!("scene '{}'", path.display()))?;
+        if let MediumSpec::Voxels { npy, .. } = &mut scene.medium {
+            if npy.is_relative() {
+                *npy = path.parent().unwrap_or(Path::new(".")).join(&*npy);
+            }
+        }
+        Ok(scene)
     }
 
     /// Parses and validates scene JSON.
@@ -209,17 +226,25 @@ impl Scene {
                     "medium.noise: amplitude ≥ 0, frequency > 0, octaves 1…10"
                 );
             }
+            MediumSpec::Voxels { origin, size, .. } => ensure!(
+                finite(origin) && size.iter().all(|&x| x > 0.0 && x.is_finite()),
+                "medium.origin must be finite and medium.size positive (m)"
+            ),
         }
         Ok(())
     }
 
-    /// The medium, σ_t included.
-    pub fn build_medium(&self) -> Box<dyn Medium> {
-        match &self.medium {
+    /// The medium, σ_t included (a voxel grid is read here).
+    pub fn build_medium(&self) -> Result<Box<dyn Medium>> {
+        Ok(match &self.medium {
             MediumSpec::Slab { thickness } => Box::new(Slab {
                 h: *thickness,
                 sigma_t: self.sigma_t,
             }),
+            MediumSpec::Voxels { npy, origin, size } => {
+                let (data, n) = read_grid(npy)?;
+                Box::new(Voxels::new(data, n, *origin, *size, self.sigma_t))
+            }
             MediumSpec::Cloud { blobs, edge, noise } => Box::new(Cloud::new(
                 blobs.clone(),
                 *edge,
@@ -227,8 +252,38 @@ impl Scene {
                 self.sigma_t,
                 self.seed as u32,
             )),
-        }
+        })
     }
+}
+
+/// A float32 .npy of rank 3 [nz, ny, nx] with finite, non-negative values; (values, [nx, ny, nz]).
+fn read_grid(path: &Path) -> Result<(Vec<f32>, [usize; 3])> {
+    let what = || format!("voxel grid '{}'", path.display());
+    let file = std::fs::File::open(path).with_context(what)?;
+    let npy = npyz::NpyFile::new(std::io::BufReader::new(file)).with_context(what)?;
+    let shape = npy.shape().to_vec();
+    ensure!(
+        shape.len() == 3 && shape.iter().all(|&d| d > 0),
+        "{}: shape {shape:?}, expected [nz, ny, nx]",
+        what()
+    );
+    ensure!(
+        !npy.order().eq(&npyz::Order::Fortran),
+        "{}: Fortran order; save a C-order array",
+        what()
+    );
+    let data: Vec<f32> = npy
+        .into_vec::<f32>()
+        .with_context(|| format!("{}: float32 values expected", what()))?;
+    ensure!(
+        data.iter().all(|v| v.is_finite() && *v >= 0.0),
+        "{}: densities must be finite and non-negative",
+        what()
+    );
+    Ok((
+        data,
+        [shape[2] as usize, shape[1] as usize, shape[0] as usize],
+    ))
 }
 
 /// a × b.
