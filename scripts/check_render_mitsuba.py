@@ -15,7 +15,8 @@ the spread across seeds. Compared, per channel:
   c. the mean absolute pixel difference against what the two images' noise alone gives,
      E|d| = sqrt(2/pi) * sqrt(se_N^2 + se_M^2) per pixel (Gaussian), within 3 of its SE.
 
-It also reports camera paths per second of both on this machine and the ratio (nephele's
+nephele's beauty.exr, read by Mitsuba's OpenEXR reader, must equal its beauty.npy. It also
+reports camera paths per second of both on this machine and the ratio (nephele's
 multi-threaded render against Mitsuba's scalar_rgb, which also uses every core).
 """
 import argparse
@@ -71,7 +72,14 @@ def render_nephele(bin_path: Path, tmp: Path, grid: np.ndarray, w: int, h: int, 
     subprocess.run([str(bin_path), "render", "--scene", str(path), "--out", str(out)], check=True,
                    capture_output=True)
     doc = json.loads((out / "render.json").read_text())
-    return np.load(out / "beauty.npy").astype(np.float64), doc["seconds"], doc["paths"]
+    beauty = np.load(out / "beauty.npy").astype(np.float64)
+    # The OpenEXR file, read by Mitsuba's own reader, holds the same linear image.
+    import mitsuba as mi
+    mi.set_variant("scalar_rgb")
+    exr = np.array(mi.Bitmap(str(out / "beauty.exr")), dtype=np.float64)[..., :3]
+    if exr.shape != beauty.shape or np.abs(exr - beauty).max() > 0:
+        raise SystemExit("check_render_mitsuba: beauty.exr differs from beauty.npy")
+    return beauty, doc["seconds"], doc["paths"]
 
 
 def render_mitsuba(grid: np.ndarray, w: int, h: int, spp: int, seed: int) -> tuple[np.ndarray, float]:

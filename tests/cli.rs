@@ -719,6 +719,7 @@ fn render_writes_its_outputs_and_refuses_bad_scenes() {
     assert_eq!(
         files_in(&out),
         [
+            "beauty.exr",
             "beauty.npy",
             "beauty.png",
             "groups.npy",

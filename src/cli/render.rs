@@ -14,7 +14,7 @@ pub struct RenderArgs {
     /// Scene (JSON; keys in fit-configs/scenes/README.md).
     #[arg(long, value_name = "FILE")]
     pub scene: PathBuf,
-    /// Output directory: beauty.png, beauty.npy, groups.npy, unscattered.npy,
+    /// Output directory: beauty.png, beauty.exr, beauty.npy, groups.npy, unscattered.npy,
     /// transmittance.npy, opacity.npy, render.json. [default: outputs/render]
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
@@ -40,7 +40,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
     write_outputs(&out, &scene, &r)?;
     println!(
         "{}×{} pixels, {} spp: {} camera paths in {:.1} s ({:.0} paths/s); wrote {}/beauty.png, \
-         beauty.npy, groups.npy, unscattered.npy, transmittance.npy, opacity.npy, render.json",
+         beauty.exr, beauty.npy, groups.npy, unscattered.npy, transmittance.npy, opacity.npy, \
+         render.json",
         r.width,
         r.height,
         scene.spp,

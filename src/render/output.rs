@@ -1,5 +1,5 @@
-//! What `nephele render` writes: the beauty image as PNG (tone-mapped, sRGB-encoded) and as
-//! .npy (linear), the per-order-group radiance, the unscattered sky, the transmittance and the
+//! What `nephele render` writes: the beauty image as OpenEXR (linear, f32 RGB), PNG
+//! (tone-mapped, sRGB-encoded) and .npy (linear), the per-order-group radiance, the unscattered sky, the transmittance and the
 //! opacity as .npy (float32, row 0 at the top), and a JSON sidecar — all atomically.
 
 use super::run::{Rendered, GROUP_FIRST};
@@ -80,6 +80,14 @@ pub fn write_outputs(out: &Path, scene: &Scene, r: &Rendered) -> Result<()> {
         image::ColorType::Rgb8,
     )?;
     files.write_bytes(&out.join("beauty.png"), &png)?;
+    files.write_via_path(&out.join("beauty.exr"), |p| {
+        let px = |x: usize, y: usize| {
+            let i = (y * r.width + x) * 3;
+            (r.beauty[i], r.beauty[i + 1], r.beauty[i + 2])
+        };
+        exr::prelude::write_rgb_file(p, r.width, r.height, px)
+            .map_err(|e| anyhow::anyhow!("OpenEXR: {e}"))
+    })?;
     let sidecar = serde_json::json!({
         "scene": scene,
         "width": w,
@@ -97,6 +105,7 @@ pub fn write_outputs(out: &Path, scene: &Scene, r: &Rendered) -> Result<()> {
             "unscattered.npy": "[H, W, 3] the sky seen through the medium",
             "transmittance.npy": "[H, W] transmittance of the camera ray through the medium",
             "opacity.npy": "[H, W] 1 - transmittance",
+            "beauty.exr": "[H, W] RGB f32, linear (OpenEXR)",
             "beauty.png": "tone-mapped (90th percentile of luminance at 0.75 of 1 - exp(-x)), sRGB",
         },
         "version": crate::VERSION,
