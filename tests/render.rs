@@ -133,18 +133,41 @@ impl nephele::render::medium::Medium for Blob {
     }
 }
 
-/// White furnace: albedo 1, no sun, a constant sky of radiance 1 around a heterogeneous blob.
-/// Every camera ray must see radiance 1 on average (what the medium scatters away it scatters
-/// in): transmittance by ratio tracking plus the scattered paths that escape, unbiased.
+/// White furnace around a heterogeneous blob.
 #[test]
 fn a_white_furnace_sees_the_sky_through_any_medium() {
     let blob = Blob {
         sigma0: 1.5,
         r: 1.0,
     };
-    let hg = HenyeyGreenstein::new(0.6);
+    // Rays from outside through the blob at offsets up to 0.9 R, and from its centre.
+    furnace(&blob, 200_000, 5, |i, rng| {
+        if i % 2 == 0 {
+            let (z, phi) = (
+                2.0 * rng.random::<f64>() - 1.0,
+                2.0 * PI * rng.random::<f64>(),
+            );
+            let s = (1.0 - z * z).sqrt();
+            ([0.0; 3], [s * phi.cos(), s * phi.sin(), z])
+        } else {
+            ([0.9 * rng.random::<f64>(), -3.0, 0.0], [0.0, 1.0, 0.0])
+        }
+    });
+}
+
+/// The white furnace: albedo 1, no sun, sky radiance 1 around `medium`, `n` camera rays from
+/// `ray(i, rng)`. Every ray must see radiance 1 on average (what the medium scatters away it
+/// scatters in): transmittance by ratio tracking plus the scattered paths that escape. Also
+/// checks that the medium matters (mean transmittance in 0.1…0.9).
+fn furnace(
+    medium: &dyn nephele::render::medium::Medium,
+    n: usize,
+    seed: u64,
+    mut ray: impl FnMut(usize, &mut Xoshiro256PlusPlus) -> ([f64; 3], [f64; 3]),
+) -> (f64, f64) {
+    let hg = HenyeyGreenstein::new(0.7);
     let volume = Volume {
-        medium: &blob,
+        medium,
         albedo: 1.0,
         phase: &hg,
         sun_dir: [0.0, 0.0, 1.0],
@@ -152,26 +175,10 @@ fn a_white_furnace_sees_the_sky_through_any_medium() {
         sky: 1.0,
         group_first: &GROUPS,
     };
-    let mut rng = Xoshiro256PlusPlus::seed_from_u64(5);
-    let n = 200_000;
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
     let (mut sum, mut sum2, mut t_sum) = (0.0, 0.0, 0.0);
     for i in 0..n {
-        // Rays from outside through the blob at offsets up to 0.9 R, and from its centre.
-        let o = if i % 2 == 0 {
-            [0.0, 0.0, 0.0]
-        } else {
-            [0.9 * rng.random::<f64>(), -3.0, 0.0]
-        };
-        let w = if i % 2 == 0 {
-            let (z, phi) = (
-                2.0 * rng.random::<f64>() - 1.0,
-                2.0 * PI * rng.random::<f64>(),
-            );
-            let s = (1.0 - z * z).sqrt();
-            [s * phi.cos(), s * phi.sin(), z]
-        } else {
-            [0.0, 1.0, 0.0]
-        };
+        let (o, w) = ray(i, &mut rng);
         let p = trace(&volume, o, w, &mut rng);
         let v = p.total();
         sum += v;
@@ -180,13 +187,11 @@ fn a_white_furnace_sees_the_sky_through_any_medium() {
     }
     let mean = sum / n as f64;
     let se = ((sum2 / n as f64 - mean * mean) / (n - 1) as f64).sqrt();
-    println!(
-        "furnace: {mean:.5} ± {se:.5}; mean transmittance {:.3}",
-        t_sum / n as f64
-    );
-    // The medium must matter (about half the light scattered) and the sum be 1.
-    assert!((0.1..0.9).contains(&(t_sum / n as f64)));
+    let t_mean = t_sum / n as f64;
+    println!("furnace: {mean:.5} ± {se:.5}; mean transmittance {t_mean:.3}");
+    assert!((0.1..0.9).contains(&t_mean), "transmittance {t_mean}");
     assert!((mean - 1.0).abs() < 4.0 * se && se < 0.01, "{mean} ± {se}");
+    (mean, se)
 }
 
 fn small_cloud() -> nephele::render::scene::Scene {
@@ -266,36 +271,12 @@ fn a_white_furnace_sees_the_sky_through_a_voxel_grid() {
         .map(|_| rng.random::<f32>().powi(3))
         .collect();
     let grid = Voxels::new(data, [8, 8, 8], [-1.0; 3], [2.0; 3], 3.0);
-    let hg = HenyeyGreenstein::new(0.8);
-    let volume = Volume {
-        medium: &grid,
-        albedo: 1.0,
-        phase: &hg,
-        sun_dir: [0.0, 0.0, 1.0],
-        sun_irradiance: 0.0,
-        sky: 1.0,
-        group_first: &GROUPS,
-    };
-    let n = 100_000;
-    let (mut sum, mut sum2, mut t_sum) = (0.0, 0.0, 0.0);
-    for _ in 0..n {
+    furnace(&grid, 100_000, 9, |_, rng| {
         let o = [
             2.0 * rng.random::<f64>() - 1.0,
             -3.0,
             2.0 * rng.random::<f64>() - 1.0,
         ];
-        let p = trace(&volume, o, [0.0, 1.0, 0.0], &mut rng);
-        let v = p.total();
-        sum += v;
-        sum2 += v * v;
-        t_sum += p.transmittance;
-    }
-    let mean = sum / n as f64;
-    let se = ((sum2 / n as f64 - mean * mean) / (n - 1) as f64).sqrt();
-    println!(
-        "voxel furnace: {mean:.5} ± {se:.5}; mean transmittance {:.3}",
-        t_sum / n as f64
-    );
-    assert!((0.1..0.9).contains(&(t_sum / n as f64)));
-    assert!((mean - 1.0).abs() < 4.0 * se && se < 0.01, "{mean} ± {se}");
+        (o, [0.0, 1.0, 0.0])
+    });
 }
