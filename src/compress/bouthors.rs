@@ -108,7 +108,7 @@ pub fn fit_and_predict(tab: &SlabTables) -> Result<Vec<f64>> {
 /// Calls `f(cell, index within the slice, ln B)` for every representable cell of thickness it.
 fn for_each_cell(tab: &SlabTables, it: usize, mut f: impl FnMut(&Cell, usize, f64)) {
     let [_, _, _, nd, nm, nk] = tab.shape;
-    let cells = super::fit::cells_of(tab, &super::LogAdditive::default(), it);
+    let cells = super::fit::cells_of(tab, it);
     for (c, [il, j, m, k], off) in cells {
         f(&c, ((il * nd + j) * nm + m) * nk + k, off);
     }

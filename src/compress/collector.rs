@@ -6,7 +6,7 @@
 //! enter where T is usable (as for T's fit) and σ's relative SE is below 30 %.
 
 use super::fit::{cells_of, Row, MAX_REL_SE, MIN_REL_SE};
-use super::form::{Cell, Lerp, LogAdditive};
+use super::form::{Cell, Lerp};
 use super::joint::{coef_at, effective_q, legendre_in_ln_t, pad_q, NormalEquations};
 use super::tables::SlabTables;
 use anyhow::Result;
@@ -27,15 +27,9 @@ pub struct CollectorFit {
 }
 
 /// A usable cell of thickness `it`: its form cell, flat table index.
-fn usable_cells(
-    tab: &SlabTables,
-    t_form: &LogAdditive,
-    g: usize,
-    it: usize,
-    skip_l: &[usize],
-) -> Vec<(Cell, usize)> {
+fn usable_cells(tab: &SlabTables, g: usize, it: usize, skip_l: &[usize]) -> Vec<(Cell, usize)> {
     let c = &tab.collector;
-    cells_of(tab, t_form, it)
+    cells_of(tab, it)
         .into_iter()
         .filter(|(_, [il, ..], _)| !skip_l.contains(il))
         .map(|(cell, [il, j, m, k], _)| (cell, tab.index(g, it, il, j, m, k)))
@@ -55,7 +49,6 @@ fn usable_cells(
 /// `skip_l`, with polynomials of `q` terms over `ln_t_range`.
 pub fn fit_collector(
     tab: &SlabTables,
-    t_form: &LogAdditive,
     form: &CollectorForm,
     g: usize,
     q: usize,
@@ -66,7 +59,7 @@ pub fn fit_collector(
     let c = &tab.collector;
     let cells: Vec<Vec<(Cell, usize)>> = fit_t
         .iter()
-        .map(|&it| usable_cells(tab, t_form, g, it, skip_l))
+        .map(|&it| usable_cells(tab, g, it, skip_l))
         .collect();
     let qe = effective_q(q, fit_t.len());
     let lq = |it: usize| legendre_in_ln_t(ln_t_range, tab.thickness[it], qe);
@@ -151,7 +144,6 @@ pub fn predict_at(
 /// positive, NaN elsewhere; the sun cosine of index il read at `l_of(il)` among the nodes.
 pub fn predict_collector(
     tab: &SlabTables,
-    t_form: &LogAdditive,
     form: &CollectorForm,
     fits: &[CollectorFit],
     t_pred: &[f64],
@@ -162,7 +154,7 @@ pub fn predict_collector(
     for fit in fits {
         for it in 0..nt {
             let coef = fit.at(tab.thickness[it]);
-            for (mut cell, [il, j, m, k], _) in cells_of(tab, t_form, it) {
+            for (mut cell, [il, j, m, k], _) in cells_of(tab, it) {
                 let i = tab.index(fit.group, it, il, j, m, k);
                 if t_pred[i] > 0.0 {
                     cell.l = l_of(il);
@@ -186,7 +178,7 @@ mod tests {
     /// joint fit gives them back (σ, c_x, c_z) at every thickness.
     #[test]
     fn recovers_collector_tables_made_by_the_form() {
-        let (mut tab, t_form, _) = synthetic(3);
+        let (mut tab, _, _) = synthetic(3);
         let [_, nt, nl, _, nm, _] = tab.shape;
         let form = CollectorForm {
             legendre: 2,
@@ -201,7 +193,7 @@ mod tests {
         let n = tab.t.len();
         let values: Vec<(usize, [f64; 3])> = (0..nt)
             .flat_map(|it| {
-                cells_of(&tab, &t_form, it)
+                cells_of(&tab, it)
                     .into_iter()
                     .map(move |(cell, [il, j, m, k], _)| (it, cell, [il, j, m, k]))
             })
@@ -222,8 +214,8 @@ mod tests {
         c.cz_se = c.sigma_se.clone();
         let span: Vec<usize> = (0..nt).collect();
         let range = (tab.thickness[0].ln(), tab.thickness[nt - 1].ln());
-        let fit = fit_collector(&tab, &t_form, &form, 1, 2, (&span, range), &[]).unwrap();
-        let pred = predict_collector(&tab, &t_form, &form, &[fit], &tab.t, &Lerp::at);
+        let fit = fit_collector(&tab, &form, 1, 2, (&span, range), &[]).unwrap();
+        let pred = predict_collector(&tab, &form, &[fit], &tab.t, &Lerp::at);
         let mut worst = 0.0f64;
         let mut compared = 0;
         for i in 0..n {

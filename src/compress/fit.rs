@@ -3,7 +3,7 @@
 //! weight is its precision: noise is not fitted), normal equations with a ridge of 10⁻¹⁰ of
 //! their mean diagonal (the form has exact degeneracies, e.g. a₀(μ_V) + b₀(μ_L)), Cholesky.
 
-use super::form::{features, Cell, Lerp, LogAdditive};
+use super::form::{features, ln_boundary, Cell, Lerp, LogAdditive};
 use super::tables::SlabTables;
 use anyhow::{anyhow, Result};
 use nalgebra::{DMatrix, DVector};
@@ -30,13 +30,9 @@ pub struct GroupFit {
     pub u_range: Vec<(f64, f64)>,
 }
 
-/// Every (cell, flat table index) of (group `g`, thickness `it`) the form can represent, with
-/// its offset ln B.
-pub(crate) fn cells_of(
-    tab: &SlabTables,
-    form: &LogAdditive,
-    it: usize,
-) -> Vec<(Cell, [usize; 4], f64)> {
+/// Every cell (and its [μ_L, depth, μ_V, ψ_V] indices) of thickness `it` with medium behind
+/// the viewpoint, with its offset ln B (geometry only: the same for every form).
+pub(crate) fn cells_of(tab: &SlabTables, it: usize) -> Vec<(Cell, [usize; 4], f64)> {
     let [_, _, nl, nd, nm, nk] = tab.shape;
     let mut out = Vec::new();
     for il in 0..nl {
@@ -53,7 +49,7 @@ pub(crate) fn cells_of(
                         d: tab.depth[it * nd + j],
                         t: tab.thickness[it],
                     };
-                    if let Some(off) = form.ln_boundary(&c) {
+                    if let Some(off) = ln_boundary(&c) {
                         out.push((c, [il, j, m, k], off));
                     }
                 }
@@ -105,7 +101,7 @@ pub(crate) fn for_each_row_of(
     mut f: impl FnMut(Row),
 ) {
     let nm = tab.shape[4];
-    for (c, [il, j, m, k], off) in cells_of(tab, &LogAdditive::default(), it) {
+    for (c, [il, j, m, k], off) in cells_of(tab, it) {
         if skip_l.contains(&il) {
             continue;
         }
@@ -222,7 +218,7 @@ pub fn predict_ln(
     let [_, _, nl, nd, nm, nk] = tab.shape;
     let mut out = vec![None; nl * nd * nm * nk];
     let mut row = Vec::new();
-    for (mut c, [il, j, m, k], off) in cells_of(tab, form, it_geom) {
+    for (mut c, [il, j, m, k], off) in cells_of(tab, it_geom) {
         c.l = l_of(il);
         // Inside the fitted depth range of every node it draws on.
         let inside = [c.l.lo, c.l.hi].iter().all(|&l| {

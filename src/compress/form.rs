@@ -3,7 +3,7 @@
 //! evaluate. This module adapts it to the fitter's sparse rows.
 
 pub use nephele_runtime::transport::log_additive::{
-    Cell as RuntimeCell, Lerp as RuntimeLerp, LogAdditive,
+    ln_boundary, Cell as RuntimeCell, Lerp as RuntimeLerp, LogAdditive,
 };
 
 /// A cell of the tables as the form sees it (f64).

@@ -10,6 +10,7 @@ use super::form::LogAdditive;
 use super::tables::SlabTables;
 use anyhow::{anyhow, Result};
 use nalgebra::{DMatrix, DVector};
+use nephele_runtime::transport::log_additive::legendre;
 use rayon::prelude::*;
 
 /// The fit of one order group over all thicknesses.
@@ -37,15 +38,7 @@ pub(crate) fn legendre_in_ln_t((a, b): (f64, f64), t: f64, q: usize) -> Vec<f64>
     } else {
         0.0
     };
-    let mut p: Vec<f64> = Vec::with_capacity(q);
-    for j in 0..q {
-        p.push(match j {
-            0 => 1.0,
-            1 => s,
-            _ => ((2 * j - 1) as f64 * s * p[j - 1] - (j - 1) as f64 * p[j - 2]) / j as f64,
-        });
-    }
-    p
+    legendre(s, q)[..q].to_vec()
 }
 
 /// The thicknesses the polynomials of group `g` span (not in `skip_t`, with ≥ 5 % of the largest

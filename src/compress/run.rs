@@ -103,7 +103,7 @@ pub fn compress(tables: &Path, out: &Path, opt: &Options) -> Result<Outcome> {
         .collect();
     reference.push(group_error(&tab, &pred_ref, None));
     let reference_params = super::bouthors::n_params(nm, nl) * (ng - 1) * tab.shape[1];
-    let pred_c = predict_collector(&tab, &opt.form, &opt.collector, &coll, &pred, &Lerp::at);
+    let pred_c = predict_collector(&tab, &opt.collector, &coll, &pred, &Lerp::at);
     let collector: Vec<_> = coll
         .iter()
         .map(|f| collector_error_on(&tab, &pred_c, f.group, &|_, _| true))
@@ -263,15 +263,7 @@ fn fit_collectors(
         .map(|&g| {
             let (span, range) = spanned(tab, g, skip_t)?;
             let form = &opt.collector;
-            fit_collector(
-                tab,
-                &opt.form,
-                form,
-                g,
-                opt.collector_q,
-                (&span, range),
-                skip_l,
-            )
+            fit_collector(tab, form, g, opt.collector_q, (&span, range), skip_l)
         })
         .collect()
 }
@@ -314,7 +306,7 @@ fn held_out_study(tab: &SlabTables, opt: &Options) -> Result<HeldOut> {
     errors.push(group_error_on(tab, &pred, None, &held));
     let coll = fit_collectors(tab, opt, &skip_t, &skip_l)?;
     let l_of = held_out_l(tab, &skip_l);
-    let pred_c = predict_collector(tab, &opt.form, &opt.collector, &coll, &pred, &l_of);
+    let pred_c = predict_collector(tab, &opt.collector, &coll, &pred, &l_of);
     let collector = coll
         .iter()
         .map(|f| collector_error_on(tab, &pred_c, f.group, &held))

@@ -14,7 +14,7 @@
 //! sampled from p around w (p is symmetric, so this is p(w′ · w) exactly), and an escaping path
 //! adds β L_sky to the order of its last scattering (the constant sky, if any).
 
-use super::medium::{Medium, Vec3};
+use super::medium::{dot, normalize, Medium, Vec3};
 use nephele_runtime::PhaseFunction;
 use rand::Rng;
 
@@ -146,13 +146,4 @@ pub fn trace<R: Rng>(v: &Volume, o: Vec3, w: Vec3, rng: &mut R) -> PathSample {
         out.sky_groups[group_of(v.group_first, order).min(MAX_GROUPS - 1)] += beta * v.sky;
     }
     out
-}
-
-fn dot(a: Vec3, b: Vec3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn normalize(a: Vec3) -> Vec3 {
-    let n = dot(a, a).sqrt();
-    [a[0] / n, a[1] / n, a[2] / n]
 }

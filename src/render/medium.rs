@@ -55,6 +55,37 @@ impl Medium for Slab {
     }
 }
 
+/// a · b.
+pub fn dot(a: Vec3, b: Vec3) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// a × b.
+pub fn cross(a: Vec3, b: Vec3) -> Vec3 {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// a / |a|.
+pub fn normalize(a: Vec3) -> Vec3 {
+    let n = dot(a, a).sqrt();
+    a.map(|x| x / n)
+}
+
+/// The parameter range where o + t w lies in the box [lo, hi], t ≥ 0.
+pub fn box_clip(o: Vec3, w: Vec3, lo: Vec3, hi: Vec3) -> Option<(f64, f64)> {
+    let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
+    for k in 0..3 {
+        let (a, b) = slab_clip(o[k], w[k], lo[k], hi[k])?;
+        t0 = t0.max(a);
+        t1 = t1.min(b);
+    }
+    (t1 > t0).then_some((t0, t1))
+}
+
 /// The parameter range where z0 + t wz lies in [lo, hi], t ≥ 0.
 pub fn slab_clip(z0: f64, wz: f64, lo: f64, hi: f64) -> Option<(f64, f64)> {
     if wz.abs() < 1e-300 {
@@ -163,13 +194,7 @@ impl Medium for Cloud {
     }
 
     fn clip(&self, o: Vec3, w: Vec3) -> Option<(f64, f64)> {
-        let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
-        for k in 0..3 {
-            let (a, b) = slab_clip(o[k], w[k], self.lo[k], self.hi[k])?;
-            t0 = t0.max(a);
-            t1 = t1.min(b);
-        }
-        (t1 > t0).then_some((t0, t1))
+        box_clip(o, w, self.lo, self.hi)
     }
 
     fn majorant(&self, _: Vec3, _: Vec3, _: f64, _: f64) -> f64 {
@@ -246,13 +271,8 @@ impl Medium for Voxels {
     }
 
     fn clip(&self, o: Vec3, w: Vec3) -> Option<(f64, f64)> {
-        let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
-        for k in 0..3 {
-            let (a, b) = slab_clip(o[k], w[k], self.origin[k], self.origin[k] + self.size[k])?;
-            t0 = t0.max(a);
-            t1 = t1.min(b);
-        }
-        (t1 > t0).then_some((t0, t1))
+        let hi = std::array::from_fn(|k| self.origin[k] + self.size[k]);
+        box_clip(o, w, self.origin, hi)
     }
 
     fn majorant(&self, _: Vec3, _: Vec3, _: f64, _: f64) -> f64 {

@@ -3,8 +3,8 @@
 //! so the image is the same bits for any thread count; and the outputs.
 
 use super::integrator::{trace, Volume, MAX_GROUPS};
-use super::medium::Vec3;
-use super::scene::{cross, Scene};
+use super::medium::{cross, normalize};
+use super::scene::Scene;
 use crate::slab::tables::PhaseModel;
 use anyhow::Result;
 use rand::{Rng, SeedableRng};
@@ -33,11 +33,6 @@ pub struct Rendered {
     pub seconds: f64,
     /// Camera paths traced.
     pub paths: u64,
-}
-
-fn normalize(a: Vec3) -> Vec3 {
-    let n = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
-    a.map(|x| x / n)
 }
 
 /// SplitMix64: the seed of pixel `i`'s stream.

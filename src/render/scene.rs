@@ -3,7 +3,7 @@
 //! optional constant sky, a pinhole camera, samples per pixel and a seed. World units are metres,
 //! z is up.
 
-use super::medium::{Cloud, Ellipsoid, Medium, Slab, Vec3, Voxels};
+use super::medium::{cross, dot, Cloud, Ellipsoid, Medium, Slab, Vec3, Voxels};
 use crate::slab::PhaseSpec;
 use anyhow::{bail, ensure, Context, Result};
 use serde::{Deserialize, Serialize};
@@ -123,7 +123,7 @@ fn finite(v: &[f64]) -> bool {
 }
 
 fn norm(v: Vec3) -> f64 {
-    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+    dot(v, v).sqrt()
 }
 
 impl Scene {
@@ -284,13 +284,4 @@ fn read_grid(path: &Path) -> Result<(Vec<f32>, [usize; 3])> {
         data,
         [shape[2] as usize, shape[1] as usize, shape[0] as usize],
     ))
-}
-
-/// a × b.
-pub fn cross(a: Vec3, b: Vec3) -> Vec3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }

@@ -174,13 +174,6 @@ impl LogAdditive {
         }
     }
 
-    /// ln B at `c`, or None where the form says T = 0 (no medium behind the viewpoint).
-    pub fn ln_boundary<F: Real>(&self, c: &Cell<F>) -> Option<F> {
-        let path = if c.mu_v > F::of(0.0) { c.t - c.d } else { c.d };
-        let b = -exp_m1(-path / c.mu_v.abs());
-        (b > F::of(0.0)).then(|| b.ln())
-    }
-
     /// Calls `f(column, value)` for every feature of `c` that is not zero by construction;
     /// false (and no call) where F₁ = 0 and the form cannot represent the cell.
     pub fn for_each_feature<F: Real>(
@@ -271,11 +264,19 @@ impl LogAdditive {
         nl: usize,
         coef: impl Fn(usize) -> F,
     ) -> Option<F> {
-        let offset = self.ln_boundary(c)?;
+        let offset = ln_boundary(c)?;
         let mut sum = offset;
         self.for_each_feature(c, nm, nl, |col, v| sum = sum + v * coef(col))
             .then_some(sum)
     }
+}
+
+/// ln B at `c`, or None where the form says T = 0 (no medium behind the viewpoint): the
+/// boundary factor depends on the geometry only, not on the form's sizes.
+pub fn ln_boundary<F: Real>(c: &Cell<F>) -> Option<F> {
+    let path = if c.mu_v > F::of(0.0) { c.t - c.d } else { c.d };
+    let b = -exp_m1(-path / c.mu_v.abs());
+    (b > F::of(0.0)).then(|| b.ln())
 }
 
 /// P_0(x) … P_{n−1}(x) (Legendre polynomials; n ≤ [`MAX_LEGENDRE`], the rest 0).

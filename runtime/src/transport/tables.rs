@@ -24,14 +24,16 @@
 //! Files without the collector arrays load too; their [`Transport`] has c = 0, σ = 0.
 
 use super::collector::{CollectorForm, Statistic};
-use super::log_additive::{Cell, Lerp, LogAdditive, MAX_CROSS, MAX_LEGENDRE};
+use super::log_additive::{
+    legendre, ln_boundary, Cell, Lerp, LogAdditive, MAX_CROSS, MAX_LEGENDRE,
+};
 use super::single::{single_scattering, PhaseValue};
 use crate::container::{ArrayView, Container, FormatError};
 use crate::phase::Cosine;
 use crate::real::Real;
 
 /// Most Legendre terms in ln t.
-pub const MAX_Q: usize = 16;
+pub const MAX_Q: usize = MAX_LEGENDRE;
 /// Most order groups.
 pub const MAX_GROUPS: usize = 64;
 /// Most azimuth harmonics of a loadable form (bounds the features of a point).
@@ -316,7 +318,7 @@ impl<'a> TransportTables<'a> {
             d,
             t,
         };
-        let offset = self.form.ln_boundary(&cell)?;
+        let offset = ln_boundary(&cell)?;
         let mut row = [(0u32, 0.0f32); MAX_FEATURES];
         let mut n = 0;
         let ok = self.form.for_each_feature(&cell, nm, nl, |col, v| {
@@ -451,15 +453,7 @@ fn legendre_in(ranges: &ArrayView, g: usize, ln_t: f32, q: usize) -> [f32; MAX_Q
     } else {
         0.0
     };
-    let mut p = [0.0f32; MAX_Q];
-    for j in 0..q.min(MAX_Q) {
-        p[j] = match j {
-            0 => 1.0,
-            1 => s,
-            _ => ((2 * j - 1) as f32 * s * p[j - 1] - (j - 1) as f32 * p[j - 2]) / j as f32,
-        };
-    }
-    p
+    legendre(s, q.min(MAX_Q))
 }
 
 /// The optional collector arrays, checked like the others.
