@@ -58,8 +58,9 @@ def density_grid() -> np.ndarray:
     return (d / d.max()).astype(np.float32)
 
 
-def render_nephele(bin_path: Path, tmp: Path, grid: np.ndarray, phase: dict, w: int, h: int,
-                   spp: int, seed: int) -> tuple[np.ndarray, float, int]:
+def write_scene(tmp: Path, grid: np.ndarray, phase: dict, w: int, h: int, spp: int,
+                seed: int) -> Path:
+    """The nephele scene (and its grid.npy) in tmp."""
     np.save(tmp / "grid.npy", grid)
     scene = {
         "medium": {"kind": "voxels", "npy": "grid.npy", "origin": ORIGIN, "size": SIZE},
@@ -69,6 +70,38 @@ def render_nephele(bin_path: Path, tmp: Path, grid: np.ndarray, phase: dict, w: 
     }
     path = tmp / "scene.json"
     path.write_text(json.dumps(scene))
+    return path
+
+
+def tab_values(bin_path: Path, tmp: Path) -> np.ndarray:
+    """A 1 um Mie table on a regular mu grid, written to tmp/tab.npz: Mitsuba's tabphase and
+    nephele's table read the same node values (as in check_mitsuba.py; smooth enough on 20001
+    nodes that the two interpolations, linear in mu and in theta, integrate it alike). Returned
+    in order of increasing theta."""
+    subprocess.run([str(bin_path), "mie", "--diameter", "1", "--sizes", "41", "--wavelengths",
+                    "400:700:16", "--out", str(tmp / "mie"), "--no-plot"], check=True, capture_output=True)
+    mie = np.load(tmp / "mie" / "phase.npz")
+    mu_nodes = np.linspace(-1.0, 1.0, 20001)
+    theta_nodes = np.degrees(np.arccos(mu_nodes))[::-1]
+    theta_nodes[0], theta_nodes[-1] = 0.0, 180.0
+    values = np.interp(theta_nodes, mie["theta_deg"], mie["phase"])
+    np.savez(tmp / "tab.npz", theta_deg=theta_nodes, phase=values)
+    return values
+
+
+def cases(bin_path: Path, tmp: Path) -> list[tuple[str, dict, dict]]:
+    """(name, nephele phase, Mitsuba phase) of the compared cases."""
+    values = tab_values(bin_path, tmp)
+    return [
+        (f"hg {G}", {"kind": "hg", "g": G}, {"type": "hg", "g": G}),
+        ("tabulated 1 um Mie", {"kind": "table", "path": str(tmp / "tab.npz")},
+         {"type": "tabphase", "values": ",".join(repr(float(v)) for v in values[::-1])}),
+    ]
+
+
+def render_nephele(bin_path: Path, tmp: Path, grid: np.ndarray, phase: dict, w: int, h: int,
+                   spp: int, seed: int) -> tuple[np.ndarray, float, int]:
+    path = write_scene(tmp, grid, phase, w, h, spp, seed)
     out = tmp / f"nephele-{seed}"
     subprocess.run([str(bin_path), "render", "--scene", str(path), "--out", str(out)], check=True,
                    capture_output=True)
@@ -173,23 +206,7 @@ def main(argv=None) -> int:
     failures = []
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        # A 1 um Mie table on a regular mu grid: Mitsuba's tabphase and nephele's table read the
-        # same node values (as in check_mitsuba.py; smooth enough on 20001 nodes that the two
-        # interpolations, linear in mu and in theta, integrate it alike).
-        subprocess.run([str(args.bin), "mie", "--diameter", "1", "--sizes", "41", "--wavelengths",
-                        "400:700:16", "--out", str(tmp / "mie"), "--no-plot"], check=True, capture_output=True)
-        mie = np.load(tmp / "mie" / "phase.npz")
-        mu_nodes = np.linspace(-1.0, 1.0, 20001)
-        theta_nodes = np.degrees(np.arccos(mu_nodes))[::-1]
-        theta_nodes[0], theta_nodes[-1] = 0.0, 180.0
-        values = np.interp(theta_nodes, mie["theta_deg"], mie["phase"])
-        np.savez(tmp / "tab.npz", theta_deg=theta_nodes, phase=values)
-        cases = [
-            (f"hg {G}", {"kind": "hg", "g": G}, {"type": "hg", "g": G}),
-            ("tabulated 1 um Mie", {"kind": "table", "path": str(tmp / "tab.npz")},
-             {"type": "tabphase", "values": ",".join(repr(float(v)) for v in values[::-1])}),
-        ]
-        for name, phase_n, phase_m in cases:
+        for name, phase_n, phase_m in cases(args.bin, tmp):
             runs_n = [render_nephele(args.bin, tmp, grid, phase_n, w, h, spp, s + 1) for s in range(k)]
             runs_m = [render_mitsuba(grid, phase_m, w, h, spp, s + 1) for s in range(k)]
             failures += compare(name, runs_n, runs_m, k, w, h, spp)

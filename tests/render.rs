@@ -4,9 +4,11 @@
 //! errors — and a white furnace, where every medium must pass the sky radiance on unchanged.
 
 use nephele::render::integrator::{trace, Volume};
+use nephele::render::majorant::{Bounds, Majorants};
 use nephele::render::medium::Slab;
 use nephele::slab::{run_slice, SlabGrid, Slice, StopRule};
 use nephele_runtime::phase::HenyeyGreenstein;
+use nephele_runtime::PhaseFunction;
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use std::f64::consts::PI;
@@ -48,7 +50,7 @@ fn slab_pixels_match_the_slab_tables_per_order_group() {
     let volume = Volume {
         medium: &slab,
         albedo: 1.0,
-        phase: &hg,
+        phases: &[&hg],
         // The sun's light travels along +y and down: (0, s_L, −μ_L).
         sun_dir: [0.0, -s_l, mu_l],
         sun_irradiance: 1.0,
@@ -71,8 +73,8 @@ fn slab_pixels_match_the_slab_tables_per_order_group() {
             let eye = [0.0, 0.0, t - depth];
             let p = trace(&volume, eye, [-light[0], -light[1], -light[2]], &mut rng);
             for g in 0..9 {
-                sum[g] += p.groups[g];
-                sum2[g] += p.groups[g] * p.groups[g];
+                sum[g] += p.groups[g][0];
+                sum2[g] += p.groups[g][0] * p.groups[g][0];
             }
         }
         for g in 0..9 {
@@ -128,8 +130,11 @@ impl nephele::render::medium::Medium for Blob {
         (t1 > 0.0).then_some((t0.max(0.0), t1))
     }
 
-    fn majorant(&self, _: [f64; 3], _: [f64; 3], _: f64, _: f64) -> f64 {
-        self.sigma0
+    fn majorants(&self) -> Majorants<'_> {
+        Majorants::Constant(Bounds {
+            min: 0.0,
+            max: self.sigma0,
+        })
     }
 }
 
@@ -169,7 +174,7 @@ fn furnace(
     let volume = Volume {
         medium,
         albedo: 1.0,
-        phase: &hg,
+        phases: &[&hg],
         sun_dir: [0.0, 0.0, 1.0],
         sun_irradiance: 0.0,
         sky: 1.0,
@@ -180,7 +185,7 @@ fn furnace(
     for i in 0..n {
         let (o, w) = ray(i, &mut rng);
         let p = trace(&volume, o, w, &mut rng);
-        let v = p.total();
+        let v = p.total(0);
         sum += v;
         sum2 += v * v;
         t_sum += p.transmittance;
@@ -271,12 +276,168 @@ fn a_white_furnace_sees_the_sky_through_a_voxel_grid() {
         .map(|_| rng.random::<f32>().powi(3))
         .collect();
     let grid = Voxels::new(data, [8, 8, 8], [-1.0; 3], [2.0; 3], 3.0);
+    // Oblique rays, so that the majorant walk crosses cell faces of all three axes.
     furnace(&grid, 100_000, 9, |_, rng| {
         let o = [
             2.0 * rng.random::<f64>() - 1.0,
             -3.0,
             2.0 * rng.random::<f64>() - 1.0,
         ];
-        (o, [0.0, 1.0, 0.0])
+        let w = [-0.3 * o[0], 1.0, -0.3 * o[2]];
+        let n = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
+        (o, w.map(|x| x / n))
     });
+}
+
+/// A small implicit cloud: three overlapping ellipsoids with a noisy boundary layer (m).
+fn implicit_cloud() -> nephele::render::medium::Cloud {
+    use nephele::render::medium::{Cloud, Ellipsoid};
+    let blob = |center, radii| Ellipsoid { center, radii };
+    let blobs = vec![
+        blob([0.0, 0.0, 0.0], [1.0, 0.8, 0.7]),
+        blob([0.7, 0.2, 0.3], [0.5, 0.5, 0.5]),
+        blob([-0.6, -0.1, 0.2], [0.4, 0.5, 0.4]),
+    ];
+    Cloud::new(blobs, 0.15, (0.25, 3.0, 4), 1.2, 3)
+}
+
+/// The white furnace through the implicit cloud: its majorant grid is empty outside the
+/// ellipsoids and loose in the boundary layer.
+#[test]
+fn a_white_furnace_sees_the_sky_through_an_implicit_cloud() {
+    let cloud = implicit_cloud();
+    furnace(&cloud, 100_000, 11, |_, rng| {
+        let o = [
+            3.0 * rng.random::<f64>() - 1.5,
+            -4.0,
+            2.0 * rng.random::<f64>() - 1.0,
+        ];
+        let w = [0.2, 1.0, -0.1 * o[2]];
+        let n = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
+        (o, w.map(|x| x / n))
+    });
+}
+
+/// The majorant grids bound σ_t from above and below everywhere (random points in the media's
+/// boxes); the implicit cloud's grid skips empty space and knows its homogeneous interior.
+#[test]
+fn majorant_grids_bound_the_extinction() {
+    use nephele::render::medium::{Medium, Voxels};
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(4);
+    let data: Vec<f32> = (0..13 * 7 * 9)
+        .map(|_| rng.random::<f32>().powi(4))
+        .collect();
+    let voxels = Voxels::new(data, [13, 7, 9], [-1.0, 0.0, 2.0], [2.6, 1.4, 1.8], 2.0);
+    let cloud = implicit_cloud();
+    let media: [(&dyn Medium, [f64; 3], [f64; 3]); 2] = [
+        (&voxels, [-1.0, 0.0, 2.0], [1.6, 1.4, 3.8]),
+        (&cloud, [-1.5, -1.2, -1.2], [1.5, 1.2, 1.2]),
+    ];
+    for (medium, lo, hi) in media {
+        let Majorants::Grid(grid) = medium.majorants() else {
+            panic!("heterogeneous media have majorant grids");
+        };
+        let mut slack = 0.0;
+        for _ in 0..200_000 {
+            let p: [f64; 3] =
+                std::array::from_fn(|k| lo[k] + (hi[k] - lo[k]) * rng.random::<f64>());
+            let (s, b) = (medium.sigma_t(p), grid.at(p));
+            assert!(
+                b.min <= s && s <= b.max,
+                "σ_t {s} outside the bounds {b:?} at {p:?}"
+            );
+            slack += b.max - s;
+        }
+        let (empty, full) = grid.fractions();
+        println!(
+            "{:?} cells, {:.0} % empty, {:.1} % homogeneous, mean slack {:.3} /m",
+            grid.cells(),
+            100.0 * empty,
+            100.0 * full,
+            slack / 2e5
+        );
+    }
+    let Majorants::Grid(grid) = cloud.majorants() else {
+        unreachable!()
+    };
+    let (empty, full) = grid.fractions();
+    assert!(
+        empty > 0.2 && full > 0.001,
+        "{empty} empty, {full} homogeneous"
+    );
+}
+
+/// Per-channel phase functions (one-sample MIS over the channels): each channel of an RGB render
+/// matches a monochrome render with that channel's phase function alone, within the standard
+/// errors, for views reflected from and transmitted through a slab lit by the sun and the sky.
+#[test]
+fn per_channel_phase_functions_match_monochrome_renders() {
+    let hg = [0.3, 0.6, 0.85].map(HenyeyGreenstein::new);
+    let slab = Slab {
+        h: 2.0,
+        sigma_t: 1.0,
+    };
+    let all: [&(dyn PhaseFunction<f64> + Sync); 3] = [&hg[0], &hg[1], &hg[2]];
+    fn volume<'a>(slab: &'a Slab, phases: &'a [&'a (dyn PhaseFunction<f64> + Sync)]) -> Volume<'a> {
+        Volume {
+            medium: slab,
+            albedo: 0.95,
+            phases,
+            sun_dir: [0.6, 0.0, 0.8],
+            sun_irradiance: 1.0,
+            sky: 0.3,
+            group_first: &GROUPS,
+        }
+    }
+    let views = [
+        ([0.0, 0.0, 3.0], [0.3, 0.1, -0.95]),
+        ([0.0, 0.0, 3.0], [-0.7, 0.2, -0.7]),
+        ([0.0, 0.0, -1.0], [0.5, 0.0, 0.87]),
+        ([0.0, 0.0, -1.0], [-0.2, 0.3, 0.93]),
+    ];
+    // Mean and standard error of channel c over n paths.
+    let stats = |v: &Volume, o, w: [f64; 3], c: usize, seed: u64| {
+        let w = nephele::render::medium::normalize(w);
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+        let n = 400_000;
+        let (mut s, mut s2) = (0.0, 0.0);
+        for _ in 0..n {
+            let x = trace(v, o, w, &mut rng).total(c);
+            s += x;
+            s2 += x * x;
+        }
+        let m = s / n as f64;
+        (m, ((s2 / n as f64 - m * m) / (n - 1) as f64).sqrt())
+    };
+    let rgb = volume(&slab, &all);
+    let (mut worst, mut z2, mut spread) = (0.0f64, 0.0, 0.0f64);
+    for (i, &(o, w)) in views.iter().enumerate() {
+        let mono: Vec<(f64, f64)> = (0..3)
+            .map(|c| {
+                stats(
+                    &volume(&slab, std::slice::from_ref(&all[c])),
+                    o,
+                    w,
+                    c,
+                    100 + i as u64,
+                )
+            })
+            .collect();
+        for (c, &(m1, s1)) in mono.iter().enumerate() {
+            let (m2, s2) = stats(&rgb, o, w, c, 300 + i as u64);
+            let z = (m2 - m1) / (s1 * s1 + s2 * s2).sqrt();
+            println!(
+                "view {i} channel {c}: rgb {m2:.5} ± {s2:.5}, mono {m1:.5} ± {s1:.5}, z {z:+.2}"
+            );
+            worst = worst.max(z.abs());
+            z2 += z * z / 12.0;
+        }
+        spread = spread.max((mono[0].0 - mono[2].0).abs() / mono[0].1.hypot(mono[2].1));
+    }
+    println!("worst |z| {worst:.2}, mean z² {z2:.2}, channels apart by up to {spread:.0} SE");
+    assert!(
+        spread > 20.0,
+        "the channels must differ for the test to mean something"
+    );
+    assert!(worst < 4.0 && z2 < 2.5, "worst |z| {worst}, mean z² {z2}");
 }

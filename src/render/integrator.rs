@@ -13,10 +13,17 @@
 //! β the path throughput (ϖ^{n−1} without roulette); the path continues along a direction
 //! sampled from p around w (p is symmetric, so this is p(w′ · w) exactly), and an escaping path
 //! adds β L_sky to the order of its last scattering (the constant sky, if any).
+//!
+//! Per-channel phase functions p_R, p_G, p_B (a Mie table per sRGB channel): β and the
+//! radiance are RGB; the new direction is sampled from a channel c drawn uniformly, so its
+//! density is the mean p̄ = (p_R + p_G + p_B)/3 (one-sample MIS, balance heuristic), and each
+//! channel's throughput takes the weight β_k ← β_k p_k(cos) / p̄(cos) — unbiased wherever p̄ > 0,
+//! and never more than 3.
 
 use super::medium::{dot, normalize, Medium, Vec3};
 use nephele_runtime::PhaseFunction;
 use rand::Rng;
+use std::ops::ControlFlow;
 
 /// Most order groups.
 pub const MAX_GROUPS: usize = 16;
@@ -27,8 +34,8 @@ pub struct Volume<'a> {
     pub medium: &'a dyn Medium,
     /// Single-scattering albedo ϖ.
     pub albedo: f64,
-    /// Phase function.
-    pub phase: &'a (dyn PhaseFunction<f64> + Sync),
+    /// The phase function: one for all channels, or one per RGB channel.
+    pub phases: &'a [&'a (dyn PhaseFunction<f64> + Sync)],
     /// Unit vector toward the sun.
     pub sun_dir: Vec3,
     /// Sun irradiance on a surface facing it (W/m², or 1 for T = L/E⊥).
@@ -39,13 +46,16 @@ pub struct Volume<'a> {
     pub group_first: &'a [u32],
 }
 
+/// RGB.
+pub type Rgb = [f64; 3];
+
 /// One camera path's radiance, split by scattering order, and the camera ray's transmittance.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PathSample {
-    /// Sunlight per order group (the first `group_first.len()` entries).
-    pub groups: [f64; MAX_GROUPS],
-    /// Skylight per order group (scattered at least once).
-    pub sky_groups: [f64; MAX_GROUPS],
+    /// Sunlight per order group (the first `group_first.len()` entries), RGB.
+    pub groups: [Rgb; MAX_GROUPS],
+    /// Skylight per order group (scattered at least once), RGB.
+    pub sky_groups: [Rgb; MAX_GROUPS],
     /// Radiance seen without scattering (the sky through the medium).
     pub unscattered: f64,
     /// Transmittance of the camera ray through the whole medium (1 − opacity).
@@ -53,9 +63,10 @@ pub struct PathSample {
 }
 
 impl PathSample {
-    /// The total radiance: the groups and the unscattered part.
-    pub fn total(&self) -> f64 {
-        self.unscattered + self.groups.iter().sum::<f64>() + self.sky_groups.iter().sum::<f64>()
+    /// The total radiance of channel c: the groups and the unscattered part.
+    pub fn total(&self, c: usize) -> f64 {
+        let sum = |g: &[Rgb; MAX_GROUPS]| g.iter().map(|v| v[c]).sum::<f64>();
+        self.unscattered + sum(&self.groups) + sum(&self.sky_groups)
     }
 }
 
@@ -63,51 +74,80 @@ fn at(o: Vec3, w: Vec3, t: f64) -> Vec3 {
     [o[0] + t * w[0], o[1] + t * w[1], o[2] + t * w[2]]
 }
 
-fn exp_step<R: Rng>(rng: &mut R, majorant: f64) -> f64 {
-    -(1.0 - rng.random::<f64>()).ln() / majorant
+/// A free flight: an exponential optical depth τ drawn once and spent cell by cell (σ̄ Δt per
+/// cell) across majorant cells, so that cell faces cost no random numbers (free paths are
+/// memoryless, so this is the Poisson process of rate σ̄(t) along the ray).
+struct Flight {
+    tau: f64,
+}
+
+impl Flight {
+    fn new<R: Rng>(rng: &mut R) -> Self {
+        Self {
+            tau: -(1.0 - rng.random::<f64>()).ln(),
+        }
+    }
+
+    /// The next tentative collision in [t, b] under majorant σ̄ (then a new τ is drawn), or
+    /// None when the flight crosses b (having spent σ̄ (b − t) of τ).
+    fn next<R: Rng>(&mut self, rng: &mut R, t: f64, b: f64, majorant: f64) -> Option<f64> {
+        if !(majorant > 0.0) {
+            return None;
+        }
+        let reach = majorant * (b - t);
+        if reach <= self.tau {
+            self.tau -= reach;
+            return None;
+        }
+        let event = t + self.tau / majorant;
+        *self = Self::new(rng);
+        Some(event)
+    }
 }
 
 /// The next real collision along o + t w by delta tracking, or None if the ray leaves.
 pub fn collide<R: Rng>(m: &dyn Medium, o: Vec3, w: Vec3, rng: &mut R) -> Option<Vec3> {
-    let (t0, t1) = m.clip(o, w)?;
-    let majorant = m.majorant(o, w, t0, t1);
-    if !(majorant > 0.0) {
-        return None;
-    }
-    let mut t = t0;
-    loop {
-        t += exp_step(rng, majorant);
-        if t >= t1 {
-            return None;
+    let segment = m.clip(o, w)?;
+    let mut flight = Flight::new(rng);
+    m.majorants().walk(o, w, segment, |a, b, bounds| {
+        let mut t = a;
+        while let Some(event) = flight.next(rng, t, b, bounds.max) {
+            t = event;
+            let p = at(o, w, t);
+            // In a homogeneous cell every tentative collision is real.
+            if bounds.homogeneous() || rng.random::<f64>() * bounds.max < m.sigma_t(p) {
+                return ControlFlow::Break(p);
+            }
         }
-        let p = at(o, w, t);
-        if rng.random::<f64>() * majorant < m.sigma_t(p) {
-            return Some(p);
-        }
-    }
+        ControlFlow::Continue(())
+    })
 }
 
-/// Transmittance along o + t w to the medium's end: closed form where the medium gives its
-/// optical depth, else ratio tracking (unbiased, never 0 by a single event).
+/// Transmittance along o + t w to the medium's end: closed form exp(−σ Δt) on homogeneous
+/// cells, else ratio tracking (unbiased, never 0 by a single event).
 pub fn transmittance<R: Rng>(m: &dyn Medium, o: Vec3, w: Vec3, rng: &mut R) -> f64 {
-    let Some((t0, t1)) = m.clip(o, w) else {
+    let Some(segment) = m.clip(o, w) else {
         return 1.0;
     };
-    if let Some(tau) = m.optical_depth(o, w, t0, t1) {
-        return (-tau).exp();
-    }
-    let majorant = m.majorant(o, w, t0, t1);
-    if !(majorant > 0.0) {
-        return 1.0;
-    }
-    let (mut t, mut tr) = (t0, 1.0);
-    loop {
-        t += exp_step(rng, majorant);
-        if t >= t1 || tr < 1e-12 {
-            return tr;
+    let mut tr = 1.0;
+    let mut flight = Flight::new(rng);
+    m.majorants().walk(o, w, segment, |a, b, bounds| {
+        if bounds.homogeneous() {
+            tr *= (-bounds.max * (b - a)).exp();
+        } else {
+            let mut t = a;
+            while let Some(event) = flight.next(rng, t, b, bounds.max) {
+                t = event;
+                tr *= 1.0 - m.sigma_t(at(o, w, t)) / bounds.max;
+            }
         }
-        tr *= 1.0 - m.sigma_t(at(o, w, t)) / majorant;
-    }
+        if tr < 1e-12 {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
+    });
+    tr
 }
 
 /// Group index of scattering order n ≥ 1.
@@ -123,27 +163,62 @@ pub fn trace<R: Rng>(v: &Volume, o: Vec3, w: Vec3, rng: &mut R) -> PathSample {
     };
     out.unscattered = out.transmittance * v.sky;
     let (mut o, mut w) = (o, w);
-    let mut beta = 1.0;
+    let mut beta = [1.0; 3];
     let mut order = 0u32;
     while let Some(x) = collide(v.medium, o, w, rng) {
         order += 1;
         let g = group_of(v.group_first, order).min(MAX_GROUPS - 1);
-        let cos = dot(v.sun_dir, w);
         let tr = transmittance(v.medium, x, v.sun_dir, rng);
-        out.groups[g] += beta * v.albedo * v.phase.eval(cos) * tr * v.sun_irradiance;
-        beta *= v.albedo;
-        if beta < 1e-3 {
+        let p_sun = v.eval(dot(v.sun_dir, w));
+        for k in 0..3 {
+            out.groups[g][k] += beta[k] * v.albedo * p_sun[k] * tr * v.sun_irradiance;
+            beta[k] *= v.albedo;
+        }
+        if beta.iter().all(|&b| b < 1e-3) {
             // Roulette on light paths only: survive with probability 0.1 at 10× the weight.
             if rng.random::<f64>() >= 0.1 {
                 return out;
             }
-            beta *= 10.0;
+            beta = beta.map(|b| 10.0 * b);
         }
-        let (w_new, _) = v.phase.sample(rng.random(), rng.random(), w);
-        (o, w) = (x, normalize(w_new));
+        let w_new = v.scatter(w, &mut beta, rng);
+        (o, w) = (x, w_new);
     }
     if order > 0 && v.sky > 0.0 {
-        out.sky_groups[group_of(v.group_first, order).min(MAX_GROUPS - 1)] += beta * v.sky;
+        let g = group_of(v.group_first, order).min(MAX_GROUPS - 1);
+        for k in 0..3 {
+            out.sky_groups[g][k] += beta[k] * v.sky;
+        }
     }
     out
+}
+
+impl Volume<'_> {
+    /// p(cos) per channel (1/sr).
+    fn eval(&self, cos: f64) -> Rgb {
+        match self.phases {
+            [p] => [p.eval(cos); 3],
+            ps => std::array::from_fn(|k| ps[k].eval(cos)),
+        }
+    }
+
+    /// A new direction around w from the phase function (a channel's, drawn uniformly, when
+    /// there are three) and the channels' MIS weights p_k / p̄ applied to β.
+    fn scatter<R: Rng>(&self, w: Vec3, beta: &mut Rgb, rng: &mut R) -> Vec3 {
+        let c = if self.phases.len() == 3 {
+            (3.0 * rng.random::<f64>()).min(2.0) as usize
+        } else {
+            0
+        };
+        let (w_new, _) = self.phases[c].sample(rng.random(), rng.random(), w);
+        let w_new = normalize(w_new);
+        if self.phases.len() == 3 {
+            let p = self.eval(dot(w_new, w));
+            let mean = (p[0] + p[1] + p[2]) / 3.0;
+            for k in 0..3 {
+                beta[k] *= p[k] / mean;
+            }
+        }
+        w_new
+    }
 }

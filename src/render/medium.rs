@@ -1,5 +1,8 @@
 //! Participating media of the path tracer: an extinction coefficient σ_t(p) (1/m) inside
-//! bounds, and a majorant σ̄ ≥ σ_t along any ray for delta tracking.
+//! bounds, and majorants σ̄ ≥ σ_t for delta tracking (a coarse grid for the heterogeneous
+//! media, see `majorant.rs`).
+
+use super::majorant::{Bounds, MajorantGrid, Majorants};
 
 /// A point or direction in world space (m); z is up.
 pub type Vec3 = [f64; 3];
@@ -13,14 +16,9 @@ pub trait Medium: Sync {
     /// None if the ray misses it.
     fn clip(&self, o: Vec3, w: Vec3) -> Option<(f64, f64)>;
 
-    /// A majorant σ̄ ≥ σ_t on the ray's segment [t0, t1] (1/m).
-    fn majorant(&self, o: Vec3, w: Vec3, t0: f64, t1: f64) -> f64;
-
-    /// The optical depth ∫ σ_t dt over [t0, t1] in closed form, where the medium has one
-    /// (homogeneous media): shadow rays then cost nothing and add no noise.
-    fn optical_depth(&self, _o: Vec3, _w: Vec3, _t0: f64, _t1: f64) -> Option<f64> {
-        None
-    }
+    /// Bounds σ_c ≤ σ_t ≤ σ̄ (1/m) over the medium's extent; where they meet, shadow rays
+    /// cost nothing and add no noise.
+    fn majorants(&self) -> Majorants<'_>;
 }
 
 /// A homogeneous slab z ∈ [0, h] (m), unbounded in x and y: the canonical slab of spec 40 with
@@ -46,12 +44,11 @@ impl Medium for Slab {
         slab_clip(o[2], w[2], 0.0, self.h)
     }
 
-    fn majorant(&self, _: Vec3, _: Vec3, _: f64, _: f64) -> f64 {
-        self.sigma_t
-    }
-
-    fn optical_depth(&self, _: Vec3, _: Vec3, t0: f64, t1: f64) -> Option<f64> {
-        Some(self.sigma_t * (t1 - t0))
+    fn majorants(&self) -> Majorants<'_> {
+        Majorants::Constant(Bounds {
+            min: self.sigma_t,
+            max: self.sigma_t,
+        })
     }
 }
 
@@ -113,7 +110,9 @@ pub struct Ellipsoid {
 ///   s(p) = max_i (1 − ρ_i(p)) r_i⁻ + A · fbm(f p)   (m),
 ///
 /// and the density rises linearly over the boundary layer: min(max(s/edge, 0), 1); σ_t is the
-/// scene's extinction times the density, so σ_t itself is a majorant.
+/// scene's extinction times the density. The majorant grid bounds s on each cell by the
+/// smallest ρ_i over the cell and |fbm| ≤ 1.2 (the clamp below), and from below by the largest
+/// ρ_i: the deep interior, where s ≥ edge everywhere, is homogeneous.
 pub struct Cloud {
     blobs: Vec<Ellipsoid>,
     edge: f64,
@@ -123,7 +122,11 @@ pub struct Cloud {
     sigma_t: f64,
     lo: Vec3,
     hi: Vec3,
+    grid: MajorantGrid,
 }
+
+/// Majorant cells per axis of the implicit cloud's bounding box.
+const CLOUD_GRID: usize = 48;
 
 impl Cloud {
     /// The cloud of `blobs` with boundary layer `edge` (m), noise (amplitude m, frequency
@@ -146,6 +149,18 @@ impl Cloud {
                 hi[k] = hi[k].max(b.center[k] + grow * b.radii[k]);
             }
         }
+        let grid = MajorantGrid::build(lo, hi, [CLOUD_GRID; 3], |c_lo, c_hi| {
+            let (mut deepest, mut shallowest) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
+            for b in &blobs {
+                let (lo, hi) = Self::depth_range(b, c_lo, c_hi);
+                (deepest, shallowest) = (deepest.max(hi), shallowest.max(lo));
+            }
+            let density = |s: f64| (s / edge).clamp(0.0, 1.0);
+            Bounds {
+                min: sigma_t * density(shallowest - 1.2 * amplitude),
+                max: sigma_t * density(deepest + 1.2 * amplitude),
+            }
+        });
         Self {
             blobs,
             edge,
@@ -155,7 +170,33 @@ impl Cloud {
             sigma_t,
             lo,
             hi,
+            grid,
         }
+    }
+
+    /// (1 − ρ) r⁻ of blob b at p (m): positive inside the undisplaced ellipsoid.
+    fn depth(b: &Ellipsoid, p: Vec3) -> f64 {
+        let rho = (0..3)
+            .map(|k| ((p[k] - b.center[k]) / b.radii[k]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        (1.0 - rho) * b.radii.iter().copied().fold(f64::INFINITY, f64::min)
+    }
+
+    /// The smallest and largest `depth` over the box [lo, hi]: at its corner farthest from
+    /// the centre and at its point nearest to it, in the ellipsoid's scaled coordinates (where
+    /// ρ is largest and smallest).
+    fn depth_range(b: &Ellipsoid, lo: Vec3, hi: Vec3) -> (f64, f64) {
+        let far = std::array::from_fn(|k| {
+            let c = b.center[k];
+            if (lo[k] - c).abs() > (hi[k] - c).abs() {
+                lo[k]
+            } else {
+                hi[k]
+            }
+        });
+        let near = std::array::from_fn(|k| b.center[k].clamp(lo[k], hi[k]));
+        (Self::depth(b, far), Self::depth(b, near))
     }
 
     /// Density in [0, 1] at p.
@@ -164,17 +205,14 @@ impl Cloud {
         let inside = self
             .blobs
             .iter()
-            .map(|b| {
-                let rho = (0..3)
-                    .map(|k| ((p[k] - b.center[k]) / b.radii[k]).powi(2))
-                    .sum::<f64>()
-                    .sqrt();
-                let r_min = b.radii.iter().copied().fold(f64::INFINITY, f64::min);
-                (1.0 - rho) * r_min
-            })
+            .map(|b| Self::depth(b, p))
             .fold(f64::NEG_INFINITY, f64::max);
+        // Where the noise cannot change the answer, it is not evaluated (most of the interior).
         if inside < -1.2 * self.amplitude {
             return 0.0;
+        }
+        if inside >= self.edge + 1.2 * self.amplitude {
+            return 1.0;
         }
         let f = self.frequency;
         let n = self
@@ -197,8 +235,8 @@ impl Medium for Cloud {
         box_clip(o, w, self.lo, self.hi)
     }
 
-    fn majorant(&self, _: Vec3, _: Vec3, _: f64, _: f64) -> f64 {
-        self.sigma_t
+    fn majorants(&self) -> Majorants<'_> {
+        Majorants::Grid(&self.grid)
     }
 }
 
@@ -213,21 +251,59 @@ pub struct Voxels {
     origin: Vec3,
     size: Vec3,
     sigma_t: f64,
-    max_density: f64,
+    grid: MajorantGrid,
 }
+
+/// Voxels per majorant cell along each axis.
+const VOXELS_PER_CELL: usize = 4;
 
 impl Voxels {
     /// The grid; `sigma_t` (1/m) scales the densities.
     pub fn new(data: Vec<f32>, n: [usize; 3], origin: Vec3, size: Vec3, sigma_t: f64) -> Self {
-        let max_density = data.iter().copied().fold(0.0f32, f32::max) as f64;
-        Self {
+        let hi = std::array::from_fn(|k| origin[k] + size[k]);
+        let cells = n.map(|m| m.div_ceil(VOXELS_PER_CELL));
+        let mut voxels = Self {
             data,
             n,
             origin,
             size,
             sigma_t,
-            max_density,
+            grid: MajorantGrid::build(origin, hi, [1; 3], |_, _| Bounds {
+                min: 0.0,
+                max: f64::INFINITY,
+            }),
+        };
+        voxels.grid = MajorantGrid::build(origin, hi, cells, |lo, hi| {
+            let (min, max) = voxels.range_over(lo, hi);
+            Bounds {
+                min: sigma_t * min,
+                max: sigma_t * max,
+            }
+        });
+        voxels
+    }
+
+    /// The smallest and largest voxels the trilinear lookup can read anywhere in the box
+    /// [lo, hi]: the voxels around the centres the box's corners fall between, one more each
+    /// side for rounding.
+    fn range_over(&self, lo: Vec3, hi: Vec3) -> (f64, f64) {
+        let range = |k: usize| {
+            let x = |p: f64| (p - self.origin[k]) / self.size[k] * self.n[k] as f64 - 0.5;
+            let a = (x(lo[k]).floor() - 1.0).max(0.0) as usize;
+            let b = ((x(hi[k]).floor() + 2.0).max(0.0) as usize).min(self.n[k] - 1);
+            a.min(self.n[k] - 1)..=b
+        };
+        let (rx, ry, rz) = (range(0), range(1), range(2));
+        let (mut min, mut max) = (f64::INFINITY, 0.0f64);
+        for z in rz {
+            for y in ry.clone() {
+                for x in rx.clone() {
+                    let v = self.at([x, y, z]);
+                    (min, max) = (min.min(v), max.max(v));
+                }
+            }
         }
+        (min.min(max), max)
     }
 
     fn at(&self, i: [usize; 3]) -> f64 {
@@ -275,8 +351,8 @@ impl Medium for Voxels {
         box_clip(o, w, self.origin, hi)
     }
 
-    fn majorant(&self, _: Vec3, _: Vec3, _: f64, _: f64) -> f64 {
-        // Trilinear interpolation never exceeds the largest voxel.
-        self.sigma_t * self.max_density
+    fn majorants(&self) -> Majorants<'_> {
+        // Trilinear interpolation never exceeds the largest voxel it reads.
+        Majorants::Grid(&self.grid)
     }
 }

@@ -2,6 +2,7 @@
 //! estimator, the camera and the outputs of `nephele render`.
 
 pub mod integrator;
+pub mod majorant;
 pub mod medium;
 pub mod output;
 pub mod run;

@@ -2,7 +2,7 @@
 //! from its own random stream (xoshiro256++ seeded by a hash of the scene's seed and the pixel),
 //! so the image is the same bits for any thread count; and the outputs.
 
-use super::integrator::{trace, Volume, MAX_GROUPS};
+use super::integrator::{trace, Rgb, Volume, MAX_GROUPS};
 use super::medium::{cross, normalize};
 use super::scene::Scene;
 use crate::slab::tables::PhaseModel;
@@ -46,7 +46,7 @@ fn pixel_seed(seed: u64, i: u64) -> u64 {
 /// Renders `scene`; `progress(rows done)` after each row.
 pub fn render(scene: &Scene, progress: &(dyn Fn(usize) + Sync)) -> Result<Rendered> {
     let medium = scene.build_medium()?;
-    let model = PhaseModel::build(&scene.phase)?;
+    let models = PhaseModel::build_channels(&scene.phase)?;
     let cam = &scene.camera;
     let (w, h) = (cam.width as usize, cam.height as usize);
     let fwd = normalize(std::array::from_fn(|k| cam.look_at[k] - cam.position[k]));
@@ -59,12 +59,12 @@ pub fn render(scene: &Scene, progress: &(dyn Fn(usize) + Sync)) -> Result<Render
     let done = std::sync::atomic::AtomicUsize::new(0);
     let t0 = Instant::now();
     // Per row: [column][group] sun and sky radiance (E = 1, L_sky = 1), and transmittance.
-    type Row = Vec<([f64; MAX_GROUPS], [f64; MAX_GROUPS], f64)>;
-    let rows: Vec<Row> = model.with(|phase| {
+    type Row = Vec<([Rgb; MAX_GROUPS], [Rgb; MAX_GROUPS], f64)>;
+    let rows: Vec<Row> = PhaseModel::with_all(&models, |phases| {
         let volume = Volume {
             medium: medium.as_ref(),
             albedo: scene.albedo,
-            phase,
+            phases,
             sun_dir: scene.sun.direction,
             sun_irradiance: 1.0,
             sky: if has_sky { 1.0 } else { 0.0 },
@@ -79,7 +79,7 @@ pub fn render(scene: &Scene, progress: &(dyn Fn(usize) + Sync)) -> Result<Render
                             scene.seed,
                             (j * w + i) as u64,
                         ));
-                        let mut acc = ([0.0; MAX_GROUPS], [0.0; MAX_GROUPS], 0.0);
+                        let mut acc = ([[0.0; 3]; MAX_GROUPS], [[0.0; 3]; MAX_GROUPS], 0.0);
                         for _ in 0..scene.spp {
                             let x = (2.0 * (i as f64 + rng.random::<f64>()) / w as f64 - 1.0)
                                 * tan
@@ -90,8 +90,10 @@ pub fn render(scene: &Scene, progress: &(dyn Fn(usize) + Sync)) -> Result<Render
                             }));
                             let p = trace(&volume, cam.position, dir, &mut rng);
                             for g in 0..MAX_GROUPS {
-                                acc.0[g] += p.groups[g];
-                                acc.1[g] += p.sky_groups[g];
+                                for c in 0..3 {
+                                    acc.0[g][c] += p.groups[g][c];
+                                    acc.1[g][c] += p.sky_groups[g][c];
+                                }
                             }
                             acc.2 += p.transmittance;
                         }
@@ -124,7 +126,7 @@ pub fn render(scene: &Scene, progress: &(dyn Fn(usize) + Sync)) -> Result<Render
                 let mut total = tr / n * sky[c];
                 out.unscattered[px * 3 + c] = total as f32;
                 for g in 0..ng {
-                    let v = (g_sun[g] * sun[c] + g_sky[g] * sky[c]) / n;
+                    let v = (g_sun[g][c] * sun[c] + g_sky[g][c] * sky[c]) / n;
                     out.groups[(g * h * w + px) * 3 + c] = v as f32;
                     total += v;
                 }

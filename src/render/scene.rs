@@ -198,6 +198,7 @@ impl Scene {
             "camera.width and camera.height must be 1…16384 pixels"
         );
         ensure!((1..=1 << 20).contains(&self.spp), "spp must be 1…1048576");
+        self.phase.validate()?;
         match &self.medium {
             MediumSpec::Slab { thickness } => ensure!(
                 *thickness > 0.0 && thickness.is_finite(),

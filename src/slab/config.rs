@@ -17,6 +17,9 @@ pub enum PhaseSpec {
     Mie {
         /// Median diameter (µm).
         diameter_um: f64,
+        /// One phase function per linear-sRGB channel (the renderer only) instead of the mean.
+        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+        rgb: bool,
     },
     /// Henyey–Greenstein (for validation against DISORT).
     Hg {
@@ -31,10 +34,13 @@ pub enum PhaseSpec {
         #[serde(default = "default_preset")]
         preset: String,
     },
-    /// A `nephele mie` phase.npz (its `theta_deg` and `phase`).
+    /// A `nephele mie` phase.npz (its `theta_deg` and `phase`, or `phase_rgb`).
     Table {
         /// Path of the npz.
         path: PathBuf,
+        /// Read `phase_rgb` (n × 3), one phase function per channel (the renderer only).
+        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+        rgb: bool,
     },
 }
 
@@ -44,7 +50,38 @@ fn default_preset() -> String {
 
 impl Default for PhaseSpec {
     fn default() -> Self {
-        PhaseSpec::Mie { diameter_um: 10.0 }
+        PhaseSpec::Mie {
+            diameter_um: 10.0,
+            rgb: false,
+        }
+    }
+}
+
+impl PhaseSpec {
+    /// Whether there is one phase function per RGB channel.
+    pub fn is_rgb(&self) -> bool {
+        matches!(
+            self,
+            PhaseSpec::Mie { rgb: true, .. } | PhaseSpec::Table { rgb: true, .. }
+        )
+    }
+
+    /// Checks the parameters, naming the first bad one.
+    pub fn validate(&self) -> Result<()> {
+        match self {
+            PhaseSpec::Mie { diameter_um, .. } | PhaseSpec::HgDraine { diameter_um, .. }
+                if !(*diameter_um > 0.0 && *diameter_um <= 1e4) =>
+            {
+                bail!("phase.diameter_um = {diameter_um} must be in (0, 10000]")
+            }
+            PhaseSpec::Hg { g } if !(g.abs() < 1.0) => bail!("phase.g = {g} must be in (−1, 1)"),
+            PhaseSpec::HgDraine { preset, .. }
+                if preset != "jendersie_deon" && preset != "nephele" =>
+            {
+                bail!("phase.preset `{preset}` is unknown (valid: jendersie_deon, nephele)")
+            }
+            _ => Ok(()),
+        }
     }
 }
 
@@ -175,19 +212,9 @@ impl SlabConfig {
         if !(s.target_rel_se >= 0.0 && (0.0..=1.0).contains(&s.cell_fraction)) {
             bail!("stop: target_rel_se ≥ 0 and cell_fraction in [0, 1]");
         }
-        match &self.phase {
-            PhaseSpec::Mie { diameter_um } | PhaseSpec::HgDraine { diameter_um, .. }
-                if !(*diameter_um > 0.0 && *diameter_um <= 1e4) =>
-            {
-                bail!("phase.diameter_um = {diameter_um} must be in (0, 10000]")
-            }
-            PhaseSpec::Hg { g } if !(g.abs() < 1.0) => bail!("phase.g = {g} must be in (−1, 1)"),
-            PhaseSpec::HgDraine { preset, .. }
-                if preset != "jendersie_deon" && preset != "nephele" =>
-            {
-                bail!("phase.preset `{preset}` is unknown (valid: jendersie_deon, nephele)")
-            }
-            _ => {}
+        self.phase.validate()?;
+        if self.phase.is_rgb() {
+            bail!("phase.rgb: the slab tables are monochrome; leave rgb out (the channel mean)");
         }
         self.grid(self.thicknesses[0]).map(|_| ())
     }

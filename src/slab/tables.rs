@@ -10,7 +10,7 @@ use super::tally::Accumulator;
 use super::walk::Slice;
 use crate::mie::polydisperse::{CONVERGED_DEFAULT, DEFAULT_WAVELENGTHS};
 use crate::mie::MieJob;
-use anyhow::{anyhow, Context, Result};
+use anyhow::{anyhow, bail, ensure, Context, Result};
 use nephele_runtime::phase::{HenyeyGreenstein, TabulatedTable};
 use nephele_runtime::presets::{jendersie_deon, nephele_refit};
 use nephele_runtime::PhaseFunction;
@@ -26,25 +26,49 @@ pub enum PhaseModel {
 }
 
 impl PhaseModel {
-    /// Builds the phase function of `spec` (a Mie table is computed here, a few seconds).
+    /// Builds the phase function of `spec` (a Mie table is computed here, a few seconds); a
+    /// per-channel (rgb) spec is an error here, see `build_channels`.
     pub fn build(spec: &PhaseSpec) -> Result<Self> {
-        let table = |th: &[f64], p: &[f64]| -> Result<Self> {
-            let t = TabulatedTable::<f64>::from_phase(th, p)
-                .map_err(|e| anyhow!("tabulated phase function: {e:?}"))?;
-            Ok(PhaseModel::Table(t))
-        };
-        match spec {
-            PhaseSpec::Mie { diameter_um } => {
+        let mut models = Self::build_channels(spec)?;
+        if models.len() != 1 {
+            bail!("phase.rgb: one phase function is needed here, not one per channel");
+        }
+        Ok(models.remove(0))
+    }
+
+    /// The phase functions of `spec`: one per linear-sRGB channel when it asks for them (rgb),
+    /// else one.
+    pub fn build_channels(spec: &PhaseSpec) -> Result<Vec<Self>> {
+        let (theta, columns) = match spec {
+            PhaseSpec::Mie { diameter_um, rgb } => {
                 let job = MieJob::paper(*diameter_um, CONVERGED_DEFAULT, DEFAULT_WAVELENGTHS);
-                let tables = job.compute(&|_, _| {})?.0;
-                let t = tables.first().context("Mie job gave no table")?;
-                table(&t.theta_deg, &t.phase)
+                let mut tables = job.compute(&|_, _| {})?.0;
+                ensure!(!tables.is_empty(), "Mie job gave no table");
+                let t = tables.swap_remove(0);
+                let columns = if *rgb {
+                    channels(&t.phase_rgb)
+                } else {
+                    vec![t.phase]
+                };
+                (t.theta_deg, columns)
             }
-            PhaseSpec::Table { path } => {
-                let a = crate::io::npz::read_arrays(path, &["theta_deg", "phase"])?;
-                table(&a[0], &a[1]).with_context(|| format!("'{}'", path.display()))
+            PhaseSpec::Table { path, rgb } => {
+                let name = if *rgb { "phase_rgb" } else { "phase" };
+                let mut a = crate::io::npz::read_arrays(path, &["theta_deg", name])?;
+                let p = a.pop().unwrap_or_default();
+                let theta = a.pop().unwrap_or_default();
+                ensure!(
+                    p.len() == theta.len() * if *rgb { 3 } else { 1 },
+                    "'{}': {name} does not match theta_deg",
+                    path.display()
+                );
+                (theta, if *rgb { channels(&p) } else { vec![p] })
             }
-            PhaseSpec::Hg { g } => Ok(PhaseModel::Analytic(Box::new(HenyeyGreenstein::new(*g)))),
+            PhaseSpec::Hg { g } => {
+                return Ok(vec![PhaseModel::Analytic(Box::new(HenyeyGreenstein::new(
+                    *g,
+                )))])
+            }
             PhaseSpec::HgDraine {
                 diameter_um,
                 preset,
@@ -54,9 +78,17 @@ impl PhaseModel {
                 } else {
                     jendersie_deon(*diameter_um)
                 };
-                Ok(PhaseModel::Analytic(Box::new(p.phase::<f64>())))
+                return Ok(vec![PhaseModel::Analytic(Box::new(p.phase::<f64>()))]);
             }
-        }
+        };
+        columns
+            .iter()
+            .map(|p| {
+                let t = TabulatedTable::<f64>::from_phase(&theta, p)
+                    .map_err(|e| anyhow!("tabulated phase function: {e:?}"))?;
+                Ok(PhaseModel::Table(t))
+            })
+            .collect()
     }
 
     /// Runs `f` with the phase function as a trait object.
@@ -66,6 +98,37 @@ impl PhaseModel {
             PhaseModel::Analytic(b) => f(b.as_ref()),
         }
     }
+
+    /// Runs `f` with all of `models` as trait objects.
+    pub fn with_all<R>(
+        models: &[Self],
+        f: impl FnOnce(&[&(dyn PhaseFunction<f64> + Sync)]) -> R,
+    ) -> R {
+        let views: Vec<_> = models
+            .iter()
+            .map(|m| match m {
+                PhaseModel::Table(t) => Some(t.view()),
+                PhaseModel::Analytic(_) => None,
+            })
+            .collect();
+        let refs: Vec<&(dyn PhaseFunction<f64> + Sync)> = models
+            .iter()
+            .zip(&views)
+            .map(|(m, v)| match (m, v) {
+                (_, Some(v)) => v as &(dyn PhaseFunction<f64> + Sync),
+                (PhaseModel::Analytic(b), None) => b.as_ref(),
+                (PhaseModel::Table(_), None) => unreachable!("every table has its view"),
+            })
+            .collect();
+        f(&refs)
+    }
+}
+
+/// The three columns of an interleaved [n, 3] array.
+fn channels(rgb: &[f64]) -> Vec<Vec<f64>> {
+    (0..3)
+        .map(|c| rgb.iter().skip(c).step_by(3).copied().collect())
+        .collect()
 }
 
 /// What one slice reports besides its tables.
