@@ -452,6 +452,10 @@ fn slab_quick_config_writes_tables_and_refuses_bad_configs() {
         (r#"{"phase": {"kind": "hg", "g": 1.5}}"#, "phase.g"),
         (r#"{"phase": {"kind": "rayleigh"}}"#, "unknown variant"),
         (
+            r#"{"phase": {"kind": "mie", "diameter_um": 10, "rgb": true}}"#,
+            "monochrome",
+        ),
+        (
             r#"{"phase": {"kind": "hg_draine", "diameter_um": 10, "preset": "x"}}"#,
             "preset",
         ),
@@ -706,6 +710,8 @@ fn render_writes_its_outputs_and_refuses_bad_scenes() {
     scene["camera"]["width"] = 12.into();
     scene["camera"]["height"] = 8.into();
     scene["spp"] = 1.into();
+    // Per-channel Mie phase functions (the sRGB channels of the 10 µm table).
+    scene["phase"]["rgb"] = true.into();
     let good = dir.path().join("good.json");
     std::fs::write(&good, scene.to_string()).unwrap();
     let out = dir.path().join("render");
@@ -729,6 +735,9 @@ fn render_writes_its_outputs_and_refuses_bad_scenes() {
             "unscattered.npy"
         ]
     );
+    let sidecar: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("render.json")).unwrap()).unwrap();
+    assert_eq!(sidecar["scene"]["phase"]["rgb"], true);
     // A voxel grid from a float32 .npy beside the scene (relative path).
     let mut npy = Vec::new();
     {
@@ -757,6 +766,20 @@ fn render_writes_its_outputs_and_refuses_bad_scenes() {
         voxel_out.to_str().unwrap(),
     ]);
     assert!(voxel_out.join("beauty.png").exists());
+    // The same box as a to_world matrix: the same image, bit for bit.
+    voxels["medium"] = serde_json::json!({"kind": "voxels", "npy": "grid.npy", "to_world":
+        [[1200, 0, 0, -600], [0, 1000, 0, -500], [0, 0, 800, 300], [0, 0, 0, 1]]});
+    std::fs::write(&voxel_scene, voxels.to_string()).unwrap();
+    let matrix_out = dir.path().join("matrix-render");
+    succeeds(&[
+        "render",
+        "--scene",
+        voxel_scene.to_str().unwrap(),
+        "--out",
+        matrix_out.to_str().unwrap(),
+    ]);
+    let read = |d: &std::path::Path| std::fs::read(d.join("beauty.npy")).unwrap();
+    assert!(read(&voxel_out) == read(&matrix_out));
     voxels["medium"]["npy"] = "missing.npy".into();
     std::fs::write(&voxel_scene, voxels.to_string()).unwrap();
     let o = nephele(&[
@@ -772,6 +795,27 @@ fn render_writes_its_outputs_and_refuses_bad_scenes() {
         (("albedo", serde_json::json!(2)), "albedo"),
         (("spp", serde_json::json!(0)), "spp"),
         (("colour", serde_json::json!(1)), "colour"),
+        (("time_budget_s", serde_json::json!(-3)), "time_budget_s"),
+        (
+            ("phase", serde_json::json!({"kind": "hg", "g": 1.5})),
+            "phase.g",
+        ),
+        (
+            (
+                "medium",
+                serde_json::json!({"kind": "voxels", "npy": "grid.npy", "origin": [0, 0, 0],
+                    "size": [1, 1, 1], "to_world": [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]}),
+            ),
+            "either origin and size, or to_world",
+        ),
+        (
+            (
+                "medium",
+                serde_json::json!({"kind": "voxels", "npy": "grid.npy",
+                    "to_world": [[1, 0, 0, 0], [2, 0, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]}),
+            ),
+            "invertible",
+        ),
     ] {
         let mut bad = scene.clone();
         bad[edit.0] = edit.1;

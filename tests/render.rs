@@ -441,3 +441,91 @@ fn per_channel_phase_functions_match_monochrome_renders() {
     );
     assert!(worst < 4.0 && z2 < 2.5, "worst |z| {worst}, mean z² {z2}");
 }
+
+/// A time budget renders passes whose pixels continue their streams: whatever number of passes
+/// it allowed, the image is the one a single render at the same total spp gives.
+#[test]
+fn a_time_budget_gives_the_image_of_its_total_spp() {
+    use nephele::render::run::render;
+    let mut scene = small_cloud();
+    scene.spp = 1;
+    scene.time_budget_s = Some(0.3);
+    let budgeted = render(&scene, &|_| {}).unwrap();
+    assert!(budgeted.spp >= 2, "{} passes in 0.3 s", budgeted.spp);
+    scene.time_budget_s = None;
+    scene.spp = budgeted.spp;
+    let single = render(&scene, &|_| {}).unwrap();
+    assert!(budgeted.beauty == single.beauty && budgeted.groups == single.groups);
+    println!("{} passes", budgeted.spp);
+}
+
+/// A voxel grid placed by a to_world matrix (a quarter turn about z, scaled and moved) has the
+/// densities and majorant bounds of the same values re-indexed over the box it covers.
+#[test]
+fn a_rotated_voxel_grid_is_the_re_indexed_grid() {
+    use nephele::render::medium::{Affine, Medium, Voxels};
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(21);
+    let (nx, ny, nz) = (5usize, 4usize, 3usize);
+    let a: Vec<f32> = (0..nx * ny * nz).map(|_| rng.random::<f32>()).collect();
+    let (s, t) = ([2.0, 3.0, 1.5], [1.0, -2.0, 0.5]);
+    // p = R S u + t with R: x → y, y → −x.
+    let m = [[0.0, -s[1], 0.0], [s[0], 0.0, 0.0], [0.0, 0.0, s[2]]];
+    let rotated = Voxels::with_transform(a.clone(), [nx, ny, nz], Affine::new(m, t).unwrap(), 1.0);
+    // The same values over the box [t_x − s_y, t_x] × [t_y, t_y + s_x] × [t_z, t_z + s_z]:
+    // B[z][j][i] = A[z][ny − 1 − i][j], B having ny columns and nx rows.
+    let mut b = vec![0.0f32; nx * ny * nz];
+    for z in 0..nz {
+        for j in 0..nx {
+            for i in 0..ny {
+                b[(z * nx + j) * ny + i] = a[(z * ny + (ny - 1 - i)) * nx + j];
+            }
+        }
+    }
+    let boxed = Voxels::new(
+        b,
+        [ny, nx, nz],
+        [t[0] - s[1], t[1], t[2]],
+        [s[1], s[0], s[2]],
+        1.0,
+    );
+    let (mut inside, mut worst) = (0, 0.0f64);
+    for _ in 0..20_000 {
+        let p = [
+            t[0] - 3.5 + 4.0 * rng.random::<f64>(),
+            t[1] - 0.5 + 3.0 * rng.random::<f64>(),
+            t[2] - 0.5 + 2.5 * rng.random::<f64>(),
+        ];
+        let (d1, d2) = (rotated.density(p), boxed.density(p));
+        worst = worst.max((d1 - d2).abs());
+        inside += usize::from(d2 > 0.0);
+        let Majorants::Grid(g) = rotated.majorants() else {
+            panic!("a voxel grid has a majorant grid")
+        };
+        let bounds = g.at(p);
+        // (Outside the grid the bounds of the nearest cell do not apply.)
+        if d2 > 0.0 {
+            assert!(
+                bounds.min <= d1 + 1e-12 && d1 <= bounds.max + 1e-12,
+                "{d1} outside {bounds:?}"
+            );
+        }
+    }
+    assert!(
+        inside > 5_000 && worst < 1e-9,
+        "{inside} points inside, worst difference {worst}"
+    );
+    // Rays: the same clipped segments.
+    for _ in 0..1000 {
+        let o = [t[0] - 1.5, t[1] + 1.0, t[2] + 0.7];
+        let w = nephele::render::medium::normalize([
+            rng.random::<f64>() - 0.5,
+            rng.random::<f64>() - 0.5,
+            rng.random::<f64>() - 0.5,
+        ]);
+        let (c1, c2) = (rotated.clip(o, w).unwrap(), boxed.clip(o, w).unwrap());
+        assert!(
+            (c1.0 - c2.0).abs() < 1e-9 && (c1.1 - c2.1).abs() < 1e-9,
+            "{c1:?} vs {c2:?}"
+        );
+    }
+}

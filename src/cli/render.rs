@@ -18,9 +18,13 @@ pub struct RenderArgs {
     /// transmittance.npy, opacity.npy, render.json. [default: outputs/render]
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
-    /// Samples per pixel, overriding the scene's.
+    /// Samples per pixel, overriding the scene's (per pass with a time budget).
     #[arg(long)]
     pub spp: Option<u32>,
+    /// Wall-clock budget in seconds, overriding the scene's: passes of spp samples per pixel
+    /// while the next one fits.
+    #[arg(long, value_name = "SECONDS")]
+    pub time_budget: Option<f64>,
 }
 
 /// Runs `nephele render`.
@@ -28,14 +32,17 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let mut scene = Scene::load(&args.scene)?;
     if let Some(spp) = args.spp {
         scene.spp = spp;
-        scene.validate()?;
     }
+    if let Some(budget) = args.time_budget {
+        scene.time_budget_s = Some(budget);
+    }
+    scene.validate()?;
     let out = args.out.unwrap_or_else(|| PathBuf::from("outputs/render"));
-    let bar = ProgressBar::new(scene.camera.height as u64).with_style(
-        ProgressStyle::with_template("render [{bar:30}] {pos}/{len} rows ({elapsed}, eta {eta})")
+    let bar = ProgressBar::new(1000).with_style(
+        ProgressStyle::with_template("render [{bar:30}] {percent:>3}% ({elapsed}, eta {eta})")
             .expect("static template"),
     );
-    let r = render(&scene, &|rows| bar.set_position(rows as u64))?;
+    let r = render(&scene, &|done| bar.set_position((done * 1000.0) as u64))?;
     bar.finish_and_clear();
     write_outputs(&out, &scene, &r)?;
     println!(
@@ -44,7 +51,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
          render.json",
         r.width,
         r.height,
-        scene.spp,
+        r.spp,
         r.paths,
         r.seconds,
         r.paths as f64 / r.seconds.max(1e-9),

@@ -12,7 +12,7 @@
 //! every tentative collision there is real and its transmittance is exp(−σ̄ Δt) in closed form,
 //! with no σ_t lookups at all (the deep interior of the implicit cloud, a homogeneous slab).
 
-use super::medium::Vec3;
+use super::medium::{Affine, Vec3};
 use std::ops::ControlFlow;
 
 /// Bounds on σ_t over a cell (1/m).
@@ -63,6 +63,8 @@ pub struct MajorantGrid {
     n: [usize; 3],
     /// Bounds per cell, x fastest.
     values: Vec<Bounds>,
+    /// The map of the grid's coordinates to the world, if they differ.
+    to_world: Option<Affine>,
 }
 
 impl MajorantGrid {
@@ -85,6 +87,15 @@ impl MajorantGrid {
             cell,
             n,
             values,
+            to_world: None,
+        }
+    }
+
+    /// The same grid placed in the world by `to_world` (rays are walked in grid coordinates).
+    pub fn with_transform(self, to_world: Affine) -> Self {
+        Self {
+            to_world: Some(to_world),
+            ..self
         }
     }
 
@@ -93,8 +104,9 @@ impl MajorantGrid {
         self.n
     }
 
-    /// The bounds of the cell holding `p` (clamped to the grid).
+    /// The bounds of the cell holding the world point `p` (clamped to the grid).
     pub fn at(&self, p: Vec3) -> Bounds {
+        let p = self.to_world.map_or(p, |a| a.local_point(p));
         self.values[self.index(self.cell_of(p))]
     }
 
@@ -129,6 +141,10 @@ impl MajorantGrid {
         (t0, t1): (f64, f64),
         mut f: impl FnMut(f64, f64, Bounds) -> ControlFlow<B>,
     ) -> Option<B> {
+        let (o, w) = match &self.to_world {
+            Some(a) => (a.local_point(o), a.local_dir(w)),
+            None => (o, w),
+        };
         // The entry point may round to just outside the box: cell_of clamps it.
         let entry: Vec3 = std::array::from_fn(|k| o[k] + t0 * w[k]);
         let mut i = self.cell_of(entry);

@@ -93,6 +93,61 @@ pub fn slab_clip(z0: f64, wz: f64, lo: f64, hi: f64) -> Option<(f64, f64)> {
     (t1 > t0).then_some((t0, t1))
 }
 
+/// An affine map p ↦ M p + t, and its inverse: a voxel grid's unit cube to the world. Ray
+/// parameters are kept by the inverse map (o + t w ↦ M⁻¹(o − t₀) + t M⁻¹ w, the direction not
+/// renormalised), so clipping and tracking in the grid's own coordinates give world distances.
+#[derive(Clone, Copy, Debug)]
+pub struct Affine {
+    m: [[f64; 3]; 3],
+    t: Vec3,
+    inv: [[f64; 3]; 3],
+    /// M is diagonal: the inverse divides by its entries (exact at voxel centres).
+    diagonal: bool,
+}
+
+impl Affine {
+    /// The map p ↦ M p + t, or None if M is singular.
+    pub fn new(m: [[f64; 3]; 3], t: Vec3) -> Option<Self> {
+        let c = |r: usize, k: usize| {
+            m[(r + 1) % 3][(k + 1) % 3] * m[(r + 2) % 3][(k + 2) % 3]
+                - m[(r + 1) % 3][(k + 2) % 3] * m[(r + 2) % 3][(k + 1) % 3]
+        };
+        let det = m[0][0] * c(0, 0) + m[0][1] * c(0, 1) + m[0][2] * c(0, 2);
+        if !(det.abs() > 1e-300 && det.is_finite()) {
+            return None;
+        }
+        // The inverse is the transposed cofactor matrix over the determinant.
+        let inv = std::array::from_fn(|r| std::array::from_fn(|k| c(k, r) / det));
+        let diagonal = (0..3).all(|r| (0..3).all(|k| r == k || m[r][k] == 0.0));
+        Some(Self {
+            m,
+            t,
+            inv,
+            diagonal,
+        })
+    }
+
+    /// The box [origin, origin + size] as the image of the unit cube.
+    pub fn from_box(origin: Vec3, size: Vec3) -> Self {
+        let m =
+            std::array::from_fn(|r| std::array::from_fn(|k| if r == k { size[r] } else { 0.0 }));
+        Self::new(m, origin).expect("a box of positive size")
+    }
+
+    /// M⁻¹ (p − t).
+    pub fn local_point(&self, p: Vec3) -> Vec3 {
+        self.local_dir(std::array::from_fn(|k| p[k] - self.t[k]))
+    }
+
+    /// M⁻¹ w.
+    pub fn local_dir(&self, w: Vec3) -> Vec3 {
+        if self.diagonal {
+            return std::array::from_fn(|k| w[k] / self.m[k][k]);
+        }
+        std::array::from_fn(|r| dot(self.inv[r], w))
+    }
+}
+
 /// An ellipsoid: centre and semi-axes (m).
 #[derive(Clone, Copy, Debug, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -240,16 +295,16 @@ impl Medium for Cloud {
     }
 }
 
-/// A voxel grid of densities over the box [origin, origin + size] (m): values at the voxel
+/// A voxel grid of densities over the unit cube [0, 1]³ of its own coordinates, mapped to the
+/// world by an affine map (by default the box [origin, origin + size], m): values at the voxel
 /// centres, interpolated trilinearly and clamped at the borders (Mitsuba 3's gridvolume with
 /// its default filter and wrap mode, so that both renderers see the same medium), 0 outside
-/// the box. `data` is [nz, ny, nx], x fastest (a C-order NumPy array indexed [z, y, x]).
+/// the cube. `data` is [nz, ny, nx], x fastest (a C-order NumPy array indexed [z, y, x]).
 pub struct Voxels {
     data: Vec<f32>,
     /// Voxels along x, y, z.
     pub n: [usize; 3],
-    origin: Vec3,
-    size: Vec3,
+    to_world: Affine,
     sigma_t: f64,
     grid: MajorantGrid,
 }
@@ -258,37 +313,42 @@ pub struct Voxels {
 const VOXELS_PER_CELL: usize = 4;
 
 impl Voxels {
-    /// The grid; `sigma_t` (1/m) scales the densities.
+    /// The grid over the box [origin, origin + size] (m); `sigma_t` (1/m) scales the densities.
     pub fn new(data: Vec<f32>, n: [usize; 3], origin: Vec3, size: Vec3, sigma_t: f64) -> Self {
-        let hi = std::array::from_fn(|k| origin[k] + size[k]);
+        Self::with_transform(data, n, Affine::from_box(origin, size), sigma_t)
+    }
+
+    /// The grid over the image of the unit cube by `to_world`.
+    pub fn with_transform(data: Vec<f32>, n: [usize; 3], to_world: Affine, sigma_t: f64) -> Self {
         let cells = n.map(|m| m.div_ceil(VOXELS_PER_CELL));
+        let unbounded = |_: Vec3, _: Vec3| Bounds {
+            min: 0.0,
+            max: f64::INFINITY,
+        };
         let mut voxels = Self {
             data,
             n,
-            origin,
-            size,
+            to_world,
             sigma_t,
-            grid: MajorantGrid::build(origin, hi, [1; 3], |_, _| Bounds {
-                min: 0.0,
-                max: f64::INFINITY,
-            }),
+            grid: MajorantGrid::build([0.0; 3], [1.0; 3], [1; 3], unbounded),
         };
-        voxels.grid = MajorantGrid::build(origin, hi, cells, |lo, hi| {
+        voxels.grid = MajorantGrid::build([0.0; 3], [1.0; 3], cells, |lo, hi| {
             let (min, max) = voxels.range_over(lo, hi);
             Bounds {
                 min: sigma_t * min,
                 max: sigma_t * max,
             }
-        });
+        })
+        .with_transform(to_world);
         voxels
     }
 
     /// The smallest and largest voxels the trilinear lookup can read anywhere in the box
-    /// [lo, hi]: the voxels around the centres the box's corners fall between, one more each
-    /// side for rounding.
+    /// [lo, hi] of the unit cube: the voxels around the centres the box's corners fall
+    /// between, one more each side for rounding.
     fn range_over(&self, lo: Vec3, hi: Vec3) -> (f64, f64) {
         let range = |k: usize| {
-            let x = |p: f64| (p - self.origin[k]) / self.size[k] * self.n[k] as f64 - 0.5;
+            let x = |u: f64| u * self.n[k] as f64 - 0.5;
             let a = (x(lo[k]).floor() - 1.0).max(0.0) as usize;
             let b = ((x(hi[k]).floor() + 2.0).max(0.0) as usize).min(self.n[k] - 1);
             a.min(self.n[k] - 1)..=b
@@ -310,17 +370,21 @@ impl Voxels {
         self.data[(i[2] * self.n[1] + i[1]) * self.n[0] + i[0]] as f64
     }
 
-    /// Density at `p` (trilinear between voxel centres, clamped; 0 outside the box).
+    /// Density at the world point `p` (trilinear between voxel centres, clamped; 0 outside).
     pub fn density(&self, p: Vec3) -> f64 {
+        self.density_local(self.to_world.local_point(p))
+    }
+
+    /// Density at `u` in the unit cube's coordinates.
+    fn density_local(&self, u: Vec3) -> f64 {
         let mut lo = [0usize; 3];
         let mut w = [0.0f64; 3];
         for k in 0..3 {
-            let u = (p[k] - self.origin[k]) / self.size[k];
-            if !(0.0..=1.0).contains(&u) {
+            if !(0.0..=1.0).contains(&u[k]) {
                 return 0.0;
             }
             // Voxel centres at (i + ½)/n.
-            let x = (u * self.n[k] as f64 - 0.5).clamp(0.0, (self.n[k] - 1) as f64);
+            let x = (u[k] * self.n[k] as f64 - 0.5).clamp(0.0, (self.n[k] - 1) as f64);
             lo[k] = (x as usize).min(self.n[k].saturating_sub(2));
             w[k] = if self.n[k] > 1 { x - lo[k] as f64 } else { 0.0 };
         }
@@ -347,12 +411,12 @@ impl Medium for Voxels {
     }
 
     fn clip(&self, o: Vec3, w: Vec3) -> Option<(f64, f64)> {
-        let hi = std::array::from_fn(|k| self.origin[k] + self.size[k]);
-        box_clip(o, w, self.origin, hi)
+        let (o, w) = (self.to_world.local_point(o), self.to_world.local_dir(w));
+        box_clip(o, w, [0.0; 3], [1.0; 3])
     }
 
     fn majorants(&self) -> Majorants<'_> {
-        // Trilinear interpolation never exceeds the largest voxel it reads.
+        // Trilinear interpolation never leaves the range of the voxels it reads.
         Majorants::Grid(&self.grid)
     }
 }

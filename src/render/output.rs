@@ -92,7 +92,7 @@ pub fn write_outputs(out: &Path, scene: &Scene, r: &Rendered) -> Result<()> {
         "scene": scene,
         "width": w,
         "height": h,
-        "spp": scene.spp,
+        "spp": r.spp,
         "paths": r.paths,
         "seconds": r.seconds,
         "paths_per_second": r.paths as f64 / r.seconds.max(1e-9),

@@ -1,15 +1,16 @@
 //! Rendering a scene: a pinhole camera, rows of pixels in parallel, each pixel's samples drawn
 //! from its own random stream (xoshiro256++ seeded by a hash of the scene's seed and the pixel),
-//! so the image is the same bits for any thread count; and the outputs.
+//! so the image is the same bits for any thread count; passes while a time budget lasts.
 
-use super::integrator::{trace, Rgb, Volume, MAX_GROUPS};
-use super::medium::{cross, normalize};
-use super::scene::Scene;
+use super::integrator::{trace, Volume};
+use super::medium::{cross, normalize, Vec3};
+use super::scene::{Camera, Scene};
 use crate::slab::tables::PhaseModel;
 use anyhow::Result;
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 /// The slab tables' order groups: first orders 1, 2, 3, 5, 7, 9, 13, 19, 31.
@@ -33,6 +34,8 @@ pub struct Rendered {
     pub seconds: f64,
     /// Camera paths traced.
     pub paths: u64,
+    /// Samples per pixel (the scene's times the passes a time budget allowed).
+    pub spp: u32,
 }
 
 /// SplitMix64: the seed of pixel `i`'s stream.
@@ -43,24 +46,76 @@ fn pixel_seed(seed: u64, i: u64) -> u64 {
     z ^ (z >> 31)
 }
 
-/// Renders `scene`; `progress(rows done)` after each row.
-pub fn render(scene: &Scene, progress: &(dyn Fn(usize) + Sync)) -> Result<Rendered> {
+/// The camera's primary rays: a pinhole at `position`, looking along `fwd`.
+struct Pinhole {
+    position: Vec3,
+    fwd: Vec3,
+    right: Vec3,
+    up: Vec3,
+    /// tan(fov_y / 2).
+    tan: f64,
+    width: usize,
+    height: usize,
+}
+
+impl Pinhole {
+    fn new(cam: &Camera) -> Self {
+        let fwd = normalize(std::array::from_fn(|k| cam.look_at[k] - cam.position[k]));
+        let right = normalize(cross(fwd, cam.up));
+        Self {
+            position: cam.position,
+            fwd,
+            right,
+            up: cross(right, fwd),
+            tan: (0.5 * cam.fov_deg.to_radians()).tan(),
+            width: cam.width as usize,
+            height: cam.height as usize,
+        }
+    }
+
+    /// The unit direction through (i + u, j + v) in pixel coordinates (row 0 at the top).
+    fn direction(&self, i: usize, j: usize, u: f64, v: f64) -> Vec3 {
+        let (w, h) = (self.width as f64, self.height as f64);
+        let x = (2.0 * (i as f64 + u) / w - 1.0) * self.tan * w / h;
+        let y = (1.0 - 2.0 * (j as f64 + v) / h) * self.tan;
+        normalize(std::array::from_fn(|k| {
+            self.fwd[k] + x * self.right[k] + y * self.up[k]
+        }))
+    }
+}
+
+/// Per-pixel sums: [sun group g channel c] at g·3 + c, [sky group g channel c] after those,
+/// then the transmittance.
+fn stride() -> usize {
+    2 * GROUP_FIRST.len() * 3 + 1
+}
+
+/// Renders `scene`; `progress(fraction done)` as rows finish. With a time budget, passes of
+/// `spp` samples per pixel follow one another while the next one is predicted to fit (at least
+/// one): each pixel's stream continues across passes, so k passes give the same bits as one
+/// render at k · spp.
+pub fn render(scene: &Scene, progress: &(dyn Fn(f64) + Sync)) -> Result<Rendered> {
     let medium = scene.build_medium()?;
     let models = PhaseModel::build_channels(&scene.phase)?;
-    let cam = &scene.camera;
-    let (w, h) = (cam.width as usize, cam.height as usize);
-    let fwd = normalize(std::array::from_fn(|k| cam.look_at[k] - cam.position[k]));
-    let right = normalize(cross(fwd, cam.up));
-    let up = cross(right, fwd);
-    let tan = (0.5 * cam.fov_deg.to_radians()).tan();
-    let aspect = w as f64 / h as f64;
+    let cam = Pinhole::new(&scene.camera);
+    let (w, h) = (cam.width, cam.height);
     let has_sky = scene.sky.iter().any(|&s| s > 0.0);
-    let ng = GROUP_FIRST.len();
-    let done = std::sync::atomic::AtomicUsize::new(0);
+    let (ng, stride) = (GROUP_FIRST.len(), stride());
+    let mut sums = vec![0.0f64; w * h * stride];
+    let mut rngs: Vec<Xoshiro256PlusPlus> = (0..w * h)
+        .map(|px| Xoshiro256PlusPlus::seed_from_u64(pixel_seed(scene.seed, px as u64)))
+        .collect();
+    let rows_done = AtomicUsize::new(0);
     let t0 = Instant::now();
-    // Per row: [column][group] sun and sky radiance (E = 1, L_sky = 1), and transmittance.
-    type Row = Vec<([Rgb; MAX_GROUPS], [Rgb; MAX_GROUPS], f64)>;
-    let rows: Vec<Row> = PhaseModel::with_all(&models, |phases| {
+    let report = || {
+        let rows = rows_done.fetch_add(1, Ordering::Relaxed) + 1;
+        progress(match scene.time_budget_s {
+            Some(budget) => (t0.elapsed().as_secs_f64() / budget).min(1.0),
+            None => rows as f64 / h as f64,
+        });
+    };
+    let mut passes = 0u32;
+    PhaseModel::with_all(&models, |phases| {
         let volume = Volume {
             medium: medium.as_ref(),
             albedo: scene.albedo,
@@ -70,43 +125,49 @@ pub fn render(scene: &Scene, progress: &(dyn Fn(usize) + Sync)) -> Result<Render
             sky: if has_sky { 1.0 } else { 0.0 },
             group_first: &GROUP_FIRST,
         };
-        (0..h)
-            .into_par_iter()
-            .map(|j| {
-                let row = (0..w)
-                    .map(|i| {
-                        let mut rng = Xoshiro256PlusPlus::seed_from_u64(pixel_seed(
-                            scene.seed,
-                            (j * w + i) as u64,
-                        ));
-                        let mut acc = ([[0.0; 3]; MAX_GROUPS], [[0.0; 3]; MAX_GROUPS], 0.0);
+        loop {
+            let pass_start = t0.elapsed().as_secs_f64();
+            sums.par_chunks_mut(w * stride)
+                .zip(rngs.par_chunks_mut(w))
+                .enumerate()
+                .for_each(|(j, (row, row_rngs))| {
+                    for (i, (px, rng)) in row.chunks_mut(stride).zip(row_rngs).enumerate() {
                         for _ in 0..scene.spp {
-                            let x = (2.0 * (i as f64 + rng.random::<f64>()) / w as f64 - 1.0)
-                                * tan
-                                * aspect;
-                            let y = (1.0 - 2.0 * (j as f64 + rng.random::<f64>()) / h as f64) * tan;
-                            let dir = normalize(std::array::from_fn(|k| {
-                                fwd[k] + x * right[k] + y * up[k]
-                            }));
-                            let p = trace(&volume, cam.position, dir, &mut rng);
-                            for g in 0..MAX_GROUPS {
+                            let dir = cam.direction(i, j, rng.random(), rng.random());
+                            let p = trace(&volume, cam.position, dir, rng);
+                            for g in 0..ng {
                                 for c in 0..3 {
-                                    acc.0[g][c] += p.groups[g][c];
-                                    acc.1[g][c] += p.sky_groups[g][c];
+                                    px[g * 3 + c] += p.groups[g][c];
+                                    px[(ng + g) * 3 + c] += p.sky_groups[g][c];
                                 }
                             }
-                            acc.2 += p.transmittance;
+                            px[stride - 1] += p.transmittance;
                         }
-                        acc
-                    })
-                    .collect();
-                progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
-                row
-            })
-            .collect()
+                    }
+                    report();
+                });
+            passes += 1;
+            let Some(budget) = scene.time_budget_s else {
+                break;
+            };
+            let now = t0.elapsed().as_secs_f64();
+            if now + (now - pass_start) > budget || passes == MAX_PASSES {
+                break;
+            }
+        }
     });
-    let seconds = t0.elapsed().as_secs_f64();
-    let n = scene.spp as f64;
+    let spp = scene.spp * passes;
+    Ok(gather(scene, &cam, &sums, spp, t0.elapsed().as_secs_f64()))
+}
+
+/// Most passes of a time-budgeted render (spp · passes stays below 2³²).
+const MAX_PASSES: u32 = 4096;
+
+/// The images from the per-pixel sums of `spp` samples, scaled by the sun's irradiance and
+/// the sky's radiance.
+fn gather(scene: &Scene, cam: &Pinhole, sums: &[f64], spp: u32, seconds: f64) -> Rendered {
+    let (w, h, ng, stride) = (cam.width, cam.height, GROUP_FIRST.len(), stride());
+    let n = spp as f64;
     let (sun, sky) = (scene.sun.irradiance, scene.sky);
     let mut out = Rendered {
         width: w,
@@ -116,23 +177,22 @@ pub fn render(scene: &Scene, progress: &(dyn Fn(usize) + Sync)) -> Result<Render
         transmittance: vec![0.0; h * w],
         beauty: vec![0.0; h * w * 3],
         seconds,
-        paths: (w * h) as u64 * scene.spp as u64,
+        paths: (w * h) as u64 * spp as u64,
+        spp,
     };
-    for (j, row) in rows.iter().enumerate() {
-        for (i, (g_sun, g_sky, tr)) in row.iter().enumerate() {
-            let px = j * w + i;
-            out.transmittance[px] = (tr / n) as f32;
-            for c in 0..3 {
-                let mut total = tr / n * sky[c];
-                out.unscattered[px * 3 + c] = total as f32;
-                for g in 0..ng {
-                    let v = (g_sun[g][c] * sun[c] + g_sky[g][c] * sky[c]) / n;
-                    out.groups[(g * h * w + px) * 3 + c] = v as f32;
-                    total += v;
-                }
-                out.beauty[px * 3 + c] = total as f32;
+    for (px, s) in sums.chunks(stride).enumerate() {
+        let tr = s[stride - 1] / n;
+        out.transmittance[px] = tr as f32;
+        for c in 0..3 {
+            let mut total = tr * sky[c];
+            out.unscattered[px * 3 + c] = total as f32;
+            for g in 0..ng {
+                let v = (s[g * 3 + c] * sun[c] + s[(ng + g) * 3 + c] * sky[c]) / n;
+                out.groups[(g * h * w + px) * 3 + c] = v as f32;
+                total += v;
             }
+            out.beauty[px * 3 + c] = total as f32;
         }
     }
-    Ok(out)
+    out
 }

@@ -3,7 +3,7 @@
 //! optional constant sky, a pinhole camera, samples per pixel and a seed. World units are metres,
 //! z is up.
 
-use super::medium::{cross, dot, Cloud, Ellipsoid, Medium, Slab, Vec3, Voxels};
+use super::medium::{cross, dot, Affine, Cloud, Ellipsoid, Medium, Slab, Vec3, Voxels};
 use crate::slab::PhaseSpec;
 use anyhow::{bail, ensure, Context, Result};
 use serde::{Deserialize, Serialize};
@@ -32,8 +32,13 @@ pub struct Scene {
     pub sky: [f64; 3],
     /// The camera.
     pub camera: Camera,
-    /// Samples (camera paths) per pixel.
+    /// Samples (camera paths) per pixel; with a time budget, per pass.
     pub spp: u32,
+    /// Wall-clock budget (s): passes of `spp` samples per pixel follow one another while the
+    /// next is predicted to fit (at least one). The image is the same as one render at
+    /// spp × passes (render.json gives the spp reached).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub time_budget_s: Option<f64>,
     /// Seed of every random stream.
     #[serde(default)]
     pub seed: u64,
@@ -62,14 +67,21 @@ pub enum MediumSpec {
         noise: NoiseSpec,
     },
     /// A voxel grid of densities: a float32 .npy [nz, ny, nx] (x fastest) over the box
-    /// [origin, origin + size] (m), trilinear between voxel centres (as Mitsuba's gridvolume).
+    /// [origin, origin + size] (m), or over the unit cube mapped to the world by `to_world`,
+    /// trilinear between voxel centres (as Mitsuba's gridvolume).
     Voxels {
         /// The .npy (relative paths are taken from the scene file's directory).
         npy: PathBuf,
         /// The box's lowest corner (m).
-        origin: Vec3,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        origin: Option<Vec3>,
         /// The box's extent (m).
-        size: Vec3,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        size: Option<Vec3>,
+        /// Instead of origin and size: the affine map of the unit cube [0, 1]³ to the world, a
+        /// 4 × 4 matrix by rows (the last row 0 0 0 1), as Mitsuba's gridvolume `to_world`.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        to_world: Option<[[f64; 4]; 4]>,
     },
 }
 
@@ -83,6 +95,13 @@ pub struct NoiseSpec {
     pub frequency: f64,
     /// Octaves (1…10).
     pub octaves: usize,
+    /// Seed of the noise (the cloud's shape; independent of the render's seed).
+    #[serde(default = "one_u32")]
+    pub seed: u32,
+}
+
+fn one_u32() -> u32 {
+    1
 }
 
 /// A directional sun.
@@ -198,6 +217,12 @@ impl Scene {
             "camera.width and camera.height must be 1…16384 pixels"
         );
         ensure!((1..=1 << 20).contains(&self.spp), "spp must be 1…1048576");
+        if let Some(b) = self.time_budget_s {
+            ensure!(
+                b > 0.0 && b.is_finite(),
+                "time_budget_s must be a positive number of seconds"
+            );
+        }
         self.phase.validate()?;
         match &self.medium {
             MediumSpec::Slab { thickness } => ensure!(
@@ -227,12 +252,45 @@ impl Scene {
                     "medium.noise: amplitude ≥ 0, frequency > 0, octaves 1…10"
                 );
             }
-            MediumSpec::Voxels { origin, size, .. } => ensure!(
-                finite(origin) && size.iter().all(|&x| x > 0.0 && x.is_finite()),
-                "medium.origin must be finite and medium.size positive (m)"
-            ),
+            MediumSpec::Voxels { .. } => {
+                self.voxel_transform()?;
+            }
         }
         Ok(())
+    }
+
+    /// A voxel grid's map of the unit cube to the world, from origin and size or to_world.
+    fn voxel_transform(&self) -> Result<Affine> {
+        let MediumSpec::Voxels {
+            origin,
+            size,
+            to_world,
+            ..
+        } = &self.medium
+        else {
+            bail!("not a voxel grid");
+        };
+        match (origin, size, to_world) {
+            (Some(origin), Some(size), None) => {
+                ensure!(
+                    finite(origin) && size.iter().all(|&x| x > 0.0 && x.is_finite()),
+                    "medium.origin must be finite and medium.size positive (m)"
+                );
+                Ok(Affine::from_box(*origin, *size))
+            }
+            (None, None, Some(m)) => {
+                ensure!(
+                    m.iter().flatten().all(|x| x.is_finite()) && m[3] == [0.0, 0.0, 0.0, 1.0],
+                    "medium.to_world must be a finite 4 × 4 affine matrix (last row 0 0 0 1)"
+                );
+                Affine::new(
+                    std::array::from_fn(|r| [m[r][0], m[r][1], m[r][2]]),
+                    [m[0][3], m[1][3], m[2][3]],
+                )
+                .context("medium.to_world must be invertible")
+            }
+            _ => bail!("medium: give either origin and size, or to_world, for a voxel grid"),
+        }
     }
 
     /// The medium, σ_t included (a voxel grid is read here).
@@ -242,16 +300,17 @@ impl Scene {
                 h: *thickness,
                 sigma_t: self.sigma_t,
             }),
-            MediumSpec::Voxels { npy, origin, size } => {
+            MediumSpec::Voxels { npy, .. } => {
                 let (data, n) = read_grid(npy)?;
-                Box::new(Voxels::new(data, n, *origin, *size, self.sigma_t))
+                let to_world = self.voxel_transform()?;
+                Box::new(Voxels::with_transform(data, n, to_world, self.sigma_t))
             }
             MediumSpec::Cloud { blobs, edge, noise } => Box::new(Cloud::new(
                 blobs.clone(),
                 *edge,
                 (noise.amplitude, noise.frequency, noise.octaves),
                 self.sigma_t,
-                self.seed as u32,
+                noise.seed,
             )),
         })
     }
