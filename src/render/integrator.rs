@@ -19,6 +19,20 @@
 //! density is the mean p̄ = (p_R + p_G + p_B)/3 (one-sample MIS, balance heuristic), and each
 //! channel's throughput takes the weight β_k ← β_k p_k(cos) / p̄(cos) — unbiased wherever p̄ > 0,
 //! and never more than 3.
+//!
+//! Two-vertex next-event estimation (`guided_nee`). With a forward peak (Mie: p(1) ~ 10³ sr⁻¹
+//! at 10 µm) the estimate above is heavy-tailed: the rare segment w′ within a few degrees of s
+//! brings p(s · w′) ≫ 1 at its next collision x′ (fireflies). So order n + 1 gets a second
+//! strategy at every collision x: B samples w′ from p around s (density p_B = p(s · w′)), flies
+//! to x′ and adds NEE there; the path's own next collision (strategy A, density p_A = p(w · w′))
+//! is the first. Balance-heuristic MIS between the two, both giving
+//!
+//!   L_{n+1} += β ϖ² p_A p_B T_r(x′ → sun) E_sun / (p_A + p_B) / p_strategy,
+//!
+//! i.e. A's NEE at x′ takes the weight p_A/(p_A + p_B) and B's contribution is β ϖ² p_A
+//! T_r E_sun · p_B/(p_A + p_B) ≤ β ϖ² p_A T_r E_sun: the peak cancels. The path itself
+//! continues as before (no weights compound), orders 1 keep plain NEE. With per-channel
+//! phase functions p_A, p_B in the MIS weights are the channel means (the densities sampled).
 
 use super::medium::{dot, normalize, Medium, Vec3};
 use nephele_runtime::PhaseFunction;
@@ -44,6 +58,8 @@ pub struct Volume<'a> {
     pub sky: f64,
     /// First scattering order of each group, increasing from 1.
     pub group_first: &'a [u32],
+    /// Two-vertex next-event estimation (see the module's docs).
+    pub guided_nee: bool,
 }
 
 /// RGB.
@@ -165,13 +181,20 @@ pub fn trace<R: Rng>(v: &Volume, o: Vec3, w: Vec3, rng: &mut R) -> PathSample {
     let (mut o, mut w) = (o, w);
     let mut beta = [1.0; 3];
     let mut order = 0u32;
+    // p̄ of the direction the path arrived along, when it was sampled at a collision.
+    let mut arrival_pdf = None;
     while let Some(x) = collide(v.medium, o, w, rng) {
         order += 1;
         let g = group_of(v.group_first, order).min(MAX_GROUPS - 1);
         let tr = transmittance(v.medium, x, v.sun_dir, rng);
         let p_sun = v.eval(dot(v.sun_dir, w));
+        // Strategy A's MIS weight against B (run at the previous collision).
+        let mis = match arrival_pdf {
+            Some(p_a) if v.guided_nee => p_a / (p_a + v.mean(p_sun)),
+            _ => 1.0,
+        };
         for k in 0..3 {
-            out.groups[g][k] += beta[k] * v.albedo * p_sun[k] * tr * v.sun_irradiance;
+            out.groups[g][k] += beta[k] * v.albedo * p_sun[k] * tr * v.sun_irradiance * mis;
             beta[k] *= v.albedo;
         }
         if beta.iter().all(|&b| b < 1e-3) {
@@ -181,7 +204,15 @@ pub fn trace<R: Rng>(v: &Volume, o: Vec3, w: Vec3, rng: &mut R) -> PathSample {
             }
             beta = beta.map(|b| 10.0 * b);
         }
-        let w_new = v.scatter(w, &mut beta, rng);
+        if v.guided_nee {
+            let g_next = group_of(v.group_first, order + 1).min(MAX_GROUPS - 1);
+            let c = v.guided_contribution(x, w, &beta, rng);
+            for k in 0..3 {
+                out.groups[g_next][k] += c[k];
+            }
+        }
+        let (w_new, pdf) = v.scatter(w, &mut beta, rng);
+        arrival_pdf = Some(pdf);
         (o, w) = (x, w_new);
     }
     if order > 0 && v.sky > 0.0 {
@@ -202,23 +233,54 @@ impl Volume<'_> {
         }
     }
 
-    /// A new direction around w from the phase function (a channel's, drawn uniformly, when
-    /// there are three) and the channels' MIS weights p_k / p̄ applied to β.
-    fn scatter<R: Rng>(&self, w: Vec3, beta: &mut Rgb, rng: &mut R) -> Vec3 {
-        let c = if self.phases.len() == 3 {
-            (3.0 * rng.random::<f64>()).min(2.0) as usize
-        } else {
-            0
-        };
-        let (w_new, _) = self.phases[c].sample(rng.random(), rng.random(), w);
-        let w_new = normalize(w_new);
+    /// The channel mean p̄ (the density of a direction sampled from a uniform channel).
+    fn mean(&self, p: Rgb) -> f64 {
         if self.phases.len() == 3 {
-            let p = self.eval(dot(w_new, w));
-            let mean = (p[0] + p[1] + p[2]) / 3.0;
+            (p[0] + p[1] + p[2]) / 3.0
+        } else {
+            p[0]
+        }
+    }
+
+    /// The phase function to sample: a channel's, drawn uniformly, when there are three.
+    fn channel<R: Rng>(&self, rng: &mut R) -> &(dyn PhaseFunction<f64> + Sync) {
+        if self.phases.len() == 3 {
+            self.phases[(3.0 * rng.random::<f64>()).min(2.0) as usize]
+        } else {
+            self.phases[0]
+        }
+    }
+
+    /// A new direction around w from the phase function, the channels' weights p_k / p̄
+    /// applied to β, and p̄(w · w′), the density it was drawn with.
+    fn scatter<R: Rng>(&self, w: Vec3, beta: &mut Rgb, rng: &mut R) -> (Vec3, f64) {
+        let phase = self.channel(rng);
+        let (w_new, _) = phase.sample(rng.random(), rng.random(), w);
+        let w_new = normalize(w_new);
+        let p = self.eval(dot(w_new, w));
+        let mean = self.mean(p);
+        if self.phases.len() == 3 {
             for k in 0..3 {
                 beta[k] *= p[k] / mean;
             }
         }
-        w_new
+        (w_new, mean)
+    }
+
+    /// Strategy B at the collision x reached along w (β after this collision's albedo): the
+    /// next order's sunlight through a direction sampled around the sun (module docs).
+    fn guided_contribution<R: Rng>(&self, x: Vec3, w: Vec3, beta: &Rgb, rng: &mut R) -> Rgb {
+        let phase = self.channel(rng);
+        let (w2, _) = phase.sample(rng.random(), rng.random(), self.sun_dir);
+        let w2 = normalize(w2);
+        let Some(x2) = collide(self.medium, x, w2, rng) else {
+            return [0.0; 3];
+        };
+        let tr = transmittance(self.medium, x2, self.sun_dir, rng);
+        let (p_a, p_b) = (self.eval(dot(w, w2)), self.eval(dot(self.sun_dir, w2)));
+        let denom = self.mean(p_a) + self.mean(p_b);
+        std::array::from_fn(|k| {
+            beta[k] * self.albedo * p_a[k] * p_b[k] * tr * self.sun_irradiance / denom
+        })
     }
 }

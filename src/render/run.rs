@@ -124,6 +124,7 @@ pub fn render(scene: &Scene, progress: &(dyn Fn(f64) + Sync)) -> Result<Rendered
             sun_irradiance: 1.0,
             sky: if has_sky { 1.0 } else { 0.0 },
             group_first: &GROUP_FIRST,
+            guided_nee: scene.guided_nee,
         };
         loop {
             let pass_start = t0.elapsed().as_secs_f64();
