@@ -201,7 +201,7 @@ def main(argv=None) -> int:
     ap.add_argument("--bin", type=Path, default=DEFAULT_BIN)
     ap.add_argument("--quick", action="store_true", help="smaller images")
     args = ap.parse_args(argv)
-    w, h, spp, k = (48, 36, 32, 6) if args.quick else (96, 72, 64, 8)
+    w, h, spp, k = (48, 36, 32, 6) if args.quick else (96, 72, 128, 16)
     grid = density_grid()
     failures = []
     with tempfile.TemporaryDirectory() as tmp:
