@@ -197,7 +197,7 @@ def main(argv=None) -> int:
 
 def print_report(jobs: list[dict], gemm: float, conv: dict, rng: dict | None, repeats: int) -> None:
     """The result tables."""
-    print(f"\nPolydisperse product-rule job (sigma 0.25, 41 sizes, 31 wavelengths 400-700 nm, 2251 angles, m 1.333)")
+    print("\nPolydisperse product-rule job (sigma 0.25, 41 sizes, 31 wavelengths 400-700 nm, 2251 angles, m 1.333)")
     print(f"miepython: best of 3 after warm-up; nephele: best of {repeats}; "
           "ratio = miepython s / nephele s, by process wall time (by reported compute time)")
     head = (f"  {'job':<10} {'miepython s':>11}  {'nephele 1T s':>14} {'ratio 1T':>13} {'':4}"

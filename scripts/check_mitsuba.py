@@ -23,14 +23,17 @@ every case, the tabulated one included.
 import argparse
 import json
 import math
-import os
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
 import numpy as np
+
 from scipy.stats import chi2 as chi2_dist
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from mie_tabphase import regular_mu_table  # noqa: E402
 
 REPO = Path(__file__).resolve().parent.parent
 DEFAULT_BIN = REPO / "target" / "release" / "nephele"
@@ -100,16 +103,8 @@ def main(argv=None) -> int:
     rows, failed = [], False
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        # A 1 um Mie table resampled on a regular mu grid: the tabphase input of both codes
-        # (smooth enough on 20001 nodes that both interpolations integrate it alike).
-        subprocess.run([str(args.bin), "mie", "--diameter", "1", "--sizes", "41", "--wavelengths", "400:700:16",
-                        "--out", str(tmp / "mie"), "--no-plot"], check=True, capture_output=True)
-        mie = np.load(tmp / "mie" / "phase.npz")
-        mu_nodes = np.linspace(-1.0, 1.0, 20001)
-        theta_nodes = np.degrees(np.arccos(mu_nodes))[::-1]
-        theta_nodes[0], theta_nodes[-1] = 0.0, 180.0
-        values = np.interp(theta_nodes, mie["theta_deg"], mie["phase"])
-        np.savez(tmp / "tab.npz", theta_deg=theta_nodes, phase=values)
+        # A 1 um Mie table resampled on a regular mu grid: the tabphase input of both codes.
+        theta_nodes, values = regular_mu_table(args.bin, tmp)
         np.savetxt(tmp / "nodes.txt", theta_nodes, fmt="%.17g")
         mi_values = ",".join(repr(float(v)) for v in values[::-1])  # Mitsuba: from mu = -1 to 1
 

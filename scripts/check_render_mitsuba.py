@@ -31,6 +31,9 @@ from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from mie_tabphase import regular_mu_table  # noqa: E402
+
 REPO = Path(__file__).resolve().parent.parent
 DEFAULT_BIN = REPO / "target" / "release" / "nephele"
 
@@ -73,25 +76,9 @@ def write_scene(tmp: Path, grid: np.ndarray, phase: dict, w: int, h: int, spp: i
     return path
 
 
-def tab_values(bin_path: Path, tmp: Path) -> np.ndarray:
-    """A 1 um Mie table on a regular mu grid, written to tmp/tab.npz: Mitsuba's tabphase and
-    nephele's table read the same node values (as in check_mitsuba.py; smooth enough on 20001
-    nodes that the two interpolations, linear in mu and in theta, integrate it alike). Returned
-    in order of increasing theta."""
-    subprocess.run([str(bin_path), "mie", "--diameter", "1", "--sizes", "41", "--wavelengths",
-                    "400:700:16", "--out", str(tmp / "mie"), "--no-plot"], check=True, capture_output=True)
-    mie = np.load(tmp / "mie" / "phase.npz")
-    mu_nodes = np.linspace(-1.0, 1.0, 20001)
-    theta_nodes = np.degrees(np.arccos(mu_nodes))[::-1]
-    theta_nodes[0], theta_nodes[-1] = 0.0, 180.0
-    values = np.interp(theta_nodes, mie["theta_deg"], mie["phase"])
-    np.savez(tmp / "tab.npz", theta_deg=theta_nodes, phase=values)
-    return values
-
-
 def cases(bin_path: Path, tmp: Path) -> list[tuple[str, dict, dict]]:
     """(name, nephele phase, Mitsuba phase) of the compared cases."""
-    values = tab_values(bin_path, tmp)
+    _, values = regular_mu_table(bin_path, tmp)
     return [
         (f"hg {G}", {"kind": "hg", "g": G}, {"type": "hg", "g": G}),
         ("tabulated 1 um Mie", {"kind": "table", "path": str(tmp / "tab.npz")},
