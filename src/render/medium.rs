@@ -93,8 +93,8 @@ pub fn slab_clip(z0: f64, wz: f64, lo: f64, hi: f64) -> Option<(f64, f64)> {
     (t1 > t0).then_some((t0, t1))
 }
 
-/// An affine map p ↦ M p + t, and its inverse: a voxel grid's unit cube to the world. Ray
-/// parameters are kept by the inverse map (o + t w ↦ M⁻¹(o − t₀) + t M⁻¹ w, the direction not
+/// An affine map p ↦ M p + b, and its inverse: a voxel grid's unit cube to the world. Ray
+/// parameters are kept by the inverse map (o + t w ↦ M⁻¹(o − b) + t M⁻¹ w, the direction not
 /// renormalised), so clipping and tracking in the grid's own coordinates give world distances.
 #[derive(Clone, Copy, Debug)]
 pub struct Affine {
@@ -106,7 +106,7 @@ pub struct Affine {
 }
 
 impl Affine {
-    /// The map p ↦ M p + t, or None if M is singular.
+    /// The map p ↦ M p + b (b = `t`), or None if M is singular.
     pub fn new(m: [[f64; 3]; 3], t: Vec3) -> Option<Self> {
         let c = |r: usize, k: usize| {
             m[(r + 1) % 3][(k + 1) % 3] * m[(r + 2) % 3][(k + 2) % 3]
@@ -134,7 +134,7 @@ impl Affine {
         Self::new(m, origin).expect("a box of positive size")
     }
 
-    /// M⁻¹ (p − t).
+    /// M⁻¹ (p − b).
     pub fn local_point(&self, p: Vec3) -> Vec3 {
         self.local_dir(std::array::from_fn(|k| p[k] - self.t[k]))
     }

@@ -152,7 +152,7 @@ pub fn render(scene: &Scene, progress: &(dyn Fn(f64) + Sync)) -> Result<Rendered
                 break;
             };
             let now = t0.elapsed().as_secs_f64();
-            if now + (now - pass_start) > budget || passes == MAX_PASSES {
+            if now + (now - pass_start) > budget || passes >= max_passes(scene.spp) {
                 break;
             }
         }
@@ -161,8 +161,10 @@ pub fn render(scene: &Scene, progress: &(dyn Fn(f64) + Sync)) -> Result<Rendered
     Ok(gather(scene, &cam, &sums, spp, t0.elapsed().as_secs_f64()))
 }
 
-/// Most passes of a time-budgeted render (spp · passes stays below 2³²).
-const MAX_PASSES: u32 = 4096;
+/// Most passes of a time-budgeted render: 4096, and spp · passes below 2³².
+fn max_passes(spp: u32) -> u32 {
+    (u32::MAX / spp.max(1)).min(4096)
+}
 
 /// The images from the per-pixel sums of `spp` samples, scaled by the sun's irradiance and
 /// the sky's radiance.

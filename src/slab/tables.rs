@@ -81,11 +81,15 @@ impl PhaseModel {
                 return Ok(vec![PhaseModel::Analytic(Box::new(p.phase::<f64>()))]);
             }
         };
+        let source = match spec {
+            PhaseSpec::Table { path, .. } => format!(" '{}'", path.display()),
+            _ => String::new(),
+        };
         columns
             .iter()
             .map(|p| {
                 let t = TabulatedTable::<f64>::from_phase(&theta, p)
-                    .map_err(|e| anyhow!("tabulated phase function: {e:?}"))?;
+                    .map_err(|e| anyhow!("tabulated phase function{source}: {e:?}"))?;
                 Ok(PhaseModel::Table(t))
             })
             .collect()
