@@ -8,6 +8,7 @@ pub mod compress;
 pub mod fit;
 pub mod io;
 pub mod mie;
+pub mod phase_models;
 pub mod render;
 pub mod slab;
 pub mod stats;

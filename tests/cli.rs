@@ -755,6 +755,9 @@ fn render_writes_its_outputs_and_refuses_bad_scenes() {
     let mut voxels = scene.clone();
     voxels["medium"] = serde_json::json!({"kind": "voxels", "npy": "grid.npy",
         "origin": [-600, -500, 300], "size": [1200, 1000, 800]});
+    // Any runtime model by name.
+    voxels["phase"] =
+        serde_json::json!({"kind": "runtime", "model": "draine", "params": {"g": 0.8, "alpha": 1}});
     let voxel_scene = dir.path().join("voxels.json");
     std::fs::write(&voxel_scene, voxels.to_string()).unwrap();
     let voxel_out = dir.path().join("voxel-render");
@@ -799,6 +802,13 @@ fn render_writes_its_outputs_and_refuses_bad_scenes() {
         (
             ("phase", serde_json::json!({"kind": "hg", "g": 1.5})),
             "phase.g",
+        ),
+        (
+            (
+                "phase",
+                serde_json::json!({"kind": "runtime", "model": "draine", "params": {"g": 0.8}}),
+            ),
+            "needs alpha",
         ),
         (
             (

@@ -2,59 +2,17 @@
 //! samples from it, and export renderer LUTs.
 
 use anyhow::{bail, Context, Result};
-use clap::{Args, ValueEnum};
+use clap::Args;
 use nephele::io::{AtomicFiles, Npz};
 use nephele::mie::grid::angles_from_spec;
-use nephele_runtime::phase::{
-    Draine, HenyeyGreenstein, Rayleigh, ReynoldsMcCormick, Schlick, TabulatedTable, TwoTermHg,
-    VonMisesFisher, Xlf, XLF_G_MAX,
-};
-use nephele_runtime::presets::{jendersie_deon, nephele_refit};
+use nephele::phase_models::{build, Model, ModelParams, Preset};
+use nephele_runtime::phase::TabulatedTable;
 use nephele_runtime::PhaseFunction;
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
-use serde::Serialize;
 use serde_json::json;
 use std::io::Write;
 use std::path::PathBuf;
-
-/// The models of nephele-runtime.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum, serde::Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Model {
-    /// Henyey–Greenstein (--g).
-    Hg,
-    /// Draine (--g, --alpha).
-    Draine,
-    /// Cornette–Shanks (--g): Draine with α = 1.
-    CornetteShanks,
-    /// Rayleigh (no parameter).
-    Rayleigh,
-    /// Reynolds–McCormick (--g, --alpha > 0; α = 1/2 is HG).
-    ReynoldsMccormick,
-    /// Schlick (--k).
-    Schlick,
-    /// von Mises–Fisher (--kappa).
-    Vmf,
-    /// Xiao-Lei Fan's function, normalised (--g, |g| ≤ 0.476955 where it stays non-negative).
-    Xlf,
-    /// w HG(g) + (1 − w) HG(g2) (--g, --g2, --w).
-    TwoTermHg,
-    /// HG + Draine blend (Jendersie & d'Eon), from --diameter (and --preset) or from --g, --g2 (g_D), --alpha, --w (w_D).
-    HgDraine,
-    /// A Mie table (--table phase.npz from `nephele mie`).
-    Tabulated,
-}
-
-/// The HG+Draine diameter presets of nephele-runtime.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Preset {
-    /// `presets::jendersie_deon`: the paper's curves and its supplement's branches.
-    JendersieDeon,
-    /// `presets::nephele_refit`: nephele's refit on the same Mie setup.
-    Nephele,
-}
 
 /// Options of `nephele phase`.
 #[derive(Args, Debug)]
@@ -110,93 +68,21 @@ pub struct PhaseArgs {
     csv: bool,
 }
 
-fn need(v: Option<f64>, name: &str, model: Model) -> Result<f64> {
-    v.with_context(|| format!("--model {model:?} needs --{name}"))
-}
-
-fn in_range(v: f64, name: &str, lo: f64, hi: f64, open: bool) -> Result<f64> {
-    let ok = if open {
-        v > lo && v < hi
-    } else {
-        v >= lo && v <= hi
-    };
-    if !(v.is_finite() && ok) {
-        let (l, r) = if open { ("(", ")") } else { ("[", "]") };
-        bail!("--{name} must lie in {l}{lo}, {hi}{r}, got {v}");
-    }
-    Ok(v)
-}
-
 impl PhaseArgs {
     /// The model as a trait object, with its parameters echoed as JSON.
     fn build(&self) -> Result<(Box<dyn PhaseFunction<f64>>, serde_json::Value)> {
-        let m = self.model;
-        let g = || in_range(need(self.g, "g", m)?, "g", -1.0, 1.0, true);
-        Ok(match m {
-            Model::Hg => (Box::new(HenyeyGreenstein::new(g()?)), json!({ "g": g()? })),
-            Model::Draine => {
-                let a = in_range(need(self.alpha, "alpha", m)?, "alpha", 0.0, 1e6, false)?;
-                (
-                    Box::new(Draine::new(g()?, a)),
-                    json!({ "g": g()?, "alpha": a }),
-                )
-            }
-            Model::CornetteShanks => (
-                Box::new(Draine::cornette_shanks(g()?)),
-                json!({ "g": g()? }),
-            ),
-            Model::Rayleigh => (Box::new(Rayleigh), json!({})),
-            Model::ReynoldsMccormick => {
-                let a = in_range(need(self.alpha, "alpha", m)?, "alpha", 0.0, 1e3, true)?;
-                (
-                    Box::new(ReynoldsMcCormick::new(g()?, a)),
-                    json!({ "g": g()?, "alpha": a }),
-                )
-            }
-            Model::Schlick => {
-                let k = in_range(need(self.k, "k", m)?, "k", -1.0, 1.0, true)?;
-                (Box::new(Schlick::new(k)), json!({ "k": k }))
-            }
-            Model::Vmf => {
-                let k = in_range(need(self.kappa, "kappa", m)?, "kappa", 0.0, 1e7, false)?;
-                (Box::new(VonMisesFisher::new(k)), json!({ "kappa": k }))
-            }
-            Model::Xlf => {
-                let gv = g()?;
-                let xlf = Xlf::new(gv).with_context(|| {
-                    format!("--g must satisfy |g| ≤ {XLF_G_MAX} for xlf (it turns negative beyond), got {gv}")
-                })?;
-                (Box::new(xlf), json!({ "g": gv, "normalised": true }))
-            }
-            Model::TwoTermHg => {
-                let g2 = in_range(need(self.g2, "g2", m)?, "g2", -1.0, 1.0, true)?;
-                let w = in_range(need(self.w, "w", m)?, "w", 0.0, 1.0, false)?;
-                (
-                    Box::new(TwoTermHg::two_term(g()?, g2, w)),
-                    json!({ "g": g()?, "g2": g2, "w": w }),
-                )
-            }
-            Model::HgDraine => {
-                let p = match self.diameter {
-                    Some(d) => {
-                        let d = in_range(d, "diameter", 0.0, 1e4, true)?;
-                        match self.preset {
-                            Preset::JendersieDeon => jendersie_deon(d),
-                            Preset::Nephele => nephele_refit(d),
-                        }
-                    }
-                    None => nephele_runtime::presets::HgDraineParams {
-                        g_hg: g()?,
-                        g_d: in_range(need(self.g2, "g2", m)?, "g2", -1.0, 1.0, true)?,
-                        alpha: in_range(need(self.alpha, "alpha", m)?, "alpha", 0.0, 1e6, false)?,
-                        w_d: in_range(need(self.w, "w", m)?, "w", 0.0, 1.0, false)?,
-                    },
-                };
-                let echo = json!({ "g_hg": p.g_hg, "g_d": p.g_d, "alpha": p.alpha, "w_d": p.w_d, "diameter_um": self.diameter, "preset": self.diameter.map(|_| self.preset) });
-                (Box::new(p.phase::<f64>()), echo)
-            }
-            Model::Tabulated => bail!("internal: tabulated is built from its table"),
-        })
+        let params = ModelParams {
+            g: self.g,
+            g2: self.g2,
+            alpha: self.alpha,
+            w: self.w,
+            k: self.k,
+            kappa: self.kappa,
+            diameter: self.diameter,
+            preset: self.preset,
+        };
+        let (model, echo) = build(self.model, &params)?;
+        Ok((model, echo))
     }
 }
 

@@ -3,7 +3,8 @@
 
 use super::grid::{stretched_depths, SlabGrid};
 use super::run::StopRule;
-use anyhow::{bail, Result};
+use crate::phase_models::{build, Model, ModelParams};
+use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 use std::path::PathBuf;
@@ -33,6 +34,15 @@ pub enum PhaseSpec {
         /// The preset.
         #[serde(default = "default_preset")]
         preset: String,
+    },
+    /// Any analytic model of nephele-runtime by name, with its parameters (as `nephele phase
+    /// --model`): {"kind": "runtime", "model": "draine", "params": {"g": 0.8, "alpha": 1}}.
+    Runtime {
+        /// The model.
+        model: Model,
+        /// Its parameters.
+        #[serde(default)]
+        params: ModelParams,
     },
     /// A `nephele mie` phase.npz (its `theta_deg` and `phase`, or `phase_rgb`).
     Table {
@@ -80,6 +90,9 @@ impl PhaseSpec {
             {
                 bail!("phase.preset `{preset}` is unknown (valid: jendersie_deon, nephele)")
             }
+            PhaseSpec::Runtime { model, params } => build(*model, params)
+                .map(|_| ())
+                .context("phase (kind runtime)"),
             _ => Ok(()),
         }
     }

@@ -80,6 +80,11 @@ impl PhaseModel {
                 };
                 return Ok(vec![PhaseModel::Analytic(Box::new(p.phase::<f64>()))]);
             }
+            PhaseSpec::Runtime { model, params } => {
+                return Ok(vec![PhaseModel::Analytic(
+                    crate::phase_models::build(*model, params)?.0,
+                )]);
+            }
         };
         let source = match spec {
             PhaseSpec::Table { path, .. } => format!(" '{}'", path.display()),
