@@ -252,11 +252,15 @@ impl Volume<'_> {
     }
 
     /// A new direction around w from the phase function, the channels' weights p_k / p̄
-    /// applied to β, and p̄(w · w′), the density it was drawn with.
+    /// applied to β, and p̄(w · w′), the density it was drawn with (NaN when neither the
+    /// channels nor two-vertex NEE need it: one phase function's weight is 1).
     fn scatter<R: Rng>(&self, w: Vec3, beta: &mut Rgb, rng: &mut R) -> (Vec3, f64) {
         let phase = self.channel(rng);
         let (w_new, _) = phase.sample(rng.random(), rng.random(), w);
         let w_new = normalize(w_new);
+        if self.phases.len() == 1 && !self.guided_nee {
+            return (w_new, f64::NAN);
+        }
         let p = self.eval(dot(w_new, w));
         let mean = self.mean(p);
         if self.phases.len() == 3 {

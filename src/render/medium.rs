@@ -301,12 +301,18 @@ impl Medium for Cloud {
 /// its default filter and wrap mode, so that both renderers see the same medium), 0 outside
 /// the cube. `data` is [nz, ny, nx], x fastest (a C-order NumPy array indexed [z, y, x]).
 pub struct Voxels {
-    data: Vec<f32>,
-    /// Voxels along x, y, z.
-    pub n: [usize; 3],
+    values: VoxelValues,
     to_world: Affine,
     sigma_t: f64,
     grid: MajorantGrid,
+}
+
+/// The densities at the voxel centres, [nz, ny, nx] with x fastest, and their trilinear lookup
+/// in the unit cube's coordinates.
+struct VoxelValues {
+    data: Vec<f32>,
+    /// Voxels along x, y, z.
+    n: [usize; 3],
 }
 
 /// Voxels per majorant cell along each axis.
@@ -320,29 +326,31 @@ impl Voxels {
 
     /// The grid over the image of the unit cube by `to_world`.
     pub fn with_transform(data: Vec<f32>, n: [usize; 3], to_world: Affine, sigma_t: f64) -> Self {
+        let values = VoxelValues { data, n };
         let cells = n.map(|m| m.div_ceil(VOXELS_PER_CELL));
-        let unbounded = |_: Vec3, _: Vec3| Bounds {
-            min: 0.0,
-            max: f64::INFINITY,
-        };
-        let mut voxels = Self {
-            data,
-            n,
-            to_world,
-            sigma_t,
-            grid: MajorantGrid::build([0.0; 3], [1.0; 3], [1; 3], unbounded),
-        };
-        voxels.grid = MajorantGrid::build([0.0; 3], [1.0; 3], cells, |lo, hi| {
-            let (min, max) = voxels.range_over(lo, hi);
+        let grid = MajorantGrid::build([0.0; 3], [1.0; 3], cells, |lo, hi| {
+            let (min, max) = values.range_over(lo, hi);
             Bounds {
                 min: sigma_t * min,
                 max: sigma_t * max,
             }
         })
         .with_transform(to_world);
-        voxels
+        Self {
+            values,
+            to_world,
+            sigma_t,
+            grid,
+        }
     }
 
+    /// Density at the world point `p` (trilinear between voxel centres, clamped; 0 outside).
+    pub fn density(&self, p: Vec3) -> f64 {
+        self.values.density(self.to_world.local_point(p))
+    }
+}
+
+impl VoxelValues {
     /// The smallest and largest voxels the trilinear lookup can read anywhere in the box
     /// [lo, hi] of the unit cube: the voxels around the centres the box's corners fall
     /// between, one more each side for rounding.
@@ -370,13 +378,8 @@ impl Voxels {
         self.data[(i[2] * self.n[1] + i[1]) * self.n[0] + i[0]] as f64
     }
 
-    /// Density at the world point `p` (trilinear between voxel centres, clamped; 0 outside).
-    pub fn density(&self, p: Vec3) -> f64 {
-        self.density_local(self.to_world.local_point(p))
-    }
-
-    /// Density at `u` in the unit cube's coordinates.
-    fn density_local(&self, u: Vec3) -> f64 {
+    /// Density at `u` in the unit cube's coordinates (0 outside).
+    fn density(&self, u: Vec3) -> f64 {
         let mut lo = [0usize; 3];
         let mut w = [0.0f64; 3];
         for k in 0..3 {

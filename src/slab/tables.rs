@@ -102,6 +102,7 @@ impl PhaseModel {
 
     /// Runs `f` with the phase function as a trait object.
     pub fn with<R>(&self, f: impl FnOnce(&(dyn PhaseFunction<f64> + Sync)) -> R) -> R {
+        // (Not via with_all: callers use this per evaluation, and with_all allocates.)
         match self {
             PhaseModel::Table(t) => f(&t.view()),
             PhaseModel::Analytic(b) => f(b.as_ref()),
