@@ -607,7 +607,7 @@ fn a_killed_slab_run_resumes_to_the_same_bits() {
 /// order 1; bad points and damaged files are errors. The runtime loader, fed truncations and
 /// thousands of bit flips of the same file, errs and never panics.
 fn transport_tables_answer_and_refuse(ntt: &Path) {
-    use nephele_runtime::transport::tables::TransportTables;
+    use nephele_runtime::transport::TransportTables;
     let path = ntt.to_str().unwrap();
     let point = [
         "--t", "2", "--mu-l", "0.5", "--depth", "0.7", "--mu-v", "-0.6", "--psi", "20",

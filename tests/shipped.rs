@@ -1,22 +1,22 @@
-//! The shipped compressed transport tables (outputs/transport/mie10um): the file the runtime's
+//! The shipped compressed transport tables (runtime/tables/mie10um): the file the runtime's
 //! `embed` feature compiles in is the committed one, its manifest names it (size, CRC-32) and
 //! records errors within the targets where they are met, and the runtime answers with
 //! physically sensible values everywhere in its range.
 
 use nephele_runtime::container::crc32;
 use nephele_runtime::embedded::{mie_10um, MIE_10UM};
-use nephele_runtime::transport::tables::Transport;
+use nephele_runtime::transport::{SlabPoint, Transport};
 use std::path::Path;
 
 fn manifest() -> serde_json::Value {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("outputs/transport/mie10um");
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("runtime/tables/mie10um");
     let text = std::fs::read_to_string(dir.join("manifest.json")).unwrap();
     serde_json::from_str(&text).unwrap()
 }
 
 #[test]
 fn the_embedded_tables_are_the_committed_file_its_manifest_describes() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("outputs/transport/mie10um");
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("runtime/tables/mie10um");
     let on_disk = std::fs::read(dir.join("transport.ntt")).unwrap();
     assert!(on_disk == MIE_10UM);
     let m = manifest();
@@ -53,8 +53,18 @@ fn the_embedded_tables_answer_sensibly_over_their_range() {
             for &u in &[0.0f32, 0.3, 0.7, 1.0] {
                 for &mu_v in &[-0.9f32, -0.3, 0.2, 0.8] {
                     for &psi in &[0.0f32, 1.0, 2.5] {
-                        tab.evaluate_all(u * t, t, mu_v, psi, mu_l, &mut out);
-                        for v in &out {
+                        let at = SlabPoint {
+                            depth: u * t,
+                            thickness: t,
+                            mu_v,
+                            psi_v: psi,
+                            mu_l,
+                        };
+                        tab.evaluate_all(&at, &mut out);
+                        for (g, v) in out.iter().enumerate() {
+                            // One group alone is the same group of all of them.
+                            assert_eq!(tab.evaluate(g, &at), *v);
+                            assert_eq!(tab.transport(g, &at), v.t);
                             assert!(v.t >= 0.0 && v.t.is_finite(), "{v:?}");
                             if v.t > 0.0 {
                                 resolved += 1;
@@ -62,7 +72,7 @@ fn the_embedded_tables_answer_sensibly_over_their_range() {
                                 assert!(v.c_x.is_finite() && v.c_z.is_finite(), "{v:?}");
                             }
                         }
-                        let o1 = tab.order1(u * t, t, mu_v, psi, mu_l);
+                        let o1 = tab.order1(&at);
                         assert!(o1 >= 0.0 && o1.is_finite());
                     }
                 }

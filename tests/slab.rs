@@ -7,7 +7,8 @@ use nephele::mie::MieJob;
 use nephele::slab::tally::SliceTables;
 use nephele::slab::{run_slice, SlabGrid, Slice, StopRule};
 use nephele_runtime::phase::{HenyeyGreenstein, TabulatedTable};
-use nephele_runtime::transport::single_scattering_bin;
+use nephele_runtime::transport::fitting::single_scattering_bin;
+use nephele_runtime::transport::SlabPoint;
 use nephele_runtime::PhaseFunction;
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 use std::f64::consts::PI;
@@ -87,9 +88,20 @@ fn compare(t: &SliceTables, exact: &[f64], cells: &[usize]) -> (f64, usize, f64)
     (chi2, tested.len(), worst)
 }
 
+/// Depth `d` of a slab of thickness `t` lit at `mu_l` (the view is set per bin).
+fn slab_at(mu_l: f64, t: f64, d: f64) -> SlabPoint<f64> {
+    SlabPoint {
+        depth: d,
+        thickness: t,
+        mu_v: 0.0,
+        psi_v: 0.0,
+        mu_l,
+    }
+}
+
 #[test]
 fn order_one_matches_the_closed_form_bin_by_bin() {
-    // The runtime's closed form (nephele_runtime::transport::single), bin-averaged, against the
+    // The runtime's closed form (nephele_runtime::transport::single_scattering), bin-averaged, against the
     // walk's order-1 tallies in every cell of the default grid, horizon bins included.
     order_one_case("HG 0.8", &HenyeyGreenstein::new(0.8), 2.0, 0.6, 8);
     let job = MieJob::paper(10.0, CONVERGED_DEFAULT, DEFAULT_WAVELENGTHS);
@@ -122,7 +134,7 @@ fn order_one_case(
             for k in 0..grid.n_psi() {
                 let psi = (grid.psi_edges[k], grid.psi_edges[k + 1]);
                 let c = grid.cell(0, j, m, k);
-                exact[c] = single_scattering_bin(phase, 1.0, mu_l, t_slab, d, mu, psi, pieces);
+                exact[c] = single_scattering_bin(phase, 1.0, &slab_at(mu_l, t_slab, d), mu, psi, pieces);
                 cells.push(c);
             }
         }
@@ -250,7 +262,11 @@ fn collector_case(mu_l: f64) {
                 let mu = (grid.mu_edges[m], grid.mu_edges[m + 1]);
                 let psi = (grid.psi_edges[k], grid.psi_edges[k + 1]);
                 let exact = nephele::slab::single::single_scattering_collector(
-                    &hg, mu_l, t_slab, d, mu, psi, 2,
+                    &hg,
+                    &slab_at(mu_l, t_slab, d),
+                    mu,
+                    psi,
+                    2,
                 );
                 for (mc, se, ex) in [
                     (t.cx[c], t.cx_se[c], exact[0]),

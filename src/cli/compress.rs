@@ -1,11 +1,11 @@
 //! `nephele compress`: fits the compressed form to a slab run's tables and reports its error.
 
-use anyhow::{ensure, Result};
+use anyhow::Result;
 use clap::Args;
 use nephele::compress::report::{CollectorError, GroupError};
 use nephele::compress::run::{compress, Options, Outcome};
 use nephele::compress::LogAdditive;
-use nephele_runtime::transport::collector::CollectorForm;
+use nephele_runtime::transport::fitting::CollectorForm;
 use std::path::{Path, PathBuf};
 
 /// Options of `nephele compress`.
@@ -57,20 +57,6 @@ pub struct CompressArgs {
 
 /// Runs `nephele compress`.
 pub fn run(args: CompressArgs) -> Result<()> {
-    ensure!(
-        args.smooth_t <= 9
-            && (1..=16).contains(&args.legendre)
-            && args.harmonics <= 8
-            && (2..=512).contains(&args.theta_nodes)
-            && (1..=16).contains(&args.collector_legendre)
-            && args.cross <= 6
-            && args.collector_harmonics <= 8
-            && args.collector_smooth_t <= 9
-            && (2..=512).contains(&args.collector_theta_nodes),
-        "--smooth-t in 0..=9, --legendre and --collector-legendre in 1..=16, --harmonics and \
-         --collector-harmonics in 0..=8, --theta-nodes and --collector-theta-nodes in 2..=512, \
-         --collector-smooth-t in 0..=9, --cross in 0..=6"
-    );
     let opt = Options {
         form: LogAdditive {
             legendre: args.legendre,
@@ -88,6 +74,7 @@ pub fn run(args: CompressArgs) -> Result<()> {
         },
         collector_q: args.collector_smooth_t,
     };
+    opt.check()?;
     let o = compress(&args.tables, &args.out, &opt)?;
     print_outcome(&o, &args.out);
     Ok(())

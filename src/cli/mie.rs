@@ -38,7 +38,7 @@ pub struct MieArgs {
     /// Vacuum wavelengths MIN:MAX:N in nm, uniform and inclusive. [default: 400:700:61]
     #[arg(long, value_name = "MIN:MAX:N", allow_hyphen_values = true)]
     wavelengths: Option<String>,
-    /// Use the explicit product rule of spec 10 with N sizes (z uniform in [−4, 4]) instead of
+    /// Use the explicit product rule (docs/mie.md) with N sizes (z uniform in [−4, 4]) instead of
     /// the converged default.
     #[arg(long, value_name = "N")]
     sizes: Option<usize>,

@@ -17,8 +17,13 @@ use anyhow::Result;
 use clap::{Parser, Subcommand};
 
 /// nephele — light scattering by water droplets, from Mie theory to renderer-ready tables.
+///
+/// Without a subcommand, `nephele` runs the main job on built-in configs (~4 min on 2 cores):
+/// Mie tables and phase-model fits (→ outputs/mie, outputs/fit), quick slab tables of 10 µm
+/// droplets (→ outputs/slab-quick), their compression (→ outputs/transport/quick) and the
+/// path-traced default cloud (→ outputs/render/cloud), all relative to the current directory.
 #[derive(Parser, Debug)]
-#[command(version, about, long_about = None)]
+#[command(version, about)]
 pub struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
@@ -26,7 +31,8 @@ pub struct Cli {
     #[arg(long, global = true)]
     threads: Option<usize>,
     /// Main job only: the default slab tables (fit-configs/slab-default.json, ~17 min on 2
-    /// cores) instead of the quick preset, compressed into outputs/transport/mie10um.
+    /// cores → outputs/slab) instead of the quick preset, compressed into
+    /// outputs/transport/mie10um (the shipped copy in runtime/tables/mie10um is not touched).
     #[arg(long)]
     full: bool,
 }
@@ -37,9 +43,9 @@ enum Command {
     Mie(mie::MieArgs),
     /// Fit HG, two-term HG, Cornette–Shanks, Draine and HG+Draine to Mie tables; diameter curves.
     Fit(fit::FitArgs),
-    /// Slab Monte Carlo: the canonical transport tables ⟨T, c, σ⟩ per order group (spec 40).
+    /// Slab Monte Carlo: the canonical transport tables ⟨T, c, σ⟩ per order group (docs/slab.md).
     Slab(slab::SlabArgs),
-    /// Fit the compressed form (spec 50) to a slab run's tables and report its error per group.
+    /// Fit the compressed form (docs/compress.md) to a slab run's tables and report its error per group.
     Compress(compress::CompressArgs),
     /// Evaluate compressed transport tables (transport.ntt) at one point: T per order group, as JSON.
     Transport(transport::TransportArgs),

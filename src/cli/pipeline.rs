@@ -61,6 +61,12 @@ pub fn run(full: bool) -> Result<()> {
     let o = compress(&tables, Path::new(comp_out), &opt)?;
     compress_cli::print_outcome(&o, Path::new(comp_out));
     let comp_s = t2.elapsed().as_secs_f64();
+    if full {
+        eprintln!(
+            "to ship these tables (nephele_runtime::embedded), copy transport.ntt, manifest.json \
+             and report.json from {comp_out} into runtime/tables/mie10um/"
+        );
+    }
     let sum = o.errors.last().map_or(f64::NAN, |e| e.rel_rms);
     let render_out = Path::new("outputs/render/cloud");
     eprintln!(

@@ -2,7 +2,7 @@
 
 use anyhow::{ensure, Context, Result};
 use clap::Args;
-use nephele_runtime::transport::tables::{Transport, TransportTables};
+use nephele_runtime::transport::{SlabPoint, Transport, TransportTables};
 use std::path::PathBuf;
 
 /// Options of `nephele transport`.
@@ -42,9 +42,15 @@ pub fn run(a: TransportArgs) -> Result<()> {
         .with_context(|| format!("cannot read '{}'", a.tables.display()))?;
     let tab = TransportTables::from_bytes(&bytes)
         .map_err(|e| anyhow::anyhow!("'{}': {e}", a.tables.display()))?;
-    let psi = a.psi.to_radians();
+    let at = SlabPoint {
+        depth: a.depth,
+        thickness: a.t,
+        mu_v: a.mu_v,
+        psi_v: a.psi.to_radians(),
+        mu_l: a.mu_l,
+    };
     let mut all = vec![Transport::default(); tab.groups()];
-    tab.evaluate_all(a.depth, a.t, a.mu_v, psi, a.mu_l, &mut all);
+    tab.evaluate_all(&at, &mut all);
     let groups: Vec<serde_json::Value> = all
         .iter()
         .enumerate()
@@ -64,7 +70,7 @@ pub fn run(a: TransportArgs) -> Result<()> {
     let out = serde_json::json!({
         "point": {"t": a.t, "mu_l": a.mu_l, "depth": a.depth, "mu_v": a.mu_v, "psi_deg": a.psi},
         "units": "T = L / E_perp (1/sr); c_x, c_z, sigma in mean free paths (the collector: where the light entered, from the viewpoint's horizontal position, z along the sun's horizontal travel; 0 where T is 0); orders >= 2 per group from the compressed form, order 1 (T only) in closed form",
-        "order1": tab.order1(a.depth, a.t, a.mu_v, psi, a.mu_l),
+        "order1": tab.order1(&at),
         "groups": groups,
     });
     println!("{}", serde_json::to_string_pretty(&out)?);

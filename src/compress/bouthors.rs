@@ -18,7 +18,7 @@ use super::form::Cell;
 use super::joint::NormalEquations;
 use super::tables::SlabTables;
 use anyhow::Result;
-use nephele_runtime::transport::log_additive::{legendre, theta_hats};
+use nephele_runtime::transport::fitting::{legendre, theta_hats};
 use rayon::prelude::*;
 
 /// Θ nodes of the reference form's P table.
@@ -50,11 +50,12 @@ fn features(c: &Cell, nm: usize, nl: usize, row: &mut Vec<(usize, f64)>) -> bool
         }
     });
     let azimuth = table + 2 * THETA_NODES;
-    let s = ((1.0 - c.mu_v * c.mu_v) * (1.0 - c.mu_l * c.mu_l))
+    let (mu_v, mu_l) = (c.at.mu_v, c.at.mu_l);
+    let s = ((1.0 - mu_v * mu_v) * (1.0 - mu_l * mu_l))
         .clamp(0.0, 1.0)
         .sqrt();
     for k in 0..HARMONICS {
-        let v = s.powi(k as i32 + 1) * ((k + 1) as f64 * c.psi_v).cos();
+        let v = s.powi(k as i32 + 1) * ((k + 1) as f64 * c.at.psi_v).cos();
         let col = azimuth + k * (nm + nl);
         row.extend([(col + m, v), (col + nm + il, v)]);
     }

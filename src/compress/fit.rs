@@ -40,16 +40,12 @@ pub(crate) fn cells_of(tab: &SlabTables, it: usize) -> Vec<(Cell, [usize; 4], f6
             for m in 0..nm {
                 for k in 0..nk {
                     let c = Cell {
+                        at: tab.point(it, il, j, m, k),
                         l: Lerp::at(il),
-                        mu_l: tab.mu_l[il],
                         v: Lerp::at(m),
-                        mu_v: tab.mu_v(m),
-                        psi_v: tab.psi_v(k),
                         u: j as f64 / (nd - 1) as f64,
-                        d: tab.depth[it * nd + j],
-                        t: tab.thickness[it],
                     };
-                    if let Some(off) = ln_boundary(&c) {
+                    if let Some(off) = ln_boundary(&c.at) {
                         out.push((c, [il, j, m, k], off));
                     }
                 }

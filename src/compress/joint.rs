@@ -10,7 +10,7 @@ use super::form::LogAdditive;
 use super::tables::SlabTables;
 use anyhow::{anyhow, Result};
 use nalgebra::{DMatrix, DVector};
-use nephele_runtime::transport::log_additive::legendre;
+use nephele_runtime::transport::fitting::legendre;
 use rayon::prelude::*;
 
 /// The fit of one order group over all thicknesses.

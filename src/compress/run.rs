@@ -14,9 +14,9 @@ use crate::io::{write_atomic, AtomicFiles, Npz};
 use crate::slab::tables::PhaseModel;
 use crate::slab::PhaseSpec;
 use anyhow::{anyhow, ensure, Context, Result};
-use nephele_runtime::transport::collector::{CollectorForm, Statistic};
-use nephele_runtime::transport::single_scattering;
-use nephele_runtime::transport::tables::{Transport, TransportTables};
+use nephele_runtime::transport::fitting::{CollectorForm, Statistic};
+use nephele_runtime::transport::{single_scattering, SlabPoint};
+use nephele_runtime::transport::{Transport, TransportTables};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -36,6 +36,30 @@ pub struct Options {
     /// Legendre terms in ln t of the collector's parameters.
     pub collector_q: usize,
 }
+
+impl Options {
+    /// Refuses options the runtime could not load (its limits, one home in
+    /// `nephele_runtime::transport::fitting`) or the joint fits cannot use.
+    pub fn check(&self) -> Result<()> {
+        if let Err(limit) = self.form.check() {
+            anyhow::bail!("the form is outside what the runtime loads ({limit})");
+        }
+        anyhow::ensure!(
+            self.smooth_t <= MAX_SMOOTH_T && self.collector_q <= MAX_SMOOTH_T,
+            "Legendre terms in ln t (--smooth-t, --collector-smooth-t): at most {MAX_SMOOTH_T}"
+        );
+        if self.collector_q > 0 {
+            if let Err(limit) = self.collector.check() {
+                anyhow::bail!("the collector form is outside what the runtime loads ({limit})");
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Most Legendre terms in ln t of a joint fit (the runtime reads up to
+/// `fitting::MAX_Q`; more than the default grid's thicknesses make the fit ill-posed).
+pub const MAX_SMOOTH_T: usize = 9;
 
 impl Default for Options {
     /// The defaults of `nephele compress` (docs/compress.md has the study behind them).
@@ -387,10 +411,15 @@ fn write_ntt(
             for j in 0..nd {
                 for m in 0..nm {
                     for k in 0..nk {
-                        let (d, t) = (tab.depth[it * nd + j], tab.thickness[it]);
-                        let (mu_v, psi, mu_l) = (tab.mu_v(m), tab.psi_v(k), tab.mu_l[il]);
-                        let at = [d, t, mu_v, psi, mu_l].map(|x| x as f32);
-                        rt.evaluate_all(at[0], at[1], at[2], at[3], at[4], &mut all);
+                        let at = tab.point(it, il, j, m, k);
+                        let at32 = SlabPoint {
+                            depth: at.depth as f32,
+                            thickness: at.thickness as f32,
+                            mu_v: at.mu_v as f32,
+                            psi_v: at.psi_v as f32,
+                            mu_l: at.mu_l as f32,
+                        };
+                        rt.evaluate_all(&at32, &mut all);
                         for (f, got) in joint.iter().zip(&all) {
                             let i = tab.index(f.group, it, il, j, m, k);
                             compare(
@@ -399,9 +428,8 @@ fn write_ntt(
                                 got,
                             );
                         }
-                        let exact =
-                            model.with(|p| single_scattering(p, 1.0, mu_l, t, d, mu_v, psi));
-                        let stored = rt.order1(at[0], at[1], at[2], at[3], at[4]) as f64;
+                        let exact = model.with(|p| single_scattering(p, 1.0, &at));
+                        let stored = rt.order1(&at32) as f64;
                         order1.push((exact, stored));
                     }
                 }

@@ -1,5 +1,5 @@
 //! The compressed tables as renderers load them: a `.ntt` container (docs/format.md) with the
-//! arrays that [`nephele_runtime::transport::tables::TransportTables`] reads (table in its module
+//! arrays that [`nephele_runtime::transport::TransportTables`] reads (table in its module
 //! docs): the joint fits of the groups of orders ≥ 2 and the phase function for order 1.
 
 use super::collector::CollectorFit;
@@ -8,8 +8,7 @@ use super::tables::SlabTables;
 use super::LogAdditive;
 use crate::io::container::{container_bytes, Array};
 use anyhow::{ensure, Result};
-use nephele_runtime::transport::collector::{CollectorForm, Statistic};
-use nephele_runtime::transport::tables::pack_u_range;
+use nephele_runtime::transport::fitting::{names, pack_u_range, CollectorForm, Statistic};
 
 /// Angles (degrees) at which the phase function is stored: 0.02° steps to 5° (the Mie forward
 /// peak, ~1° wide at 10 µm), 0.2° beyond; linear between them (the compressor reports the
@@ -76,16 +75,16 @@ pub fn ntt_bytes(
     let g = fits.len();
     let p = form.n_params(nm, nl);
     let mut arrays: Vec<(&str, Vec<usize>, Vec<f32>)> = vec![
-        ("form", vec![6], form_v),
-        ("group_first", vec![g], first),
-        ("mu_l_nodes", vec![nl], mu_l),
-        ("mu_v_nodes", vec![nm], mu_v),
-        ("thickness", vec![nt], thickness),
-        ("ln_t_range", vec![g, 2], ln_t),
-        ("beta", vec![g, p, q], beta),
-        ("u_range", vec![g, nt, nl * nm], u_range),
-        ("phase_theta", vec![theta32.len()], theta32),
-        ("phase", vec![phase32.len()], phase32),
+        (names::FORM, vec![6], form_v),
+        (names::GROUP_FIRST, vec![g], first),
+        (names::MU_L_NODES, vec![nl], mu_l),
+        (names::MU_V_NODES, vec![nm], mu_v),
+        (names::THICKNESS, vec![nt], thickness),
+        (names::LN_T_RANGE, vec![g, 2], ln_t),
+        (names::BETA, vec![g, p, q], beta),
+        (names::U_RANGE, vec![g, nt, nl * nm], u_range),
+        (names::PHASE_THETA, vec![theta32.len()], theta32),
+        (names::PHASE, vec![phase32.len()], phase32),
     ];
     if let Some((cf, coll)) = collector {
         ensure!(
@@ -97,10 +96,10 @@ pub fn ntt_bytes(
         );
         let cq = coll[0].q;
         let sizes = [cf.legendre, cf.harmonics, cf.theta_nodes, cq].map(|x| x as f32);
-        arrays.push(("collector_form", vec![4], sizes.to_vec()));
+        arrays.push((names::COLLECTOR_FORM, vec![4], sizes.to_vec()));
         for (s, (stat, name)) in Statistic::ALL
             .iter()
-            .zip(["sigma_beta", "cz_beta", "cx_beta"])
+            .zip(names::COLLECTOR_BETA)
             .enumerate()
         {
             let values = f32s(&mut coll.iter().flat_map(|c| c.beta[s].iter().copied()));

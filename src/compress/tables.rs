@@ -1,5 +1,6 @@
 //! The 5D tables of `nephele slab` (tables.npz) as the compressor reads them.
 
+use nephele_runtime::transport::SlabPoint;
 use crate::io::npz::read_arrays;
 use anyhow::{ensure, Result};
 use std::path::Path;
@@ -128,6 +129,19 @@ impl SlabTables {
     pub fn index(&self, g: usize, it: usize, il: usize, j: usize, m: usize, k: usize) -> usize {
         let s = &self.shape;
         ((((g * s[1] + it) * s[2] + il) * s[3] + j) * s[4] + m) * s[5] + k
+    }
+
+    /// The slab point of cell (thickness `it`, sun `il`, plane `j`, view `m`, `k`), at the
+    /// bin centres.
+    pub fn point(&self, it: usize, il: usize, j: usize, m: usize, k: usize) -> SlabPoint<f64> {
+        let nd = self.shape[3];
+        SlabPoint {
+            depth: self.depth[it * nd + j],
+            thickness: self.thickness[it],
+            mu_v: self.mu_v(m),
+            psi_v: self.psi_v(k),
+            mu_l: self.mu_l[il],
+        }
     }
 
     /// Centre of μ_V bin `m`.

@@ -1,9 +1,9 @@
-//! The order-1 collector by quadrature: the test of the walk's lateral moments (spec 40). T₁
-//! itself, the bin-averaged single scattering of the collimated beam, is
-//! [`nephele_runtime::transport::single`] (the renderers' code, used here too).
+//! The order-1 collector by quadrature: the test of the walk's lateral moments. T₁ itself, the
+//! bin-averaged single scattering of the collimated beam, is
+//! [`nephele_runtime::transport::single_scattering`] (the renderers' code, used here too).
 
 use crate::stats::gauss::{gauss_legendre, integrate_n};
-use nephele_runtime::transport::scattering_cosine;
+use nephele_runtime::transport::{scattering_cosine, SlabPoint};
 use nephele_runtime::PhaseFunction;
 
 /// ∫∫ f over μ ∈ [mu_a, mu_b], ψ ∈ [psi_a, psi_b] (8-point Gauss–Legendre on `pieces` pieces
@@ -24,17 +24,17 @@ fn bin_integral<const N: usize>(
 /// z and x′² + z² over the depths d′ of the scattering. The photon entered at the origin, reached
 /// (0, d′ tan φ_L, d′) along the sun, and flew ℓ = (d − d′)/(−μ_V) to the plane:
 /// x′ = ℓ sin θ_V sin ψ_V, z = d′ tan φ_L + ℓ sin θ_V cos ψ_V. By quadrature over d′.
-pub fn single_scattering_moments(
-    phase: &dyn PhaseFunction<f64>,
-    mu_l: f64,
-    t: f64,
-    d: f64,
-    mu_v: f64,
-    psi_v: f64,
-) -> [f64; 4] {
+pub fn single_scattering_moments(phase: &dyn PhaseFunction<f64>, at: &SlabPoint<f64>) -> [f64; 4] {
+    let SlabPoint {
+        depth: d,
+        thickness: t,
+        mu_v,
+        psi_v,
+        mu_l,
+    } = *at;
     let sin_l = (1.0 - mu_l * mu_l).max(0.0).sqrt();
     let sin_v = (1.0 - mu_v * mu_v).max(0.0).sqrt();
-    let p = phase.pdf_cosine(scattering_cosine(mu_l, mu_v, psi_v));
+    let p = phase.pdf_cosine(scattering_cosine(at));
     let m = mu_v.abs();
     // Scattering depths: below d for light going up, above it for light going down.
     let (a, b) = if mu_v > 0.0 { (d, t) } else { (0.0, d) };
@@ -48,20 +48,17 @@ pub fn single_scattering_moments(
     integrate_n(&f, a, b, &gauss_legendre(8), 16)
 }
 
-/// The order-1 collector of a bin: (c_x, c_z, σ) from the bin integrals of
-/// [`single_scattering_moments`].
-#[allow(clippy::too_many_arguments)]
+/// The order-1 collector of a bin at the depth, thickness and sun of `at` (its view is not
+/// used): (c_x, c_z, σ) from the bin integrals of [`single_scattering_moments`].
 pub fn single_scattering_collector(
     phase: &dyn PhaseFunction<f64>,
-    mu_l: f64,
-    t: f64,
-    d: f64,
+    at: &SlabPoint<f64>,
     (mu_a, mu_b): (f64, f64),
     (psi_a, psi_b): (f64, f64),
     pieces: usize,
 ) -> [f64; 3] {
     let [w, x, z, q] = bin_integral(
-        &|mu, psi| single_scattering_moments(phase, mu_l, t, d, mu, psi),
+        &|mu, psi| single_scattering_moments(phase, &at.with_view(mu, psi)),
         (mu_a, mu_b),
         (psi_a, psi_b),
         pieces,

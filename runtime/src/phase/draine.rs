@@ -6,7 +6,7 @@
 //! Sampling inverts the exact CDF, F(μ) = [F_HG(μ) + α M₂(μ)] / N, with M₂ = ∫ 2π HG μ′² dμ′.
 //! With v = √(1 + g² − 2gμ), a = 1 + g², v₀ = 1 + g:
 //!   M₂(μ) = −(1 − g²)/(8g³) [H(v) − H(v₀)],  H(v) = −a²/v − 2a v + v³/3,
-//! (v·F = ξ·v is the quartic of spec 20). The renderer-style closed-form root loses up to 0.1 of
+//! (v·F = ξ·v is a quartic in v). The renderer-style closed-form root loses up to 0.1 of
 //! CDF in f32 at α = 250; here the CDF is evaluated in f64 in a form free of the 1/g³
 //! cancellation (below) and F(μ) = ξ solved by Newton's method — one step from a tabulated
 //! Hermite guess when that step is below 1e-7, else inside a shrinking bracket to |F − ξ| ≤

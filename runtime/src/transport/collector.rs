@@ -1,7 +1,7 @@
 //! The collector form: where the light seen at a point of the slab entered it, per order group.
 //! The slab tables give, per cell, the collector c = (c_x, c_z) (mfp, from the viewpoint's
 //! horizontal position, x across and z along the sun's horizontal travel) and its spread σ
-//! (spec 40). Three forms, linear in their parameters like the transport's
+//! (docs/conventions.md draws the frame). Three forms, linear in their parameters like the transport's
 //! ([`super::log_additive`]; u the stretched depth, x = 2u − 1, h_i the Θ hat functions,
 //! a_j(μ_V) + b_j(μ_L) a parameter on the μ_V and μ_L nodes, s = sin of the polar angles):
 //!
@@ -10,26 +10,33 @@
 //!           + (ℓ/σ̂) [Σ_i h_i(Θ)(η_i + η′_i x) + s_L Σ_j [·] P_j(x)]
 //!   c_x/σ̂ = sin ψ Σ_i h_i(Θ)(ξ_i + ξ′_i x) + Σ_{k=1}^{K} sin kψ Σ_j [·] P_j(x)
 //!
-//! σ̂ the fitted σ, ℓ = d s_L/μ_L the horizontal distance the sun's beam travels to depth d
-//! (μ_L held ≥ 0.05). Why these terms: σ depends on the scattering angle much as T does (light
-//! seen close to the sun's direction comes from a narrow collector; without the Θ table the
-//! order-2 σ was 78 % off); c_x is odd in ψ (the tables mirror it), c_z even; at μ_L = 1 the
-//! collector turns with the view (c_x = a sin ψ, c_z = a cos ψ), which is why the harmonics of
-//! c carry no s_L factor; near the sun's direction c_z is the beam's own displacement ℓ (the
-//! ℓ terms took the order-2 error from 35 % to 8 % of σ). c is fitted in units of σ̂ so that the
-//! parameters are dimensionless across thicknesses and the fit's residuals are the report's
-//! error (in units of σ).
+//! σ̂ the fitted σ, ℓ = s_L λ (1 − e^{−d/(μ_L λ)}) with λ = 8 mfp the sun beam's horizontal
+//! reach to depth d, saturating (μ_L held ≥ 0.05): d s_L/μ_L near the lit face, where light
+//! enters along the beam, and at most λ s_L deep down, where it has forgotten the beam (ℓ = d
+//! s_L/μ_L itself made held-out orders 3–4 worse; docs/compress.md).
+//!
+//! Why these terms: σ depends on the scattering angle much as T does (light seen close to the
+//! sun's direction comes from a narrow collector; without the Θ table the order-2 σ was 78 %
+//! off); c_x is odd in ψ (the tables mirror it), c_z even; at μ_L = 1 the collector turns with
+//! the view (c_x = a sin ψ, c_z = a cos ψ), which is why the harmonics of c carry no s_L
+//! factor; near the sun's direction c_z is the beam's own displacement ℓ (the ℓ terms are what
+//! make order 2's c follow the beam there; docs/compress.md has the numbers). c is fitted in
+//! units of σ̂ so that the parameters are dimensionless across thicknesses and the fit's
+//! residuals are the report's error (in units of σ).
 
-use super::log_additive::{legendre, on_nodes, theta_hats, Cell, MAX_LEGENDRE};
+use super::geometry::SlabPoint;
+use super::log_additive::{legendre, on_nodes, theta_hats, Cell, MAX_LEGENDRE, MAX_THETA_NODES};
 use crate::real::Real;
 
 /// Most azimuth harmonics of the collector form.
-pub const MAX_COLLECTOR_HARMONICS: usize = 8;
+pub const MAX_COLLECTOR_HARMONICS: usize = 4;
+/// Most Legendre terms in depth of the collector form.
+pub const MAX_COLLECTOR_LEGENDRE: usize = 8;
 
 /// The collector form's sizes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct CollectorForm {
-    /// Legendre terms in depth, J (≤ 16).
+    /// Legendre terms in depth, J (≤ [`MAX_COLLECTOR_LEGENDRE`]).
     pub legendre: usize,
     /// Azimuth harmonics, K (≤ [`MAX_COLLECTOR_HARMONICS`]).
     pub harmonics: usize,
@@ -73,6 +80,20 @@ enum Block<F> {
 const MAX_BLOCKS: usize = 2 * MAX_COLLECTOR_HARMONICS + 4;
 
 impl CollectorForm {
+    /// Whether the runtime can evaluate this form: the name of the first size outside its
+    /// limits otherwise (the loader refuses such files, the compressor such options).
+    pub fn check(&self) -> Result<(), &'static str> {
+        if !(1..=MAX_COLLECTOR_LEGENDRE).contains(&self.legendre) {
+            Err("collector Legendre terms in depth: 1 to MAX_COLLECTOR_LEGENDRE = 8")
+        } else if self.harmonics > MAX_COLLECTOR_HARMONICS {
+            Err("collector azimuth harmonics: at most MAX_COLLECTOR_HARMONICS = 4")
+        } else if !(2..=MAX_THETA_NODES).contains(&self.theta_nodes) {
+            Err("collector Θ nodes: 2 to MAX_THETA_NODES = 512")
+        } else {
+            Ok(())
+        }
+    }
+
     /// Parameters of `stat` for `nm` view-cosine and `nl` sun-cosine nodes.
     pub fn n_params(&self, stat: Statistic, nm: usize, nl: usize) -> usize {
         let mut blocks = [Block::Theta(0.0f64); MAX_BLOCKS];
@@ -104,8 +125,15 @@ impl CollectorForm {
         out: &mut [Block<F>; MAX_BLOCKS],
     ) -> usize {
         let one = F::of(1.0);
-        let s_l = (one - c.mu_l * c.mu_l).clamp_to(F::of(0.0), one).sqrt();
-        let s_v = (one - c.mu_v * c.mu_v).clamp_to(F::of(0.0), one).sqrt();
+        let SlabPoint {
+            depth,
+            mu_v,
+            psi_v,
+            mu_l,
+            ..
+        } = c.at;
+        let s_l = (one - mu_l * mu_l).clamp_to(F::of(0.0), one).sqrt();
+        let s_v = (one - mu_v * mu_v).clamp_to(F::of(0.0), one).sqrt();
         let k_max = self.harmonics.min(MAX_COLLECTOR_HARMONICS);
         let mut n = 0;
         let mut push = |b: Block<F>| {
@@ -117,31 +145,31 @@ impl CollectorForm {
                 push(Block::Theta(one));
                 let mut s_k = one;
                 for k in 0..=k_max {
-                    let (_, cos_k) = (F::of(k as f64) * c.psi_v).sin_cos();
+                    let (_, cos_k) = (F::of(k as f64) * psi_v).sin_cos();
                     push(Block::Depth(s_k * cos_k));
                     s_k = s_k * s_v * s_l;
                 }
             }
             Statistic::Cz => {
-                let mu_l = if c.mu_l > F::of(0.05) {
-                    c.mu_l
+                let mu_l = if mu_l > F::of(0.05) {
+                    mu_l
                 } else {
                     F::of(0.05)
                 };
                 let lam = F::of(8.0);
-                let reach = s_l * lam * -super::single::exp_m1(-c.d / (mu_l * lam)) * inv_sigma;
+                let reach = s_l * lam * -super::single::exp_m1(-depth / (mu_l * lam)) * inv_sigma;
                 push(Block::Theta(one));
                 push(Block::Depth(s_l));
                 for k in 1..=k_max {
-                    push(Block::Depth((F::of(k as f64) * c.psi_v).sin_cos().1));
+                    push(Block::Depth((F::of(k as f64) * psi_v).sin_cos().1));
                 }
                 push(Block::Theta(reach));
                 push(Block::Depth(reach * s_l));
             }
             Statistic::Cx => {
-                push(Block::Theta(c.psi_v.sin_cos().0));
+                push(Block::Theta(psi_v.sin_cos().0));
                 for k in 1..=k_max {
-                    push(Block::Depth((F::of(k as f64) * c.psi_v).sin_cos().0));
+                    push(Block::Depth((F::of(k as f64) * psi_v).sin_cos().0));
                 }
             }
         }
@@ -210,14 +238,16 @@ mod tests {
         let nodes = [0.25, 0.5, 0.75, 1.0];
         let vnodes = [-0.75, -0.25, 0.25, 0.75];
         Cell {
+            at: SlabPoint {
+                depth: 4.0 * u,
+                thickness: 4.0,
+                mu_v,
+                psi_v: psi,
+                mu_l,
+            },
             l: Lerp::between(&nodes, mu_l),
-            mu_l,
             v: Lerp::between(&vnodes, mu_v),
-            mu_v,
-            psi_v: psi,
             u,
-            d: 4.0 * u,
-            t: 4.0,
         }
     }
 
@@ -251,22 +281,24 @@ mod tests {
             let c = cell(0.45, 0.55, 1.1, 0.3);
             let a = form.value(stat, &c, 1.7, 4, 4, coef);
             let c32 = Cell {
+                at: SlabPoint {
+                    depth: 1.2f32,
+                    thickness: 4.0,
+                    mu_v: 0.55,
+                    psi_v: 1.1,
+                    mu_l: 0.45,
+                },
                 l: Lerp {
                     lo: c.l.lo,
                     hi: c.l.hi,
                     w: c.l.w as f32,
                 },
-                mu_l: 0.45f32,
                 v: Lerp {
                     lo: c.v.lo,
                     hi: c.v.hi,
                     w: c.v.w as f32,
                 },
-                mu_v: 0.55,
-                psi_v: 1.1,
                 u: 0.3,
-                d: 1.2,
-                t: 4.0,
             };
             let b = form.value(stat, &c32, 1.7f32, 4, 4, |i| coef(i) as f32);
             assert!(

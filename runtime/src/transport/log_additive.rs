@@ -1,4 +1,4 @@
-//! The log-additive form of spec 50 (its prototype's best, "the one to beat"): per order group,
+//! The log-additive form (the best of the compression study, docs/compress.md): per order group,
 //! the transport T of orders ≥ 2 as
 //!
 //!   ln T = ln B + Σ_j [a_j(μ_V) + b_j(μ_L)] P_j(2u − 1) + γ(μ_V) max(ln F₁, −10)
@@ -21,6 +21,7 @@
 //! Linear in its parameters; parameters indexed by μ_V or μ_L are read between their grid nodes
 //! with [`Lerp`] weights. The toolchain fits it (`nephele compress`) with these very features.
 
+use super::geometry::SlabPoint;
 use super::single::{exp_m1, scattering_cosine, single_scattering};
 use crate::phase::HenyeyGreenstein;
 use crate::real::Real;
@@ -47,6 +48,10 @@ pub struct LogAdditive {
 
 /// Most polynomial terms per cosine in the interaction terms.
 pub const MAX_CROSS: usize = 6;
+/// Most azimuth harmonics (bounds the features of a point).
+pub const MAX_HARMONICS: usize = 8;
+/// Most Θ nodes.
+pub const MAX_THETA_NODES: usize = 512;
 /// Depth terms (P_0 … P_2) of the interaction.
 const CROSS_DEPTH: usize = 3;
 
@@ -112,25 +117,18 @@ impl<F: Real> Lerp<F> {
     }
 }
 
-/// Where the form is evaluated.
+/// Where the form is evaluated: a slab point, where its cosines sit among the parameter
+/// nodes, and its stretched depth.
 #[derive(Clone, Copy, Debug)]
 pub struct Cell<F> {
+    /// The geometry.
+    pub at: SlabPoint<F>,
     /// μ_L among the parameter nodes of the sun cosines.
     pub l: Lerp<F>,
-    /// Sun cosine.
-    pub mu_l: F,
     /// μ_V among the parameter nodes of the view cosines.
     pub v: Lerp<F>,
-    /// View cosine.
-    pub mu_v: F,
-    /// View azimuth from the sun's horizontal travel (radians).
-    pub psi_v: F,
     /// Stretched depth in [0, 1].
     pub u: F,
-    /// Depth (mfp).
-    pub d: F,
-    /// Slab thickness (mfp).
-    pub t: F,
 }
 
 impl<F: Real> Cell<F> {
@@ -138,19 +136,37 @@ impl<F: Real> Cell<F> {
     pub(crate) fn zero() -> Self {
         let z = F::of(0.0);
         Self {
+            at: SlabPoint {
+                depth: z,
+                thickness: z,
+                mu_v: z,
+                psi_v: z,
+                mu_l: z,
+            },
             l: Lerp::at(0),
-            mu_l: z,
             v: Lerp::at(0),
-            mu_v: z,
-            psi_v: z,
             u: z,
-            d: z,
-            t: z,
         }
     }
 }
 
 impl LogAdditive {
+    /// Whether the runtime can evaluate this form: the name of the first size outside its
+    /// limits otherwise (the loader refuses such files, the compressor such options).
+    pub fn check(&self) -> Result<(), &'static str> {
+        if !(1..=MAX_LEGENDRE).contains(&self.legendre) {
+            Err("Legendre terms in depth: 1 to MAX_LEGENDRE = 16")
+        } else if self.harmonics > MAX_HARMONICS {
+            Err("azimuth harmonics: at most MAX_HARMONICS = 8")
+        } else if !(2..=MAX_THETA_NODES).contains(&self.theta_nodes) {
+            Err("Θ nodes: 2 to MAX_THETA_NODES = 512")
+        } else if self.cross > MAX_CROSS {
+            Err("interaction degree A: at most MAX_CROSS = 6")
+        } else {
+            Ok(())
+        }
+    }
+
     /// Parameters for `nm` view-cosine and `nl` sun-cosine nodes.
     pub fn n_params(&self, nm: usize, nl: usize) -> usize {
         let gamma = if self.pairs { nm * nl } else { nm };
@@ -185,7 +201,7 @@ impl LogAdditive {
     ) -> bool {
         let four_pi = F::of(4.0 * core::f64::consts::PI);
         let hg0 = HenyeyGreenstein::new(F::of(0.0));
-        let f1 = four_pi * single_scattering(&hg0, F::of(1.0), c.mu_l, c.t, c.d, c.mu_v, c.psi_v);
+        let f1 = four_pi * single_scattering(&hg0, F::of(1.0), &c.at);
         if !(f1 > F::of(0.0)) {
             return false;
         }
@@ -223,13 +239,14 @@ impl LogAdditive {
         theta_hats(self.theta_nodes, c, F::of(1.0), col, &mut f);
         col += 2 * self.theta_nodes;
         let one = F::of(1.0);
-        let s = ((one - c.mu_v * c.mu_v) * (one - c.mu_l * c.mu_l))
+        let (mu_v, mu_l) = (c.at.mu_v, c.at.mu_l);
+        let s = ((one - mu_v * mu_v) * (one - mu_l * mu_l))
             .clamp_to(F::of(0.0), one)
             .sqrt();
         let mut s_k = one;
         for k in 1..=self.harmonics {
             s_k = s_k * s;
-            let (_, cos_k) = (F::of(k as f64) * c.psi_v).sin_cos();
+            let (_, cos_k) = (F::of(k as f64) * c.at.psi_v).sin_cos();
             both(&mut f, col, s_k * cos_k);
             col += nm + nl;
         }
@@ -241,9 +258,9 @@ impl LogAdditive {
             c.l.each(|il, w| f(col + il, w * ln_f1));
             col += nl;
             let two = F::of(2.0);
-            let pv = legendre(two * c.mu_v.abs() - one, a);
-            let pl = legendre(two * c.mu_l - one, a);
-            let hemi = if c.mu_v > F::of(0.0) { 0 } else { a * a };
+            let pv = legendre(two * mu_v.abs() - one, a);
+            let pl = legendre(two * mu_l - one, a);
+            let hemi = if mu_v > F::of(0.0) { 0 } else { a * a };
             for (j, &pj) in p[..CROSS_DEPTH].iter().enumerate() {
                 let base = col + j * 2 * a * a + hemi;
                 for (ia, &va) in pv[..a].iter().enumerate() {
@@ -264,7 +281,7 @@ impl LogAdditive {
         nl: usize,
         coef: impl Fn(usize) -> F,
     ) -> Option<F> {
-        let offset = ln_boundary(c)?;
+        let offset = ln_boundary(&c.at)?;
         let mut sum = offset;
         self.for_each_feature(c, nm, nl, |col, v| sum = sum + v * coef(col))
             .then_some(sum)
@@ -273,9 +290,13 @@ impl LogAdditive {
 
 /// ln B at `c`, or None where the form says T = 0 (no medium behind the viewpoint): the
 /// boundary factor depends on the geometry only, not on the form's sizes.
-pub fn ln_boundary<F: Real>(c: &Cell<F>) -> Option<F> {
-    let path = if c.mu_v > F::of(0.0) { c.t - c.d } else { c.d };
-    let b = -exp_m1(-path / c.mu_v.abs());
+pub fn ln_boundary<F: Real>(at: &SlabPoint<F>) -> Option<F> {
+    let path = if at.mu_v > F::of(0.0) {
+        at.thickness - at.depth
+    } else {
+        at.depth
+    };
+    let b = -exp_m1(-path / at.mu_v.abs());
     (b > F::of(0.0)).then(|| b.ln())
 }
 
@@ -318,7 +339,7 @@ pub fn theta_hats<F: Real>(
     col: usize,
     f: &mut dyn FnMut(usize, F),
 ) {
-    let cos = scattering_cosine(c.mu_l, c.mu_v, c.psi_v);
+    let cos = scattering_cosine(&c.at);
     let half = (F::of(0.5) * cos.one_minus_mu).sqrt();
     let theta = F::of(2.0) * (if half > F::of(1.0) { F::of(1.0) } else { half }).asin();
     let n = nodes.max(2);
@@ -347,14 +368,16 @@ mod tests {
         let lnodes = [0.25, 0.5, 0.75, 1.0].map(F::of);
         let vnodes = [-0.75, -0.25, 0.25, 0.75].map(F::of);
         Cell {
+            at: SlabPoint {
+                depth: F::of(u * t),
+                thickness: F::of(t),
+                mu_v: F::of(mu_v),
+                psi_v: F::of(psi),
+                mu_l: F::of(mu_l),
+            },
             l: Lerp::between(&lnodes, F::of(mu_l)),
-            mu_l: F::of(mu_l),
             v: Lerp::between(&vnodes, F::of(mu_v)),
-            mu_v: F::of(mu_v),
-            psi_v: F::of(psi),
             u: F::of(u),
-            d: F::of(u * t),
-            t: F::of(t),
         }
     }
 

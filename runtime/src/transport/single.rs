@@ -18,6 +18,7 @@
 //! (0, sin φ_L, μ_L) and the view (sin θ_V sin ψ_V, sin θ_V cos ψ_V, −μ_V) in (x, z, depth) is
 //! taken as 1 − cos Θ = |ω_L − ω_V|²/2, accurate near the forward peak where cos Θ is not.
 
+use super::geometry::SlabPoint;
 use crate::phase::{Cosine, PhaseFunction};
 use crate::real::Real;
 
@@ -57,19 +58,21 @@ const GL8_W: [f64; 8] = [
     0.101_228_536_290_376_26,
 ];
 
-/// T₁ (sr⁻¹) at depth `d` (mfp, 0 ≤ d ≤ t) of a slab of thickness `t`, for the view
-/// (`mu_v`, `psi_v` in radians) and the sun `mu_l` ∈ (0, 1], single-scattering albedo `albedo`.
+/// T₁ (sr⁻¹) at `at`, single-scattering albedo `albedo`.
 pub fn single_scattering<F: Real, P: PhaseValue<F> + ?Sized>(
     phase: &P,
     albedo: F,
-    mu_l: F,
-    t: F,
-    d: F,
-    mu_v: F,
-    psi_v: F,
+    at: &SlabPoint<F>,
 ) -> F {
     let (zero, one) = (F::of(0.0), F::of(1.0));
-    let p = albedo * phase.value(scattering_cosine(mu_l, mu_v, psi_v));
+    let SlabPoint {
+        depth: d,
+        thickness: t,
+        mu_v,
+        mu_l,
+        ..
+    } = *at;
+    let p = albedo * phase.value(scattering_cosine(at));
     let source = p * (-d / mu_l).exp();
     if mu_v >= zero {
         if t - d <= zero {
@@ -96,16 +99,14 @@ pub fn single_scattering<F: Real, P: PhaseValue<F> + ?Sized>(
     }
 }
 
-/// The average of T₁ over the direction bin μ_V ∈ [`mu_a`, `mu_b`] (one sign; the horizon may be
-/// an edge), ψ_V ∈ [`psi_a`, `psi_b`]: 8-point Gauss–Legendre on `pieces` × `pieces` pieces
-/// (the Mie forward peak, a few degrees wide, needs several pieces in the bin that holds it).
-#[allow(clippy::too_many_arguments)]
+/// The average of T₁ at the depth, thickness and sun of `at` over the direction bin
+/// μ_V ∈ [`mu_a`, `mu_b`] (one sign; the horizon may be an edge), ψ_V ∈ [`psi_a`, `psi_b`]
+/// (the view of `at` is not used): 8-point Gauss–Legendre on `pieces` × `pieces` pieces (the
+/// Mie forward peak, a few degrees wide, needs several pieces in the bin that holds it).
 pub fn single_scattering_bin<F: Real, P: PhaseValue<F> + ?Sized>(
     phase: &P,
     albedo: F,
-    mu_l: F,
-    t: F,
-    d: F,
+    at: &SlabPoint<F>,
     (mu_a, mu_b): (F, F),
     (psi_a, psi_b): (F, F),
     pieces: usize,
@@ -123,7 +124,7 @@ pub fn single_scattering_bin<F: Real, P: PhaseValue<F> + ?Sized>(
                 for (xp, wp) in GL8_X.iter().zip(GL8_W) {
                     let psi = psi_mid + half * h_psi * F::of(*xp);
                     let w = F::of(wm * wp);
-                    sum = sum + w * single_scattering(phase, albedo, mu_l, t, d, mu, psi);
+                    sum = sum + w * single_scattering(phase, albedo, &at.with_view(mu, psi));
                 }
             }
         }
@@ -132,9 +133,12 @@ pub fn single_scattering_bin<F: Real, P: PhaseValue<F> + ?Sized>(
     sum / (F::of(4.0) * n * n)
 }
 
-/// cos Θ between the sun's propagation direction and the view (μ_V, ψ_V), with
+/// cos Θ between the sun's propagation direction and the view (μ_V, ψ_V) of `at`, with
 /// 1 − cos Θ = |ω_L − ω_V|²/2.
-pub fn scattering_cosine<F: Real>(mu_l: F, mu_v: F, psi_v: F) -> Cosine<F> {
+pub fn scattering_cosine<F: Real>(at: &SlabPoint<F>) -> Cosine<F> {
+    let SlabPoint {
+        mu_v, psi_v, mu_l, ..
+    } = *at;
     let one = F::of(1.0);
     let sin_l = (one - mu_l * mu_l).clamp_to(F::of(0.0), one).sqrt();
     let sin_v = (one - mu_v * mu_v).clamp_to(F::of(0.0), one).sqrt();
@@ -161,12 +165,23 @@ pub(crate) fn exp_m1<F: Real>(x: F) -> F {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A slab point from (μ_L, t, d, μ_V, ψ_V), the order of the tests' tables.
+    fn at<F>(mu_l: F, thickness: F, depth: F, mu_v: F, psi_v: F) -> SlabPoint<F> {
+        SlabPoint {
+            depth,
+            thickness,
+            mu_v,
+            psi_v,
+            mu_l,
+        }
+    }
     use crate::phase::HenyeyGreenstein;
 
     /// T₁ by brute-force quadrature over the scattering depth (f64, 20 000 midpoints).
     fn brute(g: f64, mu_l: f64, t: f64, d: f64, mu_v: f64, psi_v: f64) -> f64 {
         let hg = HenyeyGreenstein::new(g);
-        let p = hg.pdf_cosine(scattering_cosine(mu_l, mu_v, psi_v));
+        let p = hg.pdf_cosine(scattering_cosine(&at(mu_l, t, d, mu_v, psi_v)));
         let (lo, hi) = if mu_v > 0.0 { (d, t) } else { (0.0, d) };
         let n = 20_000;
         let h = (hi - lo) / n as f64;
@@ -190,7 +205,7 @@ mod tests {
             (1.0, 4.0, 4.0, -0.5, 0.0),
             (0.7, 4.0, 0.0, 0.6, 3.0),
         ] {
-            let c = single_scattering(&hg, 1.0, mu_l, t, d, mu_v, psi);
+            let c = single_scattering(&hg, 1.0, &at(mu_l, t, d, mu_v, psi));
             let b = brute(0.8, mu_l, t, d, mu_v, psi);
             assert!(
                 (c - b).abs() <= 1e-7 * b.abs().max(1e-12),
@@ -198,18 +213,18 @@ mod tests {
             );
         }
         // The horizon: T₁ → ϖ p e^{−d/μ_L} from both sides, finite at 0.
-        let at = |mu_v: f64| single_scattering(&hg, 1.0, 0.5, 4.0, 1.0, mu_v, 1.0);
-        let local = hg.pdf_cosine(scattering_cosine(0.5, 0.0, 1.0)) * (-2.0f64).exp();
+        let horizon = |mu_v: f64| single_scattering(&hg, 1.0, &at(0.5, 4.0, 1.0, mu_v, 1.0));
+        let local = hg.pdf_cosine(scattering_cosine(&at(0.5, 4.0, 1.0, 0.0, 1.0))) * (-2.0f64).exp();
         for mu_v in [0.0, 1e-9, -1e-9] {
             assert!(
-                (at(mu_v) - local).abs() < 1e-6 * local,
+                (horizon(mu_v) - local).abs() < 1e-6 * local,
                 "{mu_v}: {} vs {local}",
-                at(mu_v)
+                horizon(mu_v)
             );
         }
         // Faces: nothing below the far face going up, nothing above the lit face going down.
-        assert_eq!(single_scattering(&hg, 1.0, 0.5, 4.0, 4.0, 0.5, 0.0), 0.0);
-        assert_eq!(single_scattering(&hg, 1.0, 0.5, 4.0, 0.0, -0.5, 0.0), 0.0);
+        assert_eq!(single_scattering(&hg, 1.0, &at(0.5, 4.0, 4.0, 0.5, 0.0)), 0.0);
+        assert_eq!(single_scattering(&hg, 1.0, &at(0.5, 4.0, 0.0, -0.5, 0.0)), 0.0);
     }
 
     #[test]
@@ -229,15 +244,11 @@ mod tests {
                     (0.2, 64.0, 0.1),
                     (0.1, 30.0, 27.7), // e^{bd} beyond f32 for m > μ_L
                 ] {
-                    let a = single_scattering(&h64, 1.0, mu_l, t, d, mu_v, psi);
+                    let a = single_scattering(&h64, 1.0, &at(mu_l, t, d, mu_v, psi));
                     let b = single_scattering(
                         &h32,
                         1.0,
-                        mu_l as f32,
-                        t as f32,
-                        d as f32,
-                        mu_v as f32,
-                        psi as f32,
+                        &at(mu_l as f32, t as f32, d as f32, mu_v as f32, psi as f32),
                     );
                     assert!(b.is_finite(), "f32 T₁ = {b} at {mu_l} {t} {d} {mu_v}");
                     if a > 1e-30 {
@@ -254,19 +265,12 @@ mod tests {
         // Isotropic scattering (g = 0): T₁ varies only through μ_V, and the rule must give the
         // mean of the closed form over the μ_V range.
         let hg = HenyeyGreenstein::new(0.0);
-        let bin = single_scattering_bin(&hg, 1.0, 0.5, 2.0, 0.5, (0.2, 0.4), (0.0, 1.0), 4);
+        let bin = single_scattering_bin(&hg, 1.0, &at(0.5, 2.0, 0.5, 0.0, 0.0), (0.2, 0.4), (0.0, 1.0), 4);
         let n = 200_000;
         let exact: f64 = (0..n)
             .map(|i| {
-                single_scattering(
-                    &hg,
-                    1.0,
-                    0.5,
-                    2.0,
-                    0.5,
-                    0.2 + 0.2 * (i as f64 + 0.5) / n as f64,
-                    0.0,
-                )
+                let mu_v = 0.2 + 0.2 * (i as f64 + 0.5) / n as f64;
+                single_scattering(&hg, 1.0, &at(0.5, 2.0, 0.5, mu_v, 0.0))
             })
             .sum::<f64>()
             / n as f64;

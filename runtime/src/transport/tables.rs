@@ -23,35 +23,61 @@
 //!
 //! Files without the collector arrays load too; their [`Transport`] has c = 0, σ = 0.
 
-use super::collector::{CollectorForm, Statistic};
+use super::collector::{CollectorForm, Statistic, MAX_COLLECTOR_HARMONICS, MAX_COLLECTOR_LEGENDRE};
+use super::geometry::SlabPoint;
 use super::log_additive::{
-    legendre, ln_boundary, Cell, Lerp, LogAdditive, MAX_CROSS, MAX_LEGENDRE,
+    legendre, ln_boundary, Cell, Lerp, LogAdditive, MAX_CROSS, MAX_HARMONICS, MAX_LEGENDRE,
 };
 use super::single::{single_scattering, PhaseValue};
 use crate::container::{ArrayView, Container, FormatError};
 use crate::phase::Cosine;
 use crate::real::Real;
 
+/// The names of the arrays of a `.ntt` (the table above), shared by the reader here and the
+/// toolchain's writer.
+pub mod names {
+    /// J, K, Θ nodes, pairs, Q, A.
+    pub const FORM: &str = "form";
+    /// First order of each group.
+    pub const GROUP_FIRST: &str = "group_first";
+    /// Sun-cosine nodes.
+    pub const MU_L_NODES: &str = "mu_l_nodes";
+    /// View-cosine nodes.
+    pub const MU_V_NODES: &str = "mu_v_nodes";
+    /// Thicknesses of the depth ranges.
+    pub const THICKNESS: &str = "thickness";
+    /// ln t span per group.
+    pub const LN_T_RANGE: &str = "ln_t_range";
+    /// T's parameters' Legendre coefficients in s(ln t).
+    pub const BETA: &str = "beta";
+    /// Packed fitted depth ranges.
+    pub const U_RANGE: &str = "u_range";
+    /// Phase function angles (degrees).
+    pub const PHASE_THETA: &str = "phase_theta";
+    /// Phase function values (sr⁻¹).
+    pub const PHASE: &str = "phase";
+    /// The collector form's J, K, Θ nodes, Q.
+    pub const COLLECTOR_FORM: &str = "collector_form";
+    /// The collector's parameters, in the order of `Statistic::ALL` (ln σ, c_z, c_x).
+    pub const COLLECTOR_BETA: [&str; 3] = ["sigma_beta", "cz_beta", "cx_beta"];
+}
+
 /// Most Legendre terms in ln t.
 pub const MAX_Q: usize = MAX_LEGENDRE;
 /// Most order groups.
 pub const MAX_GROUPS: usize = 64;
-/// Most azimuth harmonics of a loadable form (bounds the features of a point).
-pub const MAX_HARMONICS: usize = 8;
+/// Most nodes of each grid (sun cosines, view cosines, thicknesses).
+pub const MAX_NODES: usize = 1024;
 /// Room for the features of one point: J ≤ 16 Legendre terms on two μ_V and two μ_L nodes,
 /// γ and the pair terms on four (μ_V, μ_L) pairs, two Θ hats, K ≤ 8 harmonics, γ_L on two
 /// μ_L nodes and 3 A² interaction products.
 const MAX_FEATURES: usize = 16 * 4 + 4 * 3 + 4 + MAX_HARMONICS * 4 + 2 + 3 * MAX_CROSS * MAX_CROSS;
-
-/// Most Legendre terms in depth and azimuth harmonics of a loadable collector form.
-const MAX_COLLECTOR_LEGENDRE: usize = 8;
-const MAX_COLLECTOR_HARMONICS: usize = 4;
 /// Room for the features of a collector statistic at one point: at most two Θ blocks (4 values
 /// each) and K + 2 depth blocks of J values on two μ_V and two μ_L nodes.
 const MAX_C_FEATURES: usize = 8 + (MAX_COLLECTOR_HARMONICS + 2) * MAX_COLLECTOR_LEGENDRE * 4;
 
 /// Transport of one order group at a point: T = L/E⊥ (sr⁻¹), the collector c = (c_x, c_z) and
-/// its spread σ (mfp; spec 40).
+/// its spread σ (mfp; docs/conventions.md).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Transport {
     /// T (sr⁻¹).
@@ -106,104 +132,79 @@ fn increasing(a: &ArrayView) -> bool {
 }
 
 impl<'a> TransportTables<'a> {
-    /// Loads and checks every array (shapes, finiteness, increasing grids).
+    /// Loads the arrays ([`Self::parse`]) and checks their values ([`Self::check`]).
     pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
-        let c = Container::from_bytes(bytes)?;
-        let form_a = c.find("form").ok_or(FormatError::Missing("form"))?;
-        let int = |i: usize| {
-            form_a
-                .get(i)
-                .map(|v| v as usize)
-                .ok_or(FormatError::BadArray("form"))
-        };
-        if !(5..=6).contains(&form_a.len())
-            || form_a
-                .iter()
-                .any(|v| !(v >= 0.0 && v <= 4096.0 && v == (v as u32) as f32))
-        {
-            return Err(FormatError::BadArray("form"));
-        }
-        let form = LogAdditive {
-            legendre: int(0)?,
-            harmonics: int(1)?,
-            theta_nodes: int(2)?,
-            pairs: int(3)? == 1,
-            cross: if form_a.len() == 6 { int(5)? } else { 0 },
-        };
-        let q = int(4)?;
-        if !(1..=MAX_LEGENDRE).contains(&form.legendre)
-            || form.theta_nodes < 2
-            || form.harmonics > MAX_HARMONICS
-            || form.cross > MAX_CROSS
-            || !(1..=MAX_Q).contains(&q)
-        {
-            return Err(FormatError::BadArray("form"));
-        }
+        let t = Self::parse(&Container::from_bytes(bytes)?)?;
+        t.check()?;
+        Ok(t)
+    }
+
+    /// Finds every array with its shape (from the form's sizes and the grids' lengths), all
+    /// values finite.
+    fn parse(c: &Container<'a>) -> Result<Self, FormatError> {
+        let (form, q) = parse_form(c)?;
         let count = |name: &'static str| {
             c.find(name)
                 .map(|a| a.len())
                 .ok_or(FormatError::Missing(name))
         };
         let (g, l, m, n) = (
-            count("group_first")?,
-            count("mu_l_nodes")?,
-            count("mu_v_nodes")?,
-            count("thickness")?,
+            count(names::GROUP_FIRST)?,
+            count(names::MU_L_NODES)?,
+            count(names::MU_V_NODES)?,
+            count(names::THICKNESS)?,
         );
-        if g == 0
-            || l == 0
-            || m == 0
-            || n == 0
-            || g > MAX_GROUPS
-            || l > 1024
-            || m > 1024
-            || n > 1024
+        if !(1..=MAX_GROUPS).contains(&g) || [l, m, n].iter().any(|k| !(1..=MAX_NODES).contains(k))
         {
-            return Err(FormatError::BadArray("group_first"));
+            return Err(FormatError::BadArray(names::GROUP_FIRST));
         }
         let p = form.n_params(m, l);
-        let theta_len = count("phase_theta")?;
-        let t = TransportTables {
-            collector: collector_part(&c, g, m, l)?,
+        let theta_len = count(names::PHASE_THETA)?;
+        let beta_len = g
+            .checked_mul(p)
+            .and_then(|x| x.checked_mul(q))
+            .ok_or(FormatError::BadArray(names::BETA))?;
+        Ok(TransportTables {
+            collector: collector_part(c, g, m, l)?,
             form,
             q,
-            group_first: need(&c, "group_first", g)?,
-            mu_l: need(&c, "mu_l_nodes", l)?,
-            mu_v: need(&c, "mu_v_nodes", m)?,
-            thickness: need(&c, "thickness", n)?,
-            ln_t_range: need(&c, "ln_t_range", 2 * g)?,
-            beta: need(
-                &c,
-                "beta",
-                g.checked_mul(p)
-                    .and_then(|x| x.checked_mul(q))
-                    .ok_or(FormatError::BadArray("beta"))?,
-            )?,
-            u_range: need(&c, "u_range", g * n * l * m)?,
-            phase_theta: need(&c, "phase_theta", theta_len)?,
-            phase: need(&c, "phase", theta_len)?,
-        };
+            group_first: need(c, names::GROUP_FIRST, g)?,
+            mu_l: need(c, names::MU_L_NODES, l)?,
+            mu_v: need(c, names::MU_V_NODES, m)?,
+            thickness: need(c, names::THICKNESS, n)?,
+            ln_t_range: need(c, names::LN_T_RANGE, 2 * g)?,
+            beta: need(c, names::BETA, beta_len)?,
+            u_range: need(c, names::U_RANGE, g * n * l * m)?,
+            phase_theta: need(c, names::PHASE_THETA, theta_len)?,
+            phase: need(c, names::PHASE, theta_len)?,
+        })
+    }
+
+    /// Checks the values the shapes do not: increasing grids, depth ranges packed as exact
+    /// integers, a phase function of at least two non-negative values.
+    fn check(&self) -> Result<(), FormatError> {
         for (a, name) in [
-            (&t.mu_l, "mu_l_nodes"),
-            (&t.mu_v, "mu_v_nodes"),
-            (&t.thickness, "thickness"),
-            (&t.phase_theta, "phase_theta"),
+            (&self.mu_l, names::MU_L_NODES),
+            (&self.mu_v, names::MU_V_NODES),
+            (&self.thickness, names::THICKNESS),
+            (&self.phase_theta, names::PHASE_THETA),
         ] {
             if !increasing(a) {
                 return Err(FormatError::BadArray(name));
             }
         }
         let packed_max = (U_STEPS * U_STEPS - 1) as f32;
-        if t.u_range
+        if self
+            .u_range
             .iter()
             .any(|v| !(v >= 0.0 && v <= packed_max && v == (v as u32) as f32))
         {
-            return Err(FormatError::BadArray("u_range"));
+            return Err(FormatError::BadArray(names::U_RANGE));
         }
-        if theta_len < 2 || t.phase.iter().any(|v| v < 0.0) {
-            return Err(FormatError::BadArray("phase"));
+        if self.phase_theta.len() < 2 || self.phase.iter().any(|v| v < 0.0) {
+            return Err(FormatError::BadArray(names::PHASE));
         }
-        Ok(t)
+        Ok(())
     }
 
     /// Number of order groups (of orders ≥ 2).
@@ -216,84 +217,50 @@ impl<'a> TransportTables<'a> {
         self.group_first.get(g)
     }
 
-    /// T = L/E⊥ (sr⁻¹) of group `g` at depth `d` of a slab of thickness `t` (mfp), view
-    /// (`mu_v`, `psi_v` radians), sun `mu_l`; 0 where the tables resolve nothing. For several
-    /// groups at one point, [`Self::transport_all`] shares the work.
-    pub fn transport(&self, g: usize, d: f32, t: f32, mu_v: f32, psi_v: f32, mu_l: f32) -> f32 {
-        let mut all = [0.0f32; MAX_GROUPS];
-        self.transport_all(d, t, mu_v, psi_v, mu_l, &mut all);
-        all.get(g).copied().unwrap_or(0.0)
+    /// T = L/E⊥ (sr⁻¹) of group `g` at `at`; 0 where the tables resolve nothing or `g` is not
+    /// a group. For several groups at one point, [`Self::transport_all`] shares the work.
+    pub fn transport(&self, g: usize, at: &SlabPoint<f32>) -> f32 {
+        match self.point(at) {
+            Some(pt) if g < self.groups() => self.t_of(&pt, g),
+            _ => 0.0,
+        }
     }
 
-    /// T of every group at one point into `out[..groups()]` (the rest untouched): the features
+    /// T of every group at `at` into `out[..groups()]` (the rest untouched): the features
     /// (geometry, single-scattering factor, scattering angle) are computed once, then each
     /// group is a dot product with its parameters at t.
-    pub fn transport_all(&self, d: f32, t: f32, mu_v: f32, psi_v: f32, mu_l: f32, out: &mut [f32]) {
+    pub fn transport_all(&self, at: &SlabPoint<f32>, out: &mut [f32]) {
         let groups = self.groups().min(out.len());
         out[..groups].iter_mut().for_each(|v| *v = 0.0);
-        if let Some(pt) = self.point(d, t, mu_v, psi_v, mu_l) {
+        if let Some(pt) = self.point(at) {
             for (g, slot) in out[..groups].iter_mut().enumerate() {
                 *slot = self.t_of(&pt, g);
             }
         }
     }
 
-    /// T, c and σ of every group at one point into `out[..groups()]` (the rest untouched); c
-    /// and σ are 0 where T is, or when the file holds no collector.
-    pub fn evaluate_all(
-        &self,
-        d: f32,
-        t: f32,
-        mu_v: f32,
-        psi_v: f32,
-        mu_l: f32,
-        out: &mut [Transport],
-    ) {
+    /// T, c and σ of group `g` at `at`; c and σ are 0 where T is, or when the file holds no
+    /// collector; all 0 when `g` is not a group.
+    pub fn evaluate(&self, g: usize, at: &SlabPoint<f32>) -> Transport {
+        match self.point(at) {
+            Some(pt) if g < self.groups() => self.transport_of(&pt, &self.collector_rows(&pt), g),
+            _ => Transport::default(),
+        }
+    }
+
+    /// T, c and σ of every group at `at` into `out[..groups()]` (the rest untouched); c and σ
+    /// are 0 where T is, or when the file holds no collector.
+    pub fn evaluate_all(&self, at: &SlabPoint<f32>, out: &mut [Transport]) {
         let groups = self.groups().min(out.len());
         out[..groups]
             .iter_mut()
             .for_each(|v| *v = Transport::default());
-        let Some(pt) = self.point(d, t, mu_v, psi_v, mu_l) else {
+        let Some(pt) = self.point(at) else {
             return;
         };
-        let (nl, nm) = (self.mu_l.len(), self.mu_v.len());
-        // The features are the same for every group: c_z's ℓ/σ̂ terms are computed with σ̂ = 1
-        // and divided by the group's σ̂ after the dot product.
-        let mut rows = [[(0u32, 0.0f32); MAX_C_FEATURES]; 3];
-        let mut lens = [0usize; 3];
-        if let Some(cp) = &self.collector {
-            for ((stat, row), n) in Statistic::ALL.iter().zip(&mut rows).zip(&mut lens) {
-                cp.form
-                    .for_each_feature(*stat, &pt.cell, 1.0, nm, nl, |col, v| {
-                        if *n < MAX_C_FEATURES {
-                            row[*n] = (col as u32, v);
-                            *n += 1;
-                        }
-                    });
-            }
-        }
-        // The ℓ/σ̂ terms are c_z's last blocks: a suffix of its row.
-        let split = self.collector.map_or(0, |cp| {
-            let reach = cp.form.cz_reach_start(nm, nl) as u32;
-            rows[1][..lens[1]].partition_point(|&(col, _)| col < reach)
-        });
+        let rows = self.collector_rows(&pt);
         for (g, slot) in out[..groups].iter_mut().enumerate() {
-            slot.t = self.t_of(&pt, g);
-            let Some(cp) = &self.collector else { continue };
-            if !(slot.t > 0.0) {
-                continue;
-            }
-            let lq = legendre_in(&self.ln_t_range, g, pt.ln_t, cp.q);
-            let dot = |s: usize, row: &[(u32, f32)]| {
-                let first = g * cp.form.n_params(Statistic::ALL[s], nm, nl);
-                dot_at_t(&cp.beta[s], first, cp.q, &lq, row)
-            };
-            let sigma = Real::exp(dot(0, &rows[0][..lens[0]]));
-            let (near, reach) = rows[1][..lens[1]].split_at(split);
-            let cz = dot(1, near) + dot(1, reach) / sigma;
-            slot.sigma = sigma;
-            slot.c_z = sigma * cz;
-            slot.c_x = sigma * dot(2, &rows[2][..lens[2]]);
+            *slot = self.transport_of(&pt, &rows, g);
         }
     }
 
@@ -302,23 +269,25 @@ impl<'a> TransportTables<'a> {
         self.collector.is_some()
     }
 
+    /// Order 1 (single scattering of the sun beam, sr⁻¹) at `at`, albedo 1.
+    pub fn order1(&self, at: &SlabPoint<f32>) -> f32 {
+        single_scattering(&StoredPhase(self), 1.0, at)
+    }
+
     /// The features of T at a point, or None where every group is 0.
-    fn point(&self, d: f32, t: f32, mu_v: f32, psi_v: f32, mu_l: f32) -> Option<Point> {
+    fn point(&self, at: &SlabPoint<f32>) -> Option<Point> {
+        let (t, d) = (at.thickness, at.depth);
         if !(t > 0.0) || !(d >= 0.0 && d <= t) {
             return None;
         }
         let (nl, nm) = (self.mu_l.len(), self.mu_v.len());
         let cell = Cell {
-            l: lerp(&self.mu_l, mu_l),
-            mu_l,
-            v: lerp(&self.mu_v, mu_v),
-            mu_v,
-            psi_v,
+            at: *at,
+            l: lerp(&self.mu_l, at.mu_l),
+            v: lerp(&self.mu_v, at.mu_v),
             u: stretched_u(d, t),
-            d,
-            t,
         };
-        let offset = ln_boundary(&cell)?;
+        let offset = ln_boundary(at)?;
         let mut row = [(0u32, 0.0f32); MAX_FEATURES];
         let mut n = 0;
         let ok = self.form.for_each_feature(&cell, nm, nl, |col, v| {
@@ -348,9 +317,57 @@ impl<'a> TransportTables<'a> {
         Real::exp(pt.offset + dot_at_t(&self.beta, g * p, self.q, &lq, &pt.row[..pt.n]))
     }
 
-    /// Order 1 (single scattering of the sun beam, sr⁻¹) at the same point, albedo 1.
-    pub fn order1(&self, d: f32, t: f32, mu_v: f32, psi_v: f32, mu_l: f32) -> f32 {
-        single_scattering(&StoredPhase(self), 1.0, mu_l, t, d, mu_v, psi_v)
+    /// The collector features at `pt`, the same for every group: c_z's ℓ/σ̂ terms are
+    /// computed with σ̂ = 1 and divided by the group's σ̂ after the dot product.
+    fn collector_rows(&self, pt: &Point) -> CollectorRows {
+        let mut rows = CollectorRows {
+            row: [[(0u32, 0.0f32); MAX_C_FEATURES]; 3],
+            len: [0; 3],
+            reach: 0,
+        };
+        let Some(cp) = &self.collector else {
+            return rows;
+        };
+        let (nl, nm) = (self.mu_l.len(), self.mu_v.len());
+        for ((stat, row), n) in Statistic::ALL.iter().zip(&mut rows.row).zip(&mut rows.len) {
+            cp.form
+                .for_each_feature(*stat, &pt.cell, 1.0, nm, nl, |col, v| {
+                    if *n < MAX_C_FEATURES {
+                        row[*n] = (col as u32, v);
+                        *n += 1;
+                    }
+                });
+        }
+        // The ℓ/σ̂ terms are c_z's last blocks: a suffix of its row.
+        let reach = cp.form.cz_reach_start(nm, nl) as u32;
+        rows.reach = rows.row[1][..rows.len[1]].partition_point(|&(col, _)| col < reach);
+        rows
+    }
+
+    /// T, c and σ of group `g` at `pt`.
+    fn transport_of(&self, pt: &Point, rows: &CollectorRows, g: usize) -> Transport {
+        let t = self.t_of(pt, g);
+        let (Some(cp), true) = (&self.collector, t > 0.0) else {
+            return Transport {
+                t,
+                ..Transport::default()
+            };
+        };
+        let (nl, nm) = (self.mu_l.len(), self.mu_v.len());
+        let lq = legendre_in(&self.ln_t_range, g, pt.ln_t, cp.q);
+        let dot = |s: usize, row: &[(u32, f32)]| {
+            let first = g * cp.form.n_params(Statistic::ALL[s], nm, nl);
+            dot_at_t(&cp.beta[s], first, cp.q, &lq, row)
+        };
+        let sigma = Real::exp(dot(0, rows.of(0)));
+        let (near, reach) = rows.of(1).split_at(rows.reach);
+        let cz = dot(1, near) + dot(1, reach) / sigma;
+        Transport {
+            t,
+            c_x: sigma * dot(2, rows.of(2)),
+            c_z: sigma * cz,
+            sigma,
+        }
     }
 
     /// Whether u lies within the fitted depths of the thickness nodes `k` around t and of the
@@ -402,6 +419,43 @@ impl<'a> TransportTables<'a> {
         };
         pa + w * (pb - pa)
     }
+}
+
+/// The collector's features at one point: ln σ, c_z and c_x rows, and where c_z's ℓ/σ̂ terms
+/// start in its row.
+struct CollectorRows {
+    row: [[(u32, f32); MAX_C_FEATURES]; 3],
+    len: [usize; 3],
+    reach: usize,
+}
+
+impl CollectorRows {
+    fn of(&self, s: usize) -> &[(u32, f32)] {
+        &self.row[s][..self.len[s]]
+    }
+}
+
+/// The T form's sizes and Q from the `form` array, within the runtime's limits.
+fn parse_form(c: &Container) -> Result<(LogAdditive, usize), FormatError> {
+    let bad = FormatError::BadArray(names::FORM);
+    let a = c.find(names::FORM).ok_or(FormatError::Missing(names::FORM))?;
+    if !(5..=6).contains(&a.len()) || a.iter().any(|v| !(v >= 0.0 && v <= 4096.0 && v == (v as u32) as f32))
+    {
+        return Err(bad);
+    }
+    let int = |i: usize| a.get(i).map_or(0, |v| v as usize);
+    let form = LogAdditive {
+        legendre: int(0),
+        harmonics: int(1),
+        theta_nodes: int(2),
+        pairs: int(3) == 1,
+        cross: if a.len() == 6 { int(5) } else { 0 },
+    };
+    let q = int(4);
+    if form.check().is_err() || !(1..=MAX_Q).contains(&q) {
+        return Err(bad);
+    }
+    Ok((form, q))
 }
 
 /// The features of T at one point.
@@ -463,10 +517,10 @@ fn collector_part<'a>(
     m: usize,
     l: usize,
 ) -> Result<Option<CollectorPart<'a>>, FormatError> {
-    let Some(sizes) = c.find("collector_form") else {
+    let Some(sizes) = c.find(names::COLLECTOR_FORM) else {
         return Ok(None);
     };
-    let bad = FormatError::BadArray("collector_form");
+    let bad = FormatError::BadArray(names::COLLECTOR_FORM);
     if sizes.len() != 4
         || sizes
             .iter()
@@ -481,11 +535,7 @@ fn collector_part<'a>(
         theta_nodes: int(2),
     };
     let q = int(3);
-    if !(1..=MAX_COLLECTOR_LEGENDRE).contains(&form.legendre)
-        || form.theta_nodes < 2
-        || form.harmonics > MAX_COLLECTOR_HARMONICS
-        || !(1..=MAX_Q).contains(&q)
-    {
+    if form.check().is_err() || !(1..=MAX_Q).contains(&q) {
         return Err(bad);
     }
     let mut beta = [None; 3];
@@ -493,7 +543,7 @@ fn collector_part<'a>(
         beta.iter_mut().zip(
             Statistic::ALL
                 .iter()
-                .zip(["sigma_beta", "cz_beta", "cx_beta"]),
+                .zip(names::COLLECTOR_BETA),
         )
     {
         *slot = Some(need(c, name, g * form.n_params(*stat, m, l) * q)?);

@@ -1,0 +1,34 @@
+//! Where in the canonical slab the transport is evaluated: one named value instead of five
+//! floats of the same type (which invite swapped arguments).
+//!
+//! The slab: thickness t (mean free paths, mfp), lit from above by the sun at μ_L = cos φ_L;
+//! depth d from the lit face (0 ≤ d ≤ t). The view direction is the direction the light
+//! travels toward the eye: μ_V its cosine with the upward normal (> 0: going up, toward the
+//! lit face), ψ_V its azimuth from the sun's horizontal travel (radians). docs/conventions.md
+//! draws the frame.
+
+/// A viewpoint and direction in a slab lit by the sun.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SlabPoint<F> {
+    /// Depth d from the lit face (mfp), 0 ≤ d ≤ t.
+    pub depth: F,
+    /// Optical thickness t of the slab (mfp), > 0.
+    pub thickness: F,
+    /// Cosine μ_V of the light's travel toward the eye with the upward normal (> 0: up).
+    pub mu_v: F,
+    /// Azimuth ψ_V of that travel from the sun's horizontal travel (radians).
+    pub psi_v: F,
+    /// Sun cosine μ_L ∈ (0, 1].
+    pub mu_l: F,
+}
+
+impl<F: Copy> SlabPoint<F> {
+    /// The same place and sun, another view direction.
+    pub fn with_view(self, mu_v: F, psi_v: F) -> Self {
+        Self {
+            mu_v,
+            psi_v,
+            ..self
+        }
+    }
+}
