@@ -8,7 +8,7 @@ pub mod compress;
 pub mod fit;
 pub mod io;
 pub mod mie;
-pub mod phase_models;
+pub mod phase;
 pub mod render;
 pub mod slab;
 pub mod stats;

@@ -228,6 +228,58 @@ fn phase_writes_tables_luts_and_csv_and_refuses_bad_models() {
     }
 }
 
+/// One vocabulary: both spellings of names, lists of angles everywhere, and a flag a model
+/// does not take, a negative size parameter or the other sign of an absorbing index is an
+/// error that says what is wrong.
+#[test]
+fn names_flags_and_values_mean_one_thing_everywhere() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("p");
+    let out_s = out.to_str().unwrap();
+    for model in ["hg-draine", "hg_draine"] {
+        for preset in ["jendersie-deon", "jendersie_deon"] {
+            succeeds(&[
+                "phase", "--model", model, "--diameter", "10", "--preset", preset, "--angles",
+                "0,90,180", "--out", out_s,
+            ]);
+        }
+    }
+    let read = |dir: &Path| {
+        nephele::io::npz::read_arrays(&dir.join("phase.npz"), &["theta_deg", "phase"]).unwrap()
+    };
+    assert_eq!(read(&out)[0], [0.0, 90.0, 180.0]);
+    let bad_out = dir.path().join("bad");
+    let bad_s = bad_out.to_str().unwrap();
+    for (args, says) in [
+        (vec!["phase", "--model", "hg", "--g", "0.5", "--kappa", "3"], "does not take kappa"),
+        (vec!["phase", "--model", "hg-draine", "--diameter", "10", "--g", "0.5"], "does not take g"),
+        (vec!["phase", "--model", "hg-draine", "--g-hg", "0.5"], "hg-draine needs g_d"),
+        (vec!["phase", "--model", "hg", "--g", "0.5", "--table", "x.npz"], "does not take table"),
+        (vec!["phase", "--model", "hg", "--g", "0.5", "--preset", "nephele"], "does not take preset"),
+        (vec!["sphere", "--index", "1.33", "--x", "-3"], "positive size parameter"),
+        (vec!["sphere", "--index", "1.5-0.1i", "--x", "3"], "use 1.5+0.1i"),
+    ] {
+        let mut a = args.clone();
+        if a[0] == "phase" {
+            a.extend(["--out", bad_s]);
+        }
+        let o = nephele(&a);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(says), "{args:?}: {err}");
+        assert!(!err.contains("Hg") && !err.contains("panicked"), "{args:?}: {err}");
+        assert!(files_in(&bad_out).is_empty(), "{args:?} left files");
+    }
+    // Two-term HG: --w weighs the first lobe, as its help says.
+    let two = dir.path().join("two");
+    succeeds(&[
+        "phase", "--model", "two-term-hg", "--g", "0.9", "--g2", "-0.3", "--w", "1", "--angles",
+        "0,90,180", "--out", two.to_str().unwrap(),
+    ]);
+    let hg = |mu: f64| (1.0 - 0.81) / (4.0 * std::f64::consts::PI * (1.81 - 1.8 * mu).powf(1.5));
+    let p0 = read(&two)[1][0];
+    assert!((p0 - hg(1.0)).abs() < 1e-9 * hg(1.0), "{p0} vs {}", hg(1.0));
+}
+
 #[test]
 fn fit_quick_config_writes_json_npz_and_figures() {
     let dir = tempfile::tempdir().unwrap();

@@ -214,7 +214,7 @@ fn small_cloud() -> nephele::render::scene::Scene {
     scene.camera.width = 24;
     scene.camera.height = 16;
     scene.spp = 2;
-    scene.phase = nephele::slab::PhaseSpec::Hg { g: 0.85 };
+    scene.phase = nephele::phase::PhaseSpec::Hg { g: 0.85 };
     scene
 }
 

@@ -15,7 +15,8 @@ use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// Options of `nephele mie`; a JSON config (--config) takes the same keys, flags win.
+/// Options of `nephele mie`; a JSON config (--config) takes the same keys, flags win. Keys are
+/// the flags' names in snake_case (`medium_index`; the kebab-case spelling works too).
 #[derive(Args, Debug, Default, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MieArgs {
@@ -27,7 +28,7 @@ pub struct MieArgs {
     /// or a range "5:50:46" (or log-spaced "log:0.1:5:30") computes several tables sharing one
     /// ln-x table. [default: 10]
     #[arg(long, value_name = "UM", allow_hyphen_values = true)]
-    #[serde(default, deserialize_with = "str_or_num")]
+    #[serde(default, alias = "diameter_um", deserialize_with = "str_or_num")]
     diameter: Option<String>,
     /// σ of ln d of the log-normal distribution.
     #[arg(long, value_name = "S", allow_hyphen_values = true)]
@@ -49,9 +50,10 @@ pub struct MieArgs {
     index: Option<String>,
     /// Refractive index of the medium. [default: 1]
     #[arg(long, value_name = "N")]
+    #[serde(alias = "medium-index")]
     medium_index: Option<f64>,
-    /// Angle grid: "default" (0–5° by 0.01°, 5–180° by 0.1°) or a file of angles in degrees,
-    /// one per line, increasing from 0 to 180.
+    /// Angle grid: "default" (0–5° by 0.01°, 5–180° by 0.1°), a comma-separated list or a file
+    /// of angles in degrees, one per line, increasing from 0 to 180.
     #[arg(long, value_name = "default|FILE")]
     angles: Option<String>,
     /// Illuminant of the sRGB channel phase functions.
@@ -62,12 +64,15 @@ pub struct MieArgs {
     legendre: Option<usize>,
     /// Largest step in ln x of the converged size grid (small droplets). [default: 2.5e-4]
     #[arg(long, value_name = "H")]
+    #[serde(alias = "ln-step")]
     ln_step: Option<f64>,
     /// Largest step in x = πd/λ of the converged size grid (large droplets). [default: 0.01]
     #[arg(long, value_name = "DX")]
+    #[serde(alias = "x-step")]
     x_step: Option<f64>,
     /// Half-width of the size support of the converged rule, in σ. [default: 5]
     #[arg(long, value_name = "Z")]
+    #[serde(alias = "z-max")]
     z_max: Option<f64>,
     /// Output directory. [default: outputs/mie]
     #[arg(long, value_name = "DIR")]
@@ -79,6 +84,7 @@ pub struct MieArgs {
     /// Do not draw phase.png.
     #[arg(long)]
     #[serde(default)]
+    #[serde(alias = "no-plot")]
     no_plot: bool,
 }
 

@@ -59,6 +59,22 @@ enum Command {
     Sphere(sphere::SphereArgs),
 }
 
+/// A parser of the names in `names` (kebab-case, shown in `--help`), accepting their
+/// snake_case spelling too.
+fn names<T: Copy + Send + Sync + 'static>(
+    names: &'static [(T, &'static str)],
+) -> impl clap::builder::TypedValueParser<Value = T> {
+    use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+    let values = names.iter().map(|(_, n)| {
+        let snake: &'static str = Box::leak(n.replace('-', "_").into_boxed_str());
+        PossibleValue::new(*n).alias(snake)
+    });
+    PossibleValuesParser::new(values).map(move |s: String| {
+        let kebab = s.replace('_', "-");
+        names.iter().find(|(_, n)| *n == kebab).map(|(v, _)| *v).unwrap_or(names[0].0)
+    })
+}
+
 /// Runs the parsed command.
 pub fn run(cli: Cli) -> Result<()> {
     if let Some(n) = cli.threads {

@@ -5,7 +5,7 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use nephele::io::{AtomicFiles, Npz};
 use nephele::mie::grid::angles_from_spec;
-use nephele::phase_models::{build, Model, ModelParams, Preset};
+use nephele::phase::{build, Model, ModelParams, Preset};
 use nephele_runtime::phase::TabulatedTable;
 use nephele_runtime::PhaseFunction;
 use rand::{Rng, SeedableRng};
@@ -17,38 +17,50 @@ use std::path::PathBuf;
 /// Options of `nephele phase`.
 #[derive(Args, Debug)]
 pub struct PhaseArgs {
-    /// The model.
-    #[arg(long, value_enum)]
+    /// The model (snake_case names work too). Each takes its own parameters; any other one
+    /// is an error.
+    #[arg(long, value_parser = super::names(&Model::NAMES))]
     model: Model,
-    /// Asymmetry g (HG, Draine, Cornette–Shanks, first lobe of two-term HG, HG lobe of HG+Draine).
+    /// Asymmetry g (HG, Draine, Cornette–Shanks, Reynolds–McCormick, XLF; the first lobe of
+    /// two-term HG).
     #[arg(long, allow_hyphen_values = true)]
     g: Option<f64>,
-    /// Second g (two-term HG; the Draine lobe's g of HG+Draine).
+    /// The second lobe's g (two-term HG).
     #[arg(long, allow_hyphen_values = true)]
     g2: Option<f64>,
-    /// Draine α ≥ 0.
-    #[arg(long)]
-    alpha: Option<f64>,
-    /// Lobe weight in [0, 1] (first lobe of two-term HG; the Draine lobe of HG+Draine).
+    /// The first lobe's weight in [0, 1] (two-term HG: w HG(g) + (1 − w) HG(g2)).
     #[arg(long)]
     w: Option<f64>,
+    /// Draine α ≥ 0 (Draine, HG+Draine); Reynolds–McCormick α > 0.
+    #[arg(long, allow_hyphen_values = true)]
+    alpha: Option<f64>,
+    /// HG+Draine: the HG lobe's g ((1 − w_d) HG(g_hg) + w_d Draine(g_d, α)).
+    #[arg(long, allow_hyphen_values = true)]
+    g_hg: Option<f64>,
+    /// HG+Draine: the Draine lobe's g.
+    #[arg(long, allow_hyphen_values = true)]
+    g_d: Option<f64>,
+    /// HG+Draine: the Draine lobe's weight in [0, 1].
+    #[arg(long, allow_hyphen_values = true)]
+    w_d: Option<f64>,
     /// Schlick k in (−1, 1).
     #[arg(long, allow_hyphen_values = true)]
     k: Option<f64>,
     /// von Mises–Fisher κ ≥ 0.
     #[arg(long)]
     kappa: Option<f64>,
-    /// Droplet diameter in µm for an HG+Draine preset (--preset).
-    #[arg(long, value_name = "UM")]
+    /// Droplet diameter in µm for an HG+Draine preset (--preset); also --diameter-um.
+    #[arg(long, value_name = "UM", visible_alias = "diameter-um", allow_hyphen_values = true)]
     diameter: Option<f64>,
-    /// Which diameter → parameter curves --diameter uses: the paper's (Jendersie & d'Eon 2023)
-    /// or nephele's refit (stage 3, docs/fit.md).
-    #[arg(long, value_enum, default_value_t = Preset::JendersieDeon)]
-    preset: Preset,
+    /// Which diameter → parameter curves --diameter uses: the paper's (Jendersie & d'Eon 2023,
+    /// the default) or nephele's refit (docs/fit.md).
+    #[arg(long, value_parser = super::names(&Preset::NAMES))]
+    preset: Option<Preset>,
     /// phase.npz of `nephele mie` (its `phase` on its `theta_deg`) for --model tabulated.
     #[arg(long, value_name = "FILE")]
     table: Option<PathBuf>,
-    /// Angle grid: "default" or a file of angles in degrees from 0 to 180.
+    /// Angle grid in degrees from 0 to 180: "default", a comma-separated list (0,90,180) or a
+    /// file of angles, one per line.
     #[arg(long, default_value = "default")]
     angles: String,
     /// Also draw this many sampled cosines (f64 sampler) into samples_mu.
@@ -71,18 +83,30 @@ pub struct PhaseArgs {
 impl PhaseArgs {
     /// The model as a trait object, with its parameters echoed as JSON.
     fn build(&self) -> Result<(Box<dyn PhaseFunction<f64>>, serde_json::Value)> {
-        let params = ModelParams {
+        anyhow::ensure!(
+            self.table.is_none(),
+            "model {} does not take table (only tabulated does)",
+            self.model.name()
+        );
+        let (model, echo) = build(self.model, &self.params())?;
+        Ok((model, echo))
+    }
+
+    /// The model's parameters as given.
+    fn params(&self) -> ModelParams {
+        ModelParams {
             g: self.g,
             g2: self.g2,
             alpha: self.alpha,
             w: self.w,
+            g_hg: self.g_hg,
+            g_d: self.g_d,
+            w_d: self.w_d,
             k: self.k,
             kappa: self.kappa,
             diameter: self.diameter,
             preset: self.preset,
-        };
-        let (model, echo) = build(self.model, &params)?;
-        Ok((model, echo))
+        }
     }
 }
 
@@ -95,6 +119,7 @@ pub fn run(args: PhaseArgs) -> Result<()> {
     let table;
     let (model, params): (Box<dyn PhaseFunction<f64> + '_>, serde_json::Value) =
         if args.model == Model::Tabulated {
+            args.params().check_for(Model::Tabulated)?;
             let path = args
                 .table
                 .as_ref()
@@ -160,10 +185,12 @@ pub fn run(args: PhaseArgs) -> Result<()> {
         })?;
     }
     set.commit()?;
+    let mean = model
+        .mean_cosine()
+        .map_or("not in closed form".to_string(), |g| g.to_string());
     println!(
-        "{:?}: mean cosine {:?} → {}",
-        args.model,
-        model.mean_cosine(),
+        "{}: mean cosine {mean} → {}",
+        args.model.name(),
         args.out.display()
     );
     Ok(())

@@ -6,7 +6,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 use nephele::io::plot::{panels_plot, Panel, Series, Style};
 use nephele::io::{AtomicFiles, Npz};
 use nephele::slab::checkpoint::Checkpoint;
-use nephele::slab::tables::{merge, run_all, Control, PhaseModel, SlabRun};
+use nephele::phase::Phase;
+use nephele::slab::tables::{merge, run_all, Control, SlabRun};
 use nephele::slab::SlabConfig;
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -99,7 +100,7 @@ pub fn run_config(
     plot: bool,
 ) -> Result<()> {
     let t0 = Instant::now();
-    let phase = PhaseModel::build(&cfg.phase)?;
+    let phase = Phase::build(&cfg.phase)?;
     let phase_s = t0.elapsed().as_secs_f64();
     let checkpoint = Checkpoint::open(&out.join("checkpoint"), cfg)?;
     let control = Control {

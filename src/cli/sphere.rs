@@ -13,7 +13,7 @@ pub struct SphereArgs {
     #[arg(long, value_name = "M")]
     index: String,
     /// Size parameter x = π d n_medium / λ.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     x: f64,
     /// Scattering angles in degrees, comma-separated, or "default" for the 2251-angle grid.
     #[arg(long, value_name = "DEG,DEG,…", default_value = "0,90,180")]
@@ -34,10 +34,7 @@ pub fn run(args: SphereArgs) -> Result<()> {
     let angles: Vec<f64> = if args.angles == "default" {
         nephele::mie::grid::reference_angles_deg()
     } else {
-        args.angles
-            .split(',')
-            .map(|a| a.trim().parse::<f64>())
-            .collect::<Result<_, _>>()?
+        nephele::mie::grid::angle_list(&args.angles)?
     };
     if angles.iter().any(|a| !(0.0..=180.0).contains(a)) {
         bail!("--angles must lie within 0–180°");

@@ -11,8 +11,7 @@ use super::report::{collector_error_on, group_error, group_error_on, CollectorEr
 use super::ship::{ntt_bytes, phase_angles};
 use super::{LogAdditive, SlabTables};
 use crate::io::{write_atomic, AtomicFiles, Npz};
-use crate::slab::tables::PhaseModel;
-use crate::slab::PhaseSpec;
+use crate::phase::{Phase, PhaseSpec};
 use anyhow::{anyhow, ensure, Context, Result};
 use nephele_runtime::transport::fitting::{CollectorForm, Statistic};
 use nephele_runtime::transport::{single_scattering, SlabPoint};
@@ -344,7 +343,7 @@ fn held_out_study(tab: &SlabTables, opt: &Options) -> Result<HeldOut> {
 }
 
 /// The phase function of the slab run (its tables.json's config.phase).
-fn phase_model_of_run(tables: &Path) -> Result<PhaseModel> {
+fn phase_model_of_run(tables: &Path) -> Result<Phase> {
     let json = tables.with_extension("json");
     let text = std::fs::read_to_string(&json).with_context(|| {
         format!(
@@ -356,7 +355,7 @@ fn phase_model_of_run(tables: &Path) -> Result<PhaseModel> {
         serde_json::from_str(&text).with_context(|| format!("'{}' is not JSON", json.display()))?;
     let spec: PhaseSpec = serde_json::from_value(doc["config"]["phase"].clone())
         .with_context(|| format!("'{}': no config.phase", json.display()))?;
-    PhaseModel::build(&spec)
+    Phase::build(&spec)
 }
 
 /// transport.ntt as written, and how closely the runtime follows the fit.

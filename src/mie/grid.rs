@@ -11,10 +11,16 @@ pub fn reference_angles_deg() -> Vec<f64> {
     fine.chain(coarse).collect()
 }
 
-/// Reads one angle in degrees per line (`#` comments allowed), or `default`.
+/// `default` (the reference grid), a comma-separated list, or a file of one angle in degrees
+/// per line (`#` comments allowed); strictly increasing from 0° to 180°.
 pub fn angles_from_spec(spec: &str) -> Result<Vec<f64>> {
     if spec == "default" {
         return Ok(reference_angles_deg());
+    }
+    if spec.contains(',') {
+        let out = angle_list(spec)?;
+        validate_angles(&out).with_context(|| format!("angles '{spec}'"))?;
+        return Ok(out);
     }
     let text = std::fs::read_to_string(Path::new(spec))
         .with_context(|| format!("cannot read angle file '{spec}'"))?;
@@ -34,6 +40,17 @@ pub fn angles_from_spec(spec: &str) -> Result<Vec<f64>> {
     }
     validate_angles(&out).with_context(|| format!("angle file '{spec}'"))?;
     Ok(out)
+}
+
+/// Angles in degrees from a comma-separated list ("0,90,180").
+pub fn angle_list(spec: &str) -> Result<Vec<f64>> {
+    spec.split(',')
+        .map(|a| {
+            a.trim()
+                .parse::<f64>()
+                .with_context(|| format!("angles: '{}' is not a number of degrees", a.trim()))
+        })
+        .collect()
 }
 
 /// Angles must be strictly increasing from exactly 0° to exactly 180°: the CDF, the Legendre

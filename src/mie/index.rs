@@ -56,6 +56,12 @@ impl RefractiveIndex {
             idx.validate()?;
             return Ok(idx);
         }
+        if let Some((n, k)) = negative_imaginary(s) {
+            bail!(
+                "index '{spec}': nephele writes an absorbing index as n+ki with k ≥ 0 (Bohren & \
+                 Huffman); '{n}-{k}i' is miepython's sign for the same sphere: use {n}+{k}i"
+            );
+        }
         Self::from_csv(Path::new(s))
     }
 
@@ -160,9 +166,26 @@ fn parse_complex(s: &str) -> Option<RefractiveIndex> {
     Some(RefractiveIndex::Constant { n, k })
 }
 
+/// (n, k) of "n-ki" (the other sign convention), if `s` has that form.
+fn negative_imaginary(s: &str) -> Option<(f64, f64)> {
+    let body = s.strip_suffix('i').or_else(|| s.strip_suffix('j'))?;
+    let split = body.rfind('-').filter(|&i| i > 0 && !body[..i].ends_with(['e', 'E']))?;
+    let n = body[..split].parse::<f64>().ok()?;
+    let k = body[split + 1..].parse::<f64>().ok()?;
+    Some((n, k))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// miepython's n − ki gets an error that says which sign nephele uses.
+    #[test]
+    fn the_other_sign_convention_is_explained() {
+        let e = RefractiveIndex::parse("1.5-0.1i").unwrap_err().to_string();
+        assert!(e.contains("use 1.5+0.1i"), "{e}");
+        assert!(RefractiveIndex::parse("1.5e-3").is_ok());
+    }
 
     #[test]
     fn parses_the_documented_forms() {

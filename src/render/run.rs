@@ -5,7 +5,7 @@
 use super::integrator::{trace, Volume};
 use super::medium::{cross, normalize, Vec3};
 use super::scene::{Camera, Scene};
-use crate::slab::tables::PhaseModel;
+use crate::phase::Phase;
 use anyhow::Result;
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
@@ -96,7 +96,7 @@ fn stride() -> usize {
 /// render at k · spp.
 pub fn render(scene: &Scene, progress: &(dyn Fn(f64) + Sync)) -> Result<Rendered> {
     let medium = scene.build_medium()?;
-    let models = PhaseModel::build_channels(&scene.phase)?;
+    let models = Phase::build_channels(&scene.phase)?;
     let cam = Pinhole::new(&scene.camera);
     let (w, h) = (cam.width, cam.height);
     let has_sky = scene.sky.iter().any(|&s| s > 0.0);
@@ -115,7 +115,7 @@ pub fn render(scene: &Scene, progress: &(dyn Fn(f64) + Sync)) -> Result<Rendered
         });
     };
     let mut passes = 0u32;
-    PhaseModel::with_all(&models, |phases| {
+    Phase::with_all(&models, |phases| {
         let volume = Volume {
             medium: medium.as_ref(),
             albedo: scene.albedo,

@@ -4,7 +4,7 @@
 //! z is up.
 
 use super::medium::{cross, dot, Affine, Cloud, Ellipsoid, Medium, Slab, Vec3, Voxels};
-use crate::slab::PhaseSpec;
+use crate::phase::PhaseSpec;
 use anyhow::{bail, ensure, Context, Result};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};

@@ -1,102 +1,12 @@
-//! A slab run's config (fit-configs/slab-*.json): the grids of spec 40, the phase function,
+//! A slab run's config (fit-configs/slab-*.json): the grids (docs/slab.md), the phase function,
 //! the seed and the stopping rule. Unknown keys and impossible values are errors.
 
 use super::grid::{stretched_depths, SlabGrid};
 use super::run::StopRule;
-use crate::phase_models::{build, Model, ModelParams};
-use anyhow::{bail, Context, Result};
+use crate::phase::PhaseSpec;
+use anyhow::{bail, Result};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
-use std::path::PathBuf;
-
-/// The phase function of the slab.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
-pub enum PhaseSpec {
-    /// A stage-1 Mie table in the paper's setup (water, σ = 0.25, 400–700 nm) at this median
-    /// diameter (µm), sampled exactly by the tabulated model.
-    Mie {
-        /// Median diameter (µm).
-        diameter_um: f64,
-        /// One phase function per linear-sRGB channel (the renderer only) instead of the mean.
-        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-        rgb: bool,
-    },
-    /// Henyey–Greenstein (for validation against DISORT).
-    Hg {
-        /// Asymmetry g.
-        g: f64,
-    },
-    /// HG + Draine from a diameter preset: "jendersie_deon" (default) or "nephele".
-    HgDraine {
-        /// Median diameter (µm).
-        diameter_um: f64,
-        /// The preset.
-        #[serde(default = "default_preset")]
-        preset: String,
-    },
-    /// Any analytic model of nephele-runtime by name, with its parameters (as `nephele phase
-    /// --model`): {"kind": "runtime", "model": "draine", "params": {"g": 0.8, "alpha": 1}}.
-    Runtime {
-        /// The model.
-        model: Model,
-        /// Its parameters.
-        #[serde(default)]
-        params: ModelParams,
-    },
-    /// A `nephele mie` phase.npz (its `theta_deg` and `phase`, or `phase_rgb`).
-    Table {
-        /// Path of the npz.
-        path: PathBuf,
-        /// Read `phase_rgb` (n × 3), one phase function per channel (the renderer only).
-        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-        rgb: bool,
-    },
-}
-
-fn default_preset() -> String {
-    "jendersie_deon".into()
-}
-
-impl Default for PhaseSpec {
-    fn default() -> Self {
-        PhaseSpec::Mie {
-            diameter_um: 10.0,
-            rgb: false,
-        }
-    }
-}
-
-impl PhaseSpec {
-    /// Whether there is one phase function per RGB channel.
-    pub fn is_rgb(&self) -> bool {
-        matches!(
-            self,
-            PhaseSpec::Mie { rgb: true, .. } | PhaseSpec::Table { rgb: true, .. }
-        )
-    }
-
-    /// Checks the parameters, naming the first bad one.
-    pub fn validate(&self) -> Result<()> {
-        match self {
-            PhaseSpec::Mie { diameter_um, .. } | PhaseSpec::HgDraine { diameter_um, .. }
-                if !(*diameter_um > 0.0 && *diameter_um <= 1e4) =>
-            {
-                bail!("phase.diameter_um = {diameter_um} must be in (0, 10000]")
-            }
-            PhaseSpec::Hg { g } if !(g.abs() < 1.0) => bail!("phase.g = {g} must be in (−1, 1)"),
-            PhaseSpec::HgDraine { preset, .. }
-                if preset != "jendersie_deon" && preset != "nephele" =>
-            {
-                bail!("phase.preset `{preset}` is unknown (valid: jendersie_deon, nephele)")
-            }
-            PhaseSpec::Runtime { model, params } => build(*model, params)
-                .map(|_| ())
-                .context("phase (kind runtime)"),
-            _ => Ok(()),
-        }
-    }
-}
 
 /// Everything a slab run needs.
 #[derive(Clone, Debug, Serialize, Deserialize)]

@@ -18,7 +18,7 @@ pub mod tables;
 pub mod tally;
 pub mod walk;
 
-pub use config::{PhaseSpec, SlabConfig};
+pub use config::SlabConfig;
 pub use grid::SlabGrid;
 pub use run::{run_slice, run_slice_from, SliceRun, StopRule};
 pub use walk::Slice;

@@ -3,143 +3,15 @@
 //! [group, t, μ_L, depth, μ_V, ψ_V].
 
 use super::checkpoint::Checkpoint;
-use super::config::{PhaseSpec, SlabConfig};
+use super::config::SlabConfig;
 use super::grid::SlabGrid;
 use super::run::{run_slice_from, SliceRun};
 use super::tally::Accumulator;
 use super::walk::Slice;
-use crate::mie::polydisperse::{CONVERGED_DEFAULT, DEFAULT_WAVELENGTHS};
-use crate::mie::MieJob;
-use anyhow::{anyhow, bail, ensure, Context, Result};
-use nephele_runtime::phase::{HenyeyGreenstein, TabulatedTable};
-use nephele_runtime::presets::{jendersie_deon, nephele_refit};
-use nephele_runtime::PhaseFunction;
+use crate::phase::Phase;
+use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
-
-/// The phase function of a run, owned.
-pub enum PhaseModel {
-    /// A tabulated table (Mie or from a file).
-    Table(TabulatedTable<f64>),
-    /// An analytic model.
-    Analytic(Box<dyn PhaseFunction<f64> + Sync>),
-}
-
-impl PhaseModel {
-    /// Builds the phase function of `spec` (a Mie table is computed here, a few seconds); a
-    /// per-channel (rgb) spec is an error here, see `build_channels`.
-    pub fn build(spec: &PhaseSpec) -> Result<Self> {
-        let mut models = Self::build_channels(spec)?;
-        if models.len() != 1 {
-            bail!("phase.rgb: one phase function is needed here, not one per channel");
-        }
-        Ok(models.remove(0))
-    }
-
-    /// The phase functions of `spec`: one per linear-sRGB channel when it asks for them (rgb),
-    /// else one.
-    pub fn build_channels(spec: &PhaseSpec) -> Result<Vec<Self>> {
-        let (theta, columns) = match spec {
-            PhaseSpec::Mie { diameter_um, rgb } => {
-                let job = MieJob::paper(*diameter_um, CONVERGED_DEFAULT, DEFAULT_WAVELENGTHS);
-                let mut tables = job.compute(&|_, _| {})?.0;
-                ensure!(!tables.is_empty(), "Mie job gave no table");
-                let t = tables.swap_remove(0);
-                let columns = if *rgb {
-                    channels(&t.phase_rgb)
-                } else {
-                    vec![t.phase]
-                };
-                (t.theta_deg, columns)
-            }
-            PhaseSpec::Table { path, rgb } => {
-                let name = if *rgb { "phase_rgb" } else { "phase" };
-                let mut a = crate::io::npz::read_arrays(path, &["theta_deg", name])?;
-                let p = a.pop().unwrap_or_default();
-                let theta = a.pop().unwrap_or_default();
-                ensure!(
-                    p.len() == theta.len() * if *rgb { 3 } else { 1 },
-                    "'{}': {name} does not match theta_deg",
-                    path.display()
-                );
-                (theta, if *rgb { channels(&p) } else { vec![p] })
-            }
-            PhaseSpec::Hg { g } => {
-                return Ok(vec![PhaseModel::Analytic(Box::new(HenyeyGreenstein::new(
-                    *g,
-                )))])
-            }
-            PhaseSpec::HgDraine {
-                diameter_um,
-                preset,
-            } => {
-                let p = if preset == "nephele" {
-                    nephele_refit(*diameter_um)
-                } else {
-                    jendersie_deon(*diameter_um)
-                };
-                return Ok(vec![PhaseModel::Analytic(Box::new(p.phase::<f64>()))]);
-            }
-            PhaseSpec::Runtime { model, params } => {
-                return Ok(vec![PhaseModel::Analytic(
-                    crate::phase_models::build(*model, params)?.0,
-                )]);
-            }
-        };
-        let source = match spec {
-            PhaseSpec::Table { path, .. } => format!(" '{}'", path.display()),
-            _ => String::new(),
-        };
-        columns
-            .iter()
-            .map(|p| {
-                let t = TabulatedTable::<f64>::from_phase(&theta, p)
-                    .map_err(|e| anyhow!("tabulated phase function{source}: {e:?}"))?;
-                Ok(PhaseModel::Table(t))
-            })
-            .collect()
-    }
-
-    /// Runs `f` with the phase function as a trait object.
-    pub fn with<R>(&self, f: impl FnOnce(&(dyn PhaseFunction<f64> + Sync)) -> R) -> R {
-        // (Not via with_all: callers use this per evaluation, and with_all allocates.)
-        match self {
-            PhaseModel::Table(t) => f(&t.view()),
-            PhaseModel::Analytic(b) => f(b.as_ref()),
-        }
-    }
-
-    /// Runs `f` with all of `models` as trait objects.
-    pub fn with_all<R>(
-        models: &[Self],
-        f: impl FnOnce(&[&(dyn PhaseFunction<f64> + Sync)]) -> R,
-    ) -> R {
-        let views: Vec<_> = models
-            .iter()
-            .map(|m| match m {
-                PhaseModel::Table(t) => Some(t.view()),
-                PhaseModel::Analytic(_) => None,
-            })
-            .collect();
-        let refs: Vec<&(dyn PhaseFunction<f64> + Sync)> = models
-            .iter()
-            .zip(&views)
-            .map(|(m, v)| match (m, v) {
-                (_, Some(v)) => v as &(dyn PhaseFunction<f64> + Sync),
-                (PhaseModel::Analytic(b), None) => b.as_ref(),
-                (PhaseModel::Table(_), None) => unreachable!("every table has its view"),
-            })
-            .collect();
-        f(&refs)
-    }
-}
-
-/// The three columns of an interleaved [n, 3] array.
-fn channels(rgb: &[f64]) -> Vec<Vec<f64>> {
-    (0..3)
-        .map(|c| rgb.iter().skip(c).step_by(3).copied().collect())
-        .collect()
-}
 
 /// What one slice reports besides its tables.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -197,7 +69,7 @@ pub struct Control<'a> {
 /// `progress(slice, slices, photons, worst_rel_se)` after each round.
 pub fn run_all(
     cfg: &SlabConfig,
-    phase: &PhaseModel,
+    phase: &Phase,
     control: &Control,
     progress: &dyn Fn(usize, usize, u64, f64),
 ) -> Result<SlabRun> {
@@ -247,7 +119,7 @@ fn judged(cfg: &SlabConfig, grid: &SlabGrid, mu_l: f64, acc: Accumulator) -> Sli
 /// Slice `s`: from the checkpoint if finished there, else run (resuming its saved rounds).
 fn run_one(
     cfg: &SlabConfig,
-    phase: &PhaseModel,
+    phase: &Phase,
     control: &Control,
     grid: &SlabGrid,
     s: usize,

@@ -1,0 +1,129 @@
+//! A phase function built from its spec and owned: a tabulated table (Mie, computed here, or
+//! read from a file) or an analytic model, one per linear-sRGB channel where the spec asks.
+
+use super::model::build;
+use super::spec::PhaseSpec;
+use crate::mie::polydisperse::{CONVERGED_DEFAULT, DEFAULT_WAVELENGTHS};
+use crate::mie::MieJob;
+use anyhow::{anyhow, bail, ensure, Result};
+use nephele_runtime::phase::{HenyeyGreenstein, TabulatedTable};
+use nephele_runtime::PhaseFunction;
+
+/// The phase function of a run, owned.
+pub enum Phase {
+    /// A tabulated table (Mie or from a file).
+    Table(TabulatedTable<f64>),
+    /// An analytic model.
+    Analytic(Box<dyn PhaseFunction<f64> + Sync>),
+}
+
+impl Phase {
+    /// Builds the phase function of `spec` (a Mie table is computed here, a few seconds); a
+    /// per-channel (rgb) spec is an error here, see `build_channels`.
+    pub fn build(spec: &PhaseSpec) -> Result<Self> {
+        let mut models = Self::build_channels(spec)?;
+        if models.len() != 1 {
+            bail!("phase.rgb: one phase function is needed here, not one per channel");
+        }
+        Ok(models.remove(0))
+    }
+
+    /// The phase functions of `spec`: one per linear-sRGB channel when it asks for them (rgb),
+    /// else one.
+    pub fn build_channels(spec: &PhaseSpec) -> Result<Vec<Self>> {
+        let (theta, columns) = match spec {
+            PhaseSpec::Mie { diameter_um, rgb } => {
+                let job = MieJob::paper(*diameter_um, CONVERGED_DEFAULT, DEFAULT_WAVELENGTHS);
+                let mut tables = job.compute(&|_, _| {})?.0;
+                ensure!(!tables.is_empty(), "Mie job gave no table");
+                let t = tables.swap_remove(0);
+                let columns = if *rgb {
+                    channels(&t.phase_rgb)
+                } else {
+                    vec![t.phase]
+                };
+                (t.theta_deg, columns)
+            }
+            PhaseSpec::Table { path, rgb } => {
+                let name = if *rgb { "phase_rgb" } else { "phase" };
+                let mut a = crate::io::npz::read_arrays(path, &["theta_deg", name])?;
+                let p = a.pop().unwrap_or_default();
+                let theta = a.pop().unwrap_or_default();
+                ensure!(
+                    p.len() == theta.len() * if *rgb { 3 } else { 1 },
+                    "'{}': {name} does not match theta_deg",
+                    path.display()
+                );
+                (theta, if *rgb { channels(&p) } else { vec![p] })
+            }
+            PhaseSpec::Hg { g } => {
+                return Ok(vec![Phase::Analytic(Box::new(HenyeyGreenstein::new(
+                    *g,
+                )))])
+            }
+            PhaseSpec::HgDraine {
+                diameter_um,
+                preset,
+            } => {
+                let p = preset.at(*diameter_um);
+                return Ok(vec![Phase::Analytic(Box::new(p.phase::<f64>()))]);
+            }
+            PhaseSpec::Runtime { model, params } => {
+                return Ok(vec![Phase::Analytic(build(*model, params)?.0)]);
+            }
+        };
+        let source = match spec {
+            PhaseSpec::Table { path, .. } => format!(" '{}'", path.display()),
+            _ => String::new(),
+        };
+        columns
+            .iter()
+            .map(|p| {
+                let t = TabulatedTable::<f64>::from_phase(&theta, p)
+                    .map_err(|e| anyhow!("tabulated phase function{source}: {e:?}"))?;
+                Ok(Phase::Table(t))
+            })
+            .collect()
+    }
+
+    /// Runs `f` with the phase function as a trait object.
+    pub fn with<R>(&self, f: impl FnOnce(&(dyn PhaseFunction<f64> + Sync)) -> R) -> R {
+        // (Not via with_all: callers use this per evaluation, and with_all allocates.)
+        match self {
+            Phase::Table(t) => f(&t.view()),
+            Phase::Analytic(b) => f(b.as_ref()),
+        }
+    }
+
+    /// Runs `f` with all of `models` as trait objects.
+    pub fn with_all<R>(
+        models: &[Self],
+        f: impl FnOnce(&[&(dyn PhaseFunction<f64> + Sync)]) -> R,
+    ) -> R {
+        let views: Vec<_> = models
+            .iter()
+            .map(|m| match m {
+                Phase::Table(t) => Some(t.view()),
+                Phase::Analytic(_) => None,
+            })
+            .collect();
+        let refs: Vec<&(dyn PhaseFunction<f64> + Sync)> = models
+            .iter()
+            .zip(&views)
+            .map(|(m, v)| match (m, v) {
+                (_, Some(v)) => v as &(dyn PhaseFunction<f64> + Sync),
+                (Phase::Analytic(b), None) => b.as_ref(),
+                (Phase::Table(_), None) => unreachable!("every table has its view"),
+            })
+            .collect();
+        f(&refs)
+    }
+}
+
+/// The three columns of an interleaved [n, 3] array.
+fn channels(rgb: &[f64]) -> Vec<Vec<f64>> {
+    (0..3)
+        .map(|c| rgb.iter().skip(c).step_by(3).copied().collect())
+        .collect()
+}
+
