@@ -85,7 +85,14 @@ pub fn write_outputs(out: &Path, scene: &Scene, r: &Rendered) -> Result<()> {
             let i = (y * r.width + x) * 3;
             (r.beauty[i], r.beauty[i + 1], r.beauty[i + 2])
         };
-        exr::prelude::write_rgb_file(p, r.width, r.height, px)
+        // Blocks compressed in parallel are written in the order they finish: one thread
+        // keeps the file the same bits from run to run.
+        let channels = exr::prelude::SpecificChannels::rgb(|exr::prelude::Vec2(x, y)| px(x, y));
+        use exr::prelude::WritableImage;
+        exr::prelude::Image::from_channels((r.width, r.height), channels)
+            .write()
+            .non_parallel()
+            .to_file(p)
             .map_err(|e| anyhow::anyhow!("OpenEXR: {e}"))
     })?;
     let sidecar = serde_json::json!({
