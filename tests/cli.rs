@@ -239,8 +239,17 @@ fn names_flags_and_values_mean_one_thing_everywhere() {
     for model in ["hg-draine", "hg_draine"] {
         for preset in ["jendersie-deon", "jendersie_deon"] {
             succeeds(&[
-                "phase", "--model", model, "--diameter", "10", "--preset", preset, "--angles",
-                "0,90,180", "--out", out_s,
+                "phase",
+                "--model",
+                model,
+                "--diameter",
+                "10",
+                "--preset",
+                preset,
+                "--angles",
+                "0,90,180",
+                "--out",
+                out_s,
             ]);
         }
     }
@@ -251,13 +260,44 @@ fn names_flags_and_values_mean_one_thing_everywhere() {
     let bad_out = dir.path().join("bad");
     let bad_s = bad_out.to_str().unwrap();
     for (args, says) in [
-        (vec!["phase", "--model", "hg", "--g", "0.5", "--kappa", "3"], "does not take kappa"),
-        (vec!["phase", "--model", "hg-draine", "--diameter", "10", "--g", "0.5"], "does not take g"),
-        (vec!["phase", "--model", "hg-draine", "--g-hg", "0.5"], "hg-draine needs g_d"),
-        (vec!["phase", "--model", "hg", "--g", "0.5", "--table", "x.npz"], "does not take table"),
-        (vec!["phase", "--model", "hg", "--g", "0.5", "--preset", "nephele"], "does not take preset"),
-        (vec!["sphere", "--index", "1.33", "--x", "-3"], "positive size parameter"),
-        (vec!["sphere", "--index", "1.5-0.1i", "--x", "3"], "use 1.5+0.1i"),
+        (
+            vec!["phase", "--model", "hg", "--g", "0.5", "--kappa", "3"],
+            "does not take kappa",
+        ),
+        (
+            vec![
+                "phase",
+                "--model",
+                "hg-draine",
+                "--diameter",
+                "10",
+                "--g",
+                "0.5",
+            ],
+            "does not take g",
+        ),
+        (
+            vec!["phase", "--model", "hg-draine", "--g-hg", "0.5"],
+            "hg-draine needs g_d",
+        ),
+        (
+            vec!["phase", "--model", "hg", "--g", "0.5", "--table", "x.npz"],
+            "does not take table",
+        ),
+        (
+            vec![
+                "phase", "--model", "hg", "--g", "0.5", "--preset", "nephele",
+            ],
+            "does not take preset",
+        ),
+        (
+            vec!["sphere", "--index", "1.33", "--x", "-3"],
+            "positive size parameter",
+        ),
+        (
+            vec!["sphere", "--index", "1.5-0.1i", "--x", "3"],
+            "use 1.5+0.1i",
+        ),
     ] {
         let mut a = args.clone();
         if a[0] == "phase" {
@@ -266,14 +306,28 @@ fn names_flags_and_values_mean_one_thing_everywhere() {
         let o = nephele(&a);
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success() && err.contains(says), "{args:?}: {err}");
-        assert!(!err.contains("Hg") && !err.contains("panicked"), "{args:?}: {err}");
+        assert!(
+            !err.contains("Hg") && !err.contains("panicked"),
+            "{args:?}: {err}"
+        );
         assert!(files_in(&bad_out).is_empty(), "{args:?} left files");
     }
     // Two-term HG: --w weighs the first lobe, as its help says.
     let two = dir.path().join("two");
     succeeds(&[
-        "phase", "--model", "two-term-hg", "--g", "0.9", "--g2", "-0.3", "--w", "1", "--angles",
-        "0,90,180", "--out", two.to_str().unwrap(),
+        "phase",
+        "--model",
+        "two-term-hg",
+        "--g",
+        "0.9",
+        "--g2",
+        "-0.3",
+        "--w",
+        "1",
+        "--angles",
+        "0,90,180",
+        "--out",
+        two.to_str().unwrap(),
     ]);
     let hg = |mu: f64| (1.0 - 0.81) / (4.0 * std::f64::consts::PI * (1.81 - 1.8 * mu).powf(1.5));
     let p0 = read(&two)[1][0];

@@ -405,7 +405,7 @@ fn per_channel_phase_functions_match_monochrome_renders() {
     ];
     // Mean and standard error of channel c over n paths.
     let stats = |v: &Volume, o, w: [f64; 3], c: usize, seed: u64| {
-        let w = nephele::render::medium::normalize(w);
+        let w = nephele::render::geometry::normalize(w);
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
         let n = 400_000;
         let (mut s, mut s2) = (0.0, 0.0);
@@ -471,7 +471,8 @@ fn a_time_budget_gives_the_image_of_its_total_spp() {
 /// densities and majorant bounds of the same values re-indexed over the box it covers.
 #[test]
 fn a_rotated_voxel_grid_is_the_re_indexed_grid() {
-    use nephele::render::medium::{Affine, Medium, Voxels};
+    use nephele::render::geometry::Affine;
+    use nephele::render::medium::{Medium, Voxels};
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(21);
     let (nx, ny, nz) = (5usize, 4usize, 3usize);
     let a: Vec<f32> = (0..nx * ny * nz).map(|_| rng.random::<f32>()).collect();
@@ -525,7 +526,7 @@ fn a_rotated_voxel_grid_is_the_re_indexed_grid() {
     // Rays: the same clipped segments.
     for _ in 0..1000 {
         let o = [t[0] - 1.5, t[1] + 1.0, t[2] + 0.7];
-        let w = nephele::render::medium::normalize([
+        let w = nephele::render::geometry::normalize([
             rng.random::<f64>() - 0.5,
             rng.random::<f64>() - 0.5,
             rng.random::<f64>() - 0.5,

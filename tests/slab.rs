@@ -6,8 +6,8 @@ use nephele::mie::polydisperse::{CONVERGED_DEFAULT, DEFAULT_WAVELENGTHS};
 use nephele::mie::MieJob;
 use nephele::slab::tally::SliceTables;
 use nephele::slab::{run_slice, SlabGrid, Slice, StopRule};
+use nephele_runtime::fitting::single_scattering_bin;
 use nephele_runtime::phase::{HenyeyGreenstein, TabulatedTable};
-use nephele_runtime::transport::fitting::single_scattering_bin;
 use nephele_runtime::transport::SlabPoint;
 use nephele_runtime::PhaseFunction;
 use statrs::distribution::{ChiSquared, ContinuousCDF};
@@ -134,7 +134,8 @@ fn order_one_case(
             for k in 0..grid.n_psi() {
                 let psi = (grid.psi_edges[k], grid.psi_edges[k + 1]);
                 let c = grid.cell(0, j, m, k);
-                exact[c] = single_scattering_bin(phase, 1.0, &slab_at(mu_l, t_slab, d), mu, psi, pieces);
+                exact[c] =
+                    single_scattering_bin(phase, 1.0, &slab_at(mu_l, t_slab, d), mu, psi, pieces);
                 cells.push(c);
             }
         }

@@ -15,6 +15,8 @@ pub mod container;
 #[cfg(feature = "embed")]
 pub mod embedded;
 pub mod frame;
+#[cfg_attr(not(feature = "fitting"), allow(dead_code))]
+mod legendre;
 pub mod phase;
 pub mod presets;
 pub mod real;
@@ -22,6 +24,27 @@ pub mod soft_math;
 pub mod transport;
 
 pub use phase::PhaseFunction;
+
+/// The insides the toolchain needs to fit and write tables (feature `fitting`; a renderer does
+/// not): the features of the compressed T ([`fitting::LogAdditive`]) and of the collector
+/// ([`fitting::CollectorForm`]), where a point sits among the parameter nodes
+/// ([`fitting::Cell`], [`fitting::Lerp`]), the `.ntt` array names and the runtime's size limits
+/// (which writers must respect), the packed depth ranges, and the Legendre recurrence.
+#[cfg(feature = "fitting")]
+pub mod fitting {
+    pub use crate::legendre::Legendre;
+    pub use crate::transport::collector::{
+        CollectorForm, Statistic, MAX_COLLECTOR_HARMONICS, MAX_COLLECTOR_LEGENDRE,
+    };
+    pub use crate::transport::log_additive::{
+        legendre, ln_boundary, ln_t_position, theta_hats, Cell, Lerp, LogAdditive, LN_F1_FLOOR,
+        MAX_CROSS, MAX_HARMONICS, MAX_LEGENDRE, MAX_THETA_NODES,
+    };
+    pub use crate::transport::single::single_scattering_bin;
+    pub use crate::transport::tables::{
+        names, pack_u_range, stretched_u, unpack_u_range, MAX_GROUPS, MAX_NODES, MAX_Q, U_STEPS,
+    };
+}
 pub use real::Real;
 
 /// The crate version, for the JSON sidecars of artefacts built with it.

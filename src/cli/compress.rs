@@ -5,7 +5,7 @@ use clap::Args;
 use nephele::compress::report::{CollectorError, GroupError};
 use nephele::compress::run::{compress, Options, Outcome};
 use nephele::compress::LogAdditive;
-use nephele_runtime::transport::fitting::CollectorForm;
+use nephele_runtime::fitting::CollectorForm;
 use std::path::{Path, PathBuf};
 
 /// Options of `nephele compress`.

@@ -4,7 +4,7 @@ use super::mie::{compute_with_bar, write_outputs as write_mie, MieArgs};
 use anyhow::{Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use nephele::fit::{figures, run::FitReport, FitConfig, Loss, Model};
+use nephele::fit::{figures, run::FitReport, FitConfig, Loss, FITTED};
 use nephele::io::{AtomicFiles, Npz};
 use nephele::mie::PhaseTable;
 use serde::{Deserialize, Serialize};
@@ -218,23 +218,23 @@ fn npz(report: &FitReport) -> Npz {
     let n = report.diameters_um.len();
     let mut z = Npz::new();
     z.add("diameters_um", &[n], &report.diameters_um);
-    for m in Model::ALL {
-        if !report.fits[0].models.contains_key(m.name()) {
+    for m in FITTED {
+        if !report.fits[0].models.contains_key(&m.json_name()) {
             continue;
         }
         let k = m.param_names().len();
         let loss: Vec<f64> = report
             .fits
             .iter()
-            .map(|f| f.models[m.name()].optimum.loss)
+            .map(|f| f.models[&m.json_name()].optimum.loss)
             .collect();
         let params: Vec<f64> = report
             .fits
             .iter()
-            .flat_map(|f| f.models[m.name()].optimum.params.clone())
+            .flat_map(|f| f.models[&m.json_name()].optimum.params.clone())
             .collect();
-        z.add(&format!("loss_{}", m.name()), &[n], &loss);
-        z.add(&format!("params_{}", m.name()), &[n, k], &params);
+        z.add(&format!("loss_{}", m.json_name()), &[n], &loss);
+        z.add(&format!("params_{}", m.json_name()), &[n, k], &params);
     }
     let paper: Vec<f64> = report.fits.iter().map(|f| f.paper.loss).collect();
     z.add("loss_paper", &[n], &paper);
@@ -272,7 +272,7 @@ fn print_summary(report: &FitReport, cfg: &FitConfig, out: &Path) {
         }
         let mut row = format!("{:>8.3}", f.d_um);
         for m in &models {
-            let o = &f.models[m.name()].optimum;
+            let o = &f.models[&m.json_name()].optimum;
             row += &format!(" {:>11.4e}{}", o.loss, if o.converged { ' ' } else { '*' });
         }
         let ours = report

@@ -71,7 +71,11 @@ fn names<T: Copy + Send + Sync + 'static>(
     });
     PossibleValuesParser::new(values).map(move |s: String| {
         let kebab = s.replace('_', "-");
-        names.iter().find(|(_, n)| *n == kebab).map(|(v, _)| *v).unwrap_or(names[0].0)
+        names
+            .iter()
+            .find(|(_, n)| *n == kebab)
+            .map(|(v, _)| *v)
+            .unwrap_or(names[0].0)
     })
 }
 

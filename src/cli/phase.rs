@@ -50,7 +50,12 @@ pub struct PhaseArgs {
     #[arg(long)]
     kappa: Option<f64>,
     /// Droplet diameter in µm for an HG+Draine preset (--preset); also --diameter-um.
-    #[arg(long, value_name = "UM", visible_alias = "diameter-um", allow_hyphen_values = true)]
+    #[arg(
+        long,
+        value_name = "UM",
+        visible_alias = "diameter-um",
+        allow_hyphen_values = true
+    )]
     diameter: Option<f64>,
     /// Which diameter → parameter curves --diameter uses: the paper's (Jendersie & d'Eon 2023,
     /// the default) or nephele's refit (docs/fit.md).

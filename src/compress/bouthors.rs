@@ -18,7 +18,7 @@ use super::form::Cell;
 use super::joint::NormalEquations;
 use super::tables::SlabTables;
 use anyhow::Result;
-use nephele_runtime::transport::fitting::{legendre, theta_hats};
+use nephele_runtime::fitting::{legendre, theta_hats};
 use rayon::prelude::*;
 
 /// Θ nodes of the reference form's P table.

@@ -10,7 +10,7 @@ use super::form::{Cell, Lerp};
 use super::joint::{coef_at, effective_q, legendre_in_ln_t, pad_q, NormalEquations};
 use super::tables::SlabTables;
 use anyhow::Result;
-use nephele_runtime::transport::fitting::{CollectorForm, Statistic};
+use nephele_runtime::fitting::{CollectorForm, Statistic};
 
 /// The collector fit of one group over all thicknesses.
 pub struct CollectorFit {

@@ -2,7 +2,7 @@
 //! docs there have the equation): the toolchain fits it with the very features renderers
 //! evaluate. This module adapts it to the fitter's sparse rows.
 
-pub use nephele_runtime::transport::fitting::{
+pub use nephele_runtime::fitting::{
     ln_boundary, Cell as RuntimeCell, Lerp as RuntimeLerp, LogAdditive,
 };
 

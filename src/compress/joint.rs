@@ -10,7 +10,7 @@ use super::form::LogAdditive;
 use super::tables::SlabTables;
 use anyhow::{anyhow, Result};
 use nalgebra::{DMatrix, DVector};
-use nephele_runtime::transport::fitting::legendre;
+use nephele_runtime::fitting::{legendre, ln_t_position};
 use rayon::prelude::*;
 
 /// The fit of one order group over all thicknesses.
@@ -32,13 +32,8 @@ pub struct JointFit {
 }
 
 /// s(t) ∈ [−1, 1] over the range (a, b) of ln t (held at ±1 outside), and L_0(s) … L_{Q−1}(s).
-pub(crate) fn legendre_in_ln_t((a, b): (f64, f64), t: f64, q: usize) -> Vec<f64> {
-    let s = if b > a {
-        (2.0 * (t.ln() - a) / (b - a) - 1.0).clamp(-1.0, 1.0)
-    } else {
-        0.0
-    };
-    legendre(s, q)[..q].to_vec()
+pub(crate) fn legendre_in_ln_t(range: (f64, f64), t: f64, q: usize) -> Vec<f64> {
+    legendre(ln_t_position(range, t.ln()), q)[..q].to_vec()
 }
 
 /// The thicknesses the polynomials of group `g` span (not in `skip_t`, with ≥ 5 % of the largest

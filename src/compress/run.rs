@@ -13,7 +13,7 @@ use super::{LogAdditive, SlabTables};
 use crate::io::{write_atomic, AtomicFiles, Npz};
 use crate::phase::{Phase, PhaseSpec};
 use anyhow::{anyhow, ensure, Context, Result};
-use nephele_runtime::transport::fitting::{CollectorForm, Statistic};
+use nephele_runtime::fitting::{CollectorForm, Statistic};
 use nephele_runtime::transport::{single_scattering, SlabPoint};
 use nephele_runtime::transport::{Transport, TransportTables};
 use rayon::prelude::*;
@@ -38,7 +38,7 @@ pub struct Options {
 
 impl Options {
     /// Refuses options the runtime could not load (its limits, one home in
-    /// `nephele_runtime::transport::fitting`) or the joint fits cannot use.
+    /// `nephele_runtime::fitting`) or the joint fits cannot use.
     pub fn check(&self) -> Result<()> {
         if let Err(limit) = self.form.check() {
             anyhow::bail!("the form is outside what the runtime loads ({limit})");

@@ -8,7 +8,7 @@ use super::tables::SlabTables;
 use super::LogAdditive;
 use crate::io::container::{container_bytes, Array};
 use anyhow::{ensure, Result};
-use nephele_runtime::transport::fitting::{names, pack_u_range, CollectorForm, Statistic};
+use nephele_runtime::fitting::{names, pack_u_range, CollectorForm, Statistic};
 
 /// Angles (degrees) at which the phase function is stored: 0.02° steps to 5° (the Mie forward
 /// peak, ~1° wide at 10 µm), 0.2° beyond; linear between them (the compressor reports the
@@ -97,11 +97,7 @@ pub fn ntt_bytes(
         let cq = coll[0].q;
         let sizes = [cf.legendre, cf.harmonics, cf.theta_nodes, cq].map(|x| x as f32);
         arrays.push((names::COLLECTOR_FORM, vec![4], sizes.to_vec()));
-        for (s, (stat, name)) in Statistic::ALL
-            .iter()
-            .zip(names::COLLECTOR_BETA)
-            .enumerate()
-        {
+        for (s, (stat, name)) in Statistic::ALL.iter().zip(names::COLLECTOR_BETA).enumerate() {
             let values = f32s(&mut coll.iter().flat_map(|c| c.beta[s].iter().copied()));
             arrays.push((name, vec![g, cf.n_params(*stat, nm, nl), cq], values));
         }

@@ -1,8 +1,8 @@
 //! The 5D tables of `nephele slab` (tables.npz) as the compressor reads them.
 
-use nephele_runtime::transport::SlabPoint;
 use crate::io::npz::read_arrays;
 use anyhow::{ensure, Result};
+use nephele_runtime::transport::SlabPoint;
 use std::path::Path;
 
 /// T and its standard error over [group, t, μ_L, depth, μ_V, ψ_V], with the grids.

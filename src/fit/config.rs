@@ -3,7 +3,7 @@
 
 use super::curves::Form;
 use super::loss::Loss;
-use super::model::Model;
+use super::model::{Model, FITTED};
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 
@@ -45,7 +45,7 @@ pub struct BranchConfig {
 }
 
 fn default_models() -> Vec<String> {
-    Model::ALL.iter().map(|m| m.name().to_string()).collect()
+    FITTED.iter().map(|m| m.json_name()).collect()
 }
 
 fn default_alpha_max() -> f64 {
@@ -96,7 +96,7 @@ impl FitConfig {
         let mut out = self
             .models
             .iter()
-            .map(|n| Model::from_name(n))
+            .map(|n| Model::fitted_from_name(n))
             .collect::<Result<Vec<_>>>()?;
         out.sort();
         out.dedup();

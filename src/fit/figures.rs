@@ -1,7 +1,7 @@
 //! The figures of a fit run: Mie vs the fitted models (the paper's Figure 2), the loss against
 //! diameter (Figure 3), and each HG+Draine parameter against diameter with its curves.
 
-use super::model::Model;
+use super::model::{Model, FITTED};
 use super::run::{paper_theta, FitReport, HG_DRAINE_PARAMS};
 use crate::io::plot::{panels_plot, Panel, Series, Style};
 use crate::mie::PhaseTable;
@@ -37,9 +37,9 @@ pub fn phase_figure(
         .map(|&i| {
             let t = &tables[i];
             let mut s = vec![("Mie".to_string(), t.phase.clone(), Style::Line, 0)];
-            for (k, m) in Model::ALL.iter().enumerate() {
-                if let Some(f) = report.fits[i].models.get(m.name()) {
-                    let p = m.phase(&f.optimum.params);
+            for (k, m) in FITTED.iter().enumerate() {
+                if let Some(f) = report.fits[i].models.get(&m.json_name()) {
+                    let p = m.phase(&f.optimum.params)?;
                     s.push((
                         m.label().to_string(),
                         t.mu.iter().map(|&mu| p.eval(mu)).collect(),
@@ -48,16 +48,16 @@ pub fn phase_figure(
                     ));
                 }
             }
-            let paper = Model::HgDraine.phase(&paper_theta(report.diameters_um[i]));
+            let paper = Model::HgDraine.phase(&paper_theta(report.diameters_um[i]))?;
             s.push((
                 "HG+Draine, paper".into(),
                 t.mu.iter().map(|&mu| paper.eval(mu)).collect(),
                 Style::Dashed,
                 7,
             ));
-            (i, s)
+            Ok((i, s))
         })
-        .collect();
+        .collect::<Result<_>>()?;
     let panels: Vec<Panel> = curves
         .iter()
         .map(|(i, s)| Panel {
@@ -87,12 +87,12 @@ pub fn phase_figure(
 pub fn loss_figure(path: &Path, report: &FitReport, loss_name: &str) -> Result<()> {
     let d = &report.diameters_um;
     let mut series_data: Vec<(String, Vec<f64>, Vec<f64>, Style, usize)> = Vec::new();
-    for (k, m) in Model::ALL.iter().enumerate() {
-        if report.fits[0].models.contains_key(m.name()) {
+    for (k, m) in FITTED.iter().enumerate() {
+        if report.fits[0].models.contains_key(&m.json_name()) {
             let y = report
                 .fits
                 .iter()
-                .map(|f| f.models[m.name()].optimum.loss)
+                .map(|f| f.models[&m.json_name()].optimum.loss)
                 .collect();
             series_data.push((m.label().to_string(), d.clone(), y, Style::Line, k + 1));
         }

@@ -18,5 +18,5 @@ pub mod run;
 
 pub use config::FitConfig;
 pub use loss::{Loss, Target};
-pub use model::Model;
+pub use model::{Model, FITTED};
 pub use run::{run, FitReport};

@@ -10,25 +10,20 @@
 //! and for a blend p = (1 − w) a + w b: ∂ ln p/∂θ_a = (1 − w) a ∂ ln a/∂θ_a / p,
 //! ∂ ln p/∂θ_b = w b ∂ ln b/∂θ_b / p, ∂ ln p/∂w = (b − a)/p.
 
-use nephele_runtime::phase::{phase_draine, Draine, HenyeyGreenstein, HgDraine, TwoTermHg};
+pub use crate::phase::Model;
+use crate::phase::{build, Boxed, ModelParams};
+use nephele_runtime::phase::{phase_draine, HenyeyGreenstein};
 use nephele_runtime::PhaseFunction;
-use serde::{Deserialize, Serialize};
 
-/// A model fitted to Mie.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Model {
-    /// Henyey–Greenstein: θ = [g].
-    Hg,
-    /// w HG(g₁) + (1 − w) HG(g₂): θ = [g1, g2, w].
-    TwoTermHg,
-    /// Cornette–Shanks (Draine with α = 1): θ = [g].
-    CornetteShanks,
-    /// Draine: θ = [g, alpha].
-    Draine,
-    /// (1 − w_D) HG(g_HG) + w_D Draine(g_D, α): θ = [g_hg, g_d, alpha, w_d].
-    HgDraine,
-}
+/// The models stage 3 fits (those of [`crate::phase::Model`] that it has gradients for), in the
+/// order of reports.
+pub const FITTED: [Model; 5] = [
+    Model::Hg,
+    Model::TwoTermHg,
+    Model::CornetteShanks,
+    Model::Draine,
+    Model::HgDraine,
+];
 
 /// The largest |g| a fit may reach (HG at g = 0.999999 peaks at 2·10¹², still finite).
 pub const G_MAX: f64 = 1.0 - 1e-6;
@@ -92,47 +87,22 @@ impl Bound {
     }
 }
 
+/// What fitting needs of a model: θ's names and bounds, starts, ln p and its gradient. Only the
+/// [`FITTED`] models have them (configs refuse the others): another model has no parameters
+/// here, and ln p = NaN.
 impl Model {
-    /// Every model, in the order of reports.
-    pub const ALL: [Model; 5] = [
-        Model::Hg,
-        Model::TwoTermHg,
-        Model::CornetteShanks,
-        Model::Draine,
-        Model::HgDraine,
-    ];
-
-    /// The config/report name.
-    pub fn name(self) -> &'static str {
-        match self {
-            Model::Hg => "hg",
-            Model::TwoTermHg => "two_term_hg",
-            Model::CornetteShanks => "cornette_shanks",
-            Model::Draine => "draine",
-            Model::HgDraine => "hg_draine",
-        }
-    }
-
-    /// A label for figures.
-    pub fn label(self) -> &'static str {
-        match self {
-            Model::Hg => "HG",
-            Model::TwoTermHg => "two-term HG",
-            Model::CornetteShanks => "Cornette-Shanks",
-            Model::Draine => "Draine",
-            Model::HgDraine => "HG+Draine",
-        }
-    }
-
-    /// Parses a config name; the error lists the valid ones.
-    pub fn from_name(name: &str) -> anyhow::Result<Model> {
-        Model::ALL
-            .into_iter()
-            .find(|m| m.name() == name)
-            .ok_or_else(|| {
-                let valid: Vec<&str> = Model::ALL.iter().map(|m| m.name()).collect();
-                anyhow::anyhow!("unknown model `{name}` (valid: {})", valid.join(", "))
-            })
+    /// Parses a config name (either spelling) of a fitted model; the error lists the valid ones.
+    pub fn fitted_from_name(name: &str) -> anyhow::Result<Model> {
+        let valid = || FITTED.map(|m| m.json_name()).join(", ");
+        let m: Model = name
+            .parse()
+            .map_err(|_| anyhow::anyhow!("unknown model `{name}` (valid: {})", valid()))?;
+        anyhow::ensure!(
+            FITTED.contains(&m),
+            "model `{name}` is not fitted (fitted models: {})",
+            valid()
+        );
+        Ok(m)
     }
 
     /// The names of θ's components.
@@ -142,6 +112,7 @@ impl Model {
             Model::TwoTermHg => &["g1", "g2", "w"],
             Model::Draine => &["g", "alpha"],
             Model::HgDraine => &["g_hg", "g_d", "alpha", "w_d"],
+            _ => &[],
         }
     }
 
@@ -154,6 +125,7 @@ impl Model {
             Model::TwoTermHg => vec![Bound::Symmetric, Bound::Symmetric, w],
             Model::Draine => vec![Bound::Symmetric, alpha],
             Model::HgDraine => vec![Bound::Symmetric, Bound::Symmetric, alpha, w],
+            _ => Vec::new(),
         }
     }
 
@@ -231,6 +203,7 @@ impl Model {
                     }
                 }
             }
+            _ => {}
         }
         grid
     }
@@ -277,20 +250,40 @@ impl Model {
                 grad[3] = (b - a) / p;
                 p.ln()
             }
+            _ => f64::NAN,
         }
     }
 
-    /// The runtime's evaluator for θ (for figures and the sampler).
-    pub fn phase(self, theta: &[f64]) -> Box<dyn PhaseFunction<f64> + Send + Sync> {
-        match self {
-            Model::Hg => Box::new(HenyeyGreenstein::new(theta[0])),
-            Model::CornetteShanks => Box::new(Draine::cornette_shanks(theta[0])),
-            Model::Draine => Box::new(Draine::new(theta[0], theta[1])),
-            Model::TwoTermHg => Box::new(TwoTermHg::two_term(theta[0], theta[1], theta[2])),
-            Model::HgDraine => {
-                Box::new(HgDraine::hg_draine(theta[0], theta[1], theta[2], theta[3]))
-            }
-        }
+    /// The runtime's evaluator for θ (for figures and the sampler), built by
+    /// [`crate::phase::build`].
+    pub fn phase(self, theta: &[f64]) -> anyhow::Result<Boxed> {
+        let p = |i: usize| theta.get(i).copied();
+        let params = match self {
+            Model::Hg | Model::CornetteShanks => ModelParams {
+                g: p(0),
+                ..ModelParams::default()
+            },
+            Model::Draine => ModelParams {
+                g: p(0),
+                alpha: p(1),
+                ..ModelParams::default()
+            },
+            Model::TwoTermHg => ModelParams {
+                g: p(0),
+                g2: p(1),
+                w: p(2),
+                ..ModelParams::default()
+            },
+            Model::HgDraine => ModelParams {
+                g_hg: p(0),
+                g_d: p(1),
+                alpha: p(2),
+                w_d: p(3),
+                ..ModelParams::default()
+            },
+            _ => ModelParams::default(),
+        };
+        Ok(build(self, &params)?.0)
     }
 }
 

@@ -204,7 +204,7 @@ pub fn run(
                     .zip(opts)
                     .map(|(m, o)| {
                         (
-                            m.name().to_string(),
+                            m.json_name(),
                             ModelFit {
                                 params: named(*m, &o.params),
                                 optimum: o.clone(),

@@ -1,6 +1,7 @@
 //! Angle grids and the quadratures of a tabulated phase function over them.
 
 use anyhow::{bail, Context, Result};
+use nephele_runtime::fitting::Legendre;
 use std::path::Path;
 
 /// The reference grid: 0°–5° every 0.01°, then 5.1°–180° every 0.1° (2251 angles), exact
@@ -103,12 +104,8 @@ pub fn legendre_moments(theta_deg: &[f64], phase: &[f64], k_max: usize) -> Vec<f
     for (i, &deg) in theta_deg.iter().enumerate() {
         let mu = deg.to_radians().cos();
         let f = w[i] * phase[i];
-        let (mut p_prev, mut p) = (0.0, 1.0);
-        for (l, c) in chi.iter_mut().enumerate() {
+        for (c, p) in chi.iter_mut().zip(Legendre::new(mu)) {
             *c += f * p;
-            let lf = l as f64;
-            let next = ((2.0 * lf + 1.0) * mu * p - lf * p_prev) / (lf + 1.0);
-            (p_prev, p) = (p, next);
         }
     }
     chi

@@ -169,7 +169,9 @@ fn parse_complex(s: &str) -> Option<RefractiveIndex> {
 /// (n, k) of "n-ki" (the other sign convention), if `s` has that form.
 fn negative_imaginary(s: &str) -> Option<(f64, f64)> {
     let body = s.strip_suffix('i').or_else(|| s.strip_suffix('j'))?;
-    let split = body.rfind('-').filter(|&i| i > 0 && !body[..i].ends_with(['e', 'E']))?;
+    let split = body
+        .rfind('-')
+        .filter(|&i| i > 0 && !body[..i].ends_with(['e', 'E']))?;
     let n = body[..split].parse::<f64>().ok()?;
     let k = body[split + 1..].parse::<f64>().ok()?;
     Some((n, k))

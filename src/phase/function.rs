@@ -57,9 +57,7 @@ impl Phase {
                 (theta, if *rgb { channels(&p) } else { vec![p] })
             }
             PhaseSpec::Hg { g } => {
-                return Ok(vec![Phase::Analytic(Box::new(HenyeyGreenstein::new(
-                    *g,
-                )))])
+                return Ok(vec![Phase::Analytic(Box::new(HenyeyGreenstein::new(*g)))])
             }
             PhaseSpec::HgDraine {
                 diameter_um,
@@ -126,4 +124,3 @@ fn channels(rgb: &[f64]) -> Vec<Vec<f64>> {
         .map(|c| rgb.iter().skip(c).step_by(3).copied().collect())
         .collect()
 }
-

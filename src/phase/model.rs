@@ -97,6 +97,28 @@ impl Model {
             .map_or("?", |(_, n)| n)
     }
 
+    /// The JSON name (snake_case), as configs and outputs write it.
+    pub fn json_name(self) -> String {
+        self.name().replace('-', "_")
+    }
+
+    /// A label for figures and tables.
+    pub fn label(self) -> &'static str {
+        match self {
+            Model::Hg => "HG",
+            Model::TwoTermHg => "two-term HG",
+            Model::CornetteShanks => "Cornette-Shanks",
+            Model::Draine => "Draine",
+            Model::HgDraine => "HG+Draine",
+            Model::Rayleigh => "Rayleigh",
+            Model::ReynoldsMccormick => "Reynolds-McCormick",
+            Model::Schlick => "Schlick",
+            Model::Vmf => "von Mises-Fisher",
+            Model::Xlf => "XLF",
+            Model::Tabulated => "tabulated",
+        }
+    }
+
     /// The parameters this model takes (the names of [`ModelParams`]' fields).
     pub fn takes(self) -> &'static [&'static str] {
         match self {
@@ -190,7 +212,11 @@ pub struct ModelParams {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub kappa: Option<f64>,
     /// Droplet diameter (µm) for an HG+Draine preset (also `diameter_um`).
-    #[serde(default, alias = "diameter_um", skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        alias = "diameter_um",
+        skip_serializing_if = "Option::is_none"
+    )]
     pub diameter: Option<f64>,
     /// Which diameter curves `diameter` uses (default jendersie_deon).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -362,7 +388,9 @@ mod tests {
         let err = |m, p: &ModelParams| build(m, p).err().unwrap().to_string();
         assert!(err(Model::Schlick, &ModelParams::default()).contains("model schlick needs k"));
         assert!(err(Model::Hg, &params(Some(1.2), None)).contains("g must lie in"));
-        assert!(err(Model::HgDraine, &ModelParams::default()).contains("model hg-draine needs g_hg"));
+        assert!(
+            err(Model::HgDraine, &ModelParams::default()).contains("model hg-draine needs g_hg")
+        );
     }
 
     /// A parameter the model does not take is an error naming it, and so are HG+Draine's two
@@ -404,13 +432,19 @@ mod tests {
             assert_eq!(name.replace('-', "_").parse::<Model>().unwrap(), m);
             let json = serde_json::to_string(&m).unwrap();
             assert_eq!(json, format!("\"{}\"", name.replace('-', "_")));
-            assert_eq!(serde_json::from_str::<Model>(&format!("\"{name}\"")).unwrap(), m);
+            assert_eq!(
+                serde_json::from_str::<Model>(&format!("\"{name}\"")).unwrap(),
+                m
+            );
         }
         for (p, name) in Preset::NAMES {
             assert_eq!(name.parse::<Preset>().unwrap(), p);
             assert_eq!(name.replace('-', "_").parse::<Preset>().unwrap(), p);
         }
         let e = "hg-drain".parse::<Model>().unwrap_err().to_string();
-        assert!(e.contains("unknown model `hg-drain`") && e.contains("hg-draine"), "{e}");
+        assert!(
+            e.contains("unknown model `hg-drain`") && e.contains("hg-draine"),
+            "{e}"
+        );
     }
 }

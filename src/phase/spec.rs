@@ -89,7 +89,6 @@ impl PhaseSpec {
     }
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;

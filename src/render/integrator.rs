@@ -34,7 +34,8 @@
 //! continues as before (no weights compound), orders 1 keep plain NEE. With per-channel
 //! phase functions p_A, p_B in the MIS weights are the channel means (the densities sampled).
 
-use super::medium::{dot, normalize, Medium, Vec3};
+use super::geometry::{dot, normalize, Vec3};
+use super::medium::Medium;
 use nephele_runtime::PhaseFunction;
 use rand::Rng;
 use std::ops::ControlFlow;

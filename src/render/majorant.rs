@@ -12,7 +12,7 @@
 //! every tentative collision there is real and its transmittance is exp(−σ̄ Δt) in closed form,
 //! with no σ_t lookups at all (the deep interior of the implicit cloud, a homogeneous slab).
 
-use super::medium::{Affine, Vec3};
+use super::geometry::{Affine, Vec3};
 use std::ops::ControlFlow;
 
 /// Bounds on σ_t over a cell (1/m).
@@ -210,8 +210,8 @@ mod tests {
             ([0.5, -1.0, 1.5], [0.3, 1.0, 0.0]),
         ];
         for (o, w) in rays {
-            let w = super::super::medium::normalize(w);
-            let (t0, t1) = super::super::medium::box_clip(o, w, [0.0; 3], [4.0, 2.0, 3.0])
+            let w = super::super::geometry::normalize(w);
+            let (t0, t1) = super::super::geometry::box_clip(o, w, [0.0; 3], [4.0, 2.0, 3.0])
                 .expect("the ray meets the box");
             let mut t = t0;
             let mut segments = 0;

@@ -2,10 +2,8 @@
 //! bounds, and majorants σ̄ ≥ σ_t for delta tracking (a coarse grid for the heterogeneous
 //! media, see `majorant.rs`).
 
+use super::geometry::{box_clip, slab_clip, Affine, Vec3};
 use super::majorant::{Bounds, MajorantGrid, Majorants};
-
-/// A point or direction in world space (m); z is up.
-pub type Vec3 = [f64; 3];
 
 /// The medium as the integrator sees it.
 pub trait Medium: Sync {
@@ -49,102 +47,6 @@ impl Medium for Slab {
             min: self.sigma_t,
             max: self.sigma_t,
         })
-    }
-}
-
-/// a · b.
-pub fn dot(a: Vec3, b: Vec3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-/// a × b.
-pub fn cross(a: Vec3, b: Vec3) -> Vec3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-/// a / |a|.
-pub fn normalize(a: Vec3) -> Vec3 {
-    let n = dot(a, a).sqrt();
-    a.map(|x| x / n)
-}
-
-/// The parameter range where o + t w lies in the box [lo, hi], t ≥ 0.
-pub fn box_clip(o: Vec3, w: Vec3, lo: Vec3, hi: Vec3) -> Option<(f64, f64)> {
-    let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
-    for k in 0..3 {
-        let (a, b) = slab_clip(o[k], w[k], lo[k], hi[k])?;
-        t0 = t0.max(a);
-        t1 = t1.min(b);
-    }
-    (t1 > t0).then_some((t0, t1))
-}
-
-/// The parameter range where z0 + t wz lies in [lo, hi], t ≥ 0.
-pub fn slab_clip(z0: f64, wz: f64, lo: f64, hi: f64) -> Option<(f64, f64)> {
-    if wz.abs() < 1e-300 {
-        return (lo..=hi).contains(&z0).then_some((0.0, f64::INFINITY));
-    }
-    let (a, b) = ((lo - z0) / wz, (hi - z0) / wz);
-    let (t0, t1) = (a.min(b).max(0.0), a.max(b));
-    (t1 > t0).then_some((t0, t1))
-}
-
-/// An affine map p ↦ M p + b, and its inverse: a voxel grid's unit cube to the world. Ray
-/// parameters are kept by the inverse map (o + t w ↦ M⁻¹(o − b) + t M⁻¹ w, the direction not
-/// renormalised), so clipping and tracking in the grid's own coordinates give world distances.
-#[derive(Clone, Copy, Debug)]
-pub struct Affine {
-    m: [[f64; 3]; 3],
-    t: Vec3,
-    inv: [[f64; 3]; 3],
-    /// M is diagonal: the inverse divides by its entries (exact at voxel centres).
-    diagonal: bool,
-}
-
-impl Affine {
-    /// The map p ↦ M p + b (b = `t`), or None if M is singular.
-    pub fn new(m: [[f64; 3]; 3], t: Vec3) -> Option<Self> {
-        let c = |r: usize, k: usize| {
-            m[(r + 1) % 3][(k + 1) % 3] * m[(r + 2) % 3][(k + 2) % 3]
-                - m[(r + 1) % 3][(k + 2) % 3] * m[(r + 2) % 3][(k + 1) % 3]
-        };
-        let det = m[0][0] * c(0, 0) + m[0][1] * c(0, 1) + m[0][2] * c(0, 2);
-        if !(det.abs() > 1e-300 && det.is_finite()) {
-            return None;
-        }
-        // The inverse is the transposed cofactor matrix over the determinant.
-        let inv = std::array::from_fn(|r| std::array::from_fn(|k| c(k, r) / det));
-        let diagonal = (0..3).all(|r| (0..3).all(|k| r == k || m[r][k] == 0.0));
-        Some(Self {
-            m,
-            t,
-            inv,
-            diagonal,
-        })
-    }
-
-    /// The box [origin, origin + size] as the image of the unit cube.
-    pub fn from_box(origin: Vec3, size: Vec3) -> Self {
-        let m =
-            std::array::from_fn(|r| std::array::from_fn(|k| if r == k { size[r] } else { 0.0 }));
-        Self::new(m, origin).expect("a box of positive size")
-    }
-
-    /// M⁻¹ (p − b).
-    pub fn local_point(&self, p: Vec3) -> Vec3 {
-        self.local_dir(std::array::from_fn(|k| p[k] - self.t[k]))
-    }
-
-    /// M⁻¹ w.
-    pub fn local_dir(&self, w: Vec3) -> Vec3 {
-        if self.diagonal {
-            return std::array::from_fn(|k| w[k] / self.m[k][k]);
-        }
-        std::array::from_fn(|r| dot(self.inv[r], w))
     }
 }
 

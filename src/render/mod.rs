@@ -1,6 +1,7 @@
-//! Stage 6 — the ground-truth volumetric path tracer (spec 60): scenes, participating media, the
+//! The ground-truth volumetric path tracer (docs/render.md): scenes, participating media, the
 //! estimator, the camera and the outputs of `nephele render`.
 
+pub mod geometry;
 pub mod integrator;
 pub mod majorant;
 pub mod medium;

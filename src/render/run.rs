@@ -2,8 +2,8 @@
 //! from its own random stream (xoshiro256++ seeded by a hash of the scene's seed and the pixel),
 //! so the image is the same bits for any thread count; passes while a time budget lasts.
 
+use super::geometry::{cross, normalize, Vec3};
 use super::integrator::{trace, Volume};
-use super::medium::{cross, normalize, Vec3};
 use super::scene::{Camera, Scene};
 use crate::phase::Phase;
 use anyhow::Result;
@@ -38,12 +38,9 @@ pub struct Rendered {
     pub spp: u32,
 }
 
-/// SplitMix64: the seed of pixel `i`'s stream.
+/// The seed of pixel `i`'s stream (SplitMix64).
 fn pixel_seed(seed: u64, i: u64) -> u64 {
-    let mut z = seed ^ i.wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
+    crate::stats::splitmix64(seed ^ i.wrapping_mul(0x9E37_79B9_7F4A_7C15))
 }
 
 /// The camera's primary rays: a pinhole at `position`, looking along `fwd`.

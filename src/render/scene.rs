@@ -3,7 +3,8 @@
 //! optional constant sky, a pinhole camera, samples per pixel and a seed. World units are metres,
 //! z is up.
 
-use super::medium::{cross, dot, Affine, Cloud, Ellipsoid, Medium, Slab, Vec3, Voxels};
+use super::geometry::{cross, dot, Affine, Vec3};
+use super::medium::{Cloud, Ellipsoid, Medium, Slab, Voxels};
 use crate::phase::PhaseSpec;
 use anyhow::{bail, ensure, Context, Result};
 use serde::{Deserialize, Serialize};

@@ -7,7 +7,7 @@
 
 use super::config::SlabConfig;
 use super::grid::SlabGrid;
-use super::tables::SliceReport;
+use super::run::SliceReport;
 use super::tally::Accumulator;
 use crate::io::{AtomicFiles, Npz};
 use anyhow::{bail, Context, Result};

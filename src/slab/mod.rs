@@ -20,5 +20,5 @@ pub mod walk;
 
 pub use config::SlabConfig;
 pub use grid::SlabGrid;
-pub use run::{run_slice, run_slice_from, SliceRun, StopRule};
+pub use run::{run_slice, run_slice_from, SliceReport, SliceRun, StopRule};
 pub use walk::Slice;

@@ -124,3 +124,30 @@ pub fn run_slice_from(
         after_round(&acc, worst);
     }
 }
+
+/// What one slice reports besides its tables.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct SliceReport {
+    /// Thickness (mfp).
+    pub t: f64,
+    /// Sun cosine.
+    pub mu_l: f64,
+    /// Photons walked.
+    pub photons: u64,
+    /// Scattering events.
+    pub events: u64,
+    /// Worst relative standard error over the tested cells.
+    pub worst_rel_se: f64,
+    /// Worst relative standard error over the horizon bins, when the test leaves them out.
+    pub worst_rel_se_horizon: f64,
+    /// Whether the target was met (else the photon budget stopped it).
+    pub converged: bool,
+    /// Fractions of the incident photons leaving by the lit face / the far face, and absorbed.
+    pub reflected: f64,
+    /// See `reflected`.
+    pub transmitted: f64,
+    /// See `reflected`.
+    pub absorbed: f64,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+}

@@ -5,40 +5,12 @@
 use super::checkpoint::Checkpoint;
 use super::config::SlabConfig;
 use super::grid::SlabGrid;
-use super::run::{run_slice_from, SliceRun};
+use super::run::{run_slice_from, SliceReport, SliceRun};
 use super::tally::Accumulator;
 use super::walk::Slice;
 use crate::phase::Phase;
 use anyhow::{Context, Result};
-use serde::{Deserialize, Serialize};
 use std::time::Instant;
-
-/// What one slice reports besides its tables.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct SliceReport {
-    /// Thickness (mfp).
-    pub t: f64,
-    /// Sun cosine.
-    pub mu_l: f64,
-    /// Photons walked.
-    pub photons: u64,
-    /// Scattering events.
-    pub events: u64,
-    /// Worst relative standard error over the tested cells.
-    pub worst_rel_se: f64,
-    /// Worst relative standard error over the horizon bins, when the test leaves them out.
-    pub worst_rel_se_horizon: f64,
-    /// Whether the target was met (else the photon budget stopped it).
-    pub converged: bool,
-    /// Fractions of the incident photons leaving by the lit face / the far face, and absorbed.
-    pub reflected: f64,
-    /// See `reflected`.
-    pub transmitted: f64,
-    /// See `reflected`.
-    pub absorbed: f64,
-    /// Wall-clock seconds.
-    pub seconds: f64,
-}
 
 /// The results of every slice, in (t, μ_L) order (`None`: another shard's).
 pub struct SlabRun {

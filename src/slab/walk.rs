@@ -40,12 +40,10 @@ pub struct Slice<'a> {
 /// whichever thread runs it.
 pub fn batch_rng(seed: u64, slice: u64, batch: u64) -> Xoshiro256PlusPlus {
     // SplitMix64 finaliser of a combination of the three: distinct inputs → unrelated seeds.
-    let mut z = seed
+    let z = seed
         ^ slice.wrapping_mul(0x9E37_79B9_7F4A_7C15)
         ^ batch.wrapping_mul(0xD1B5_4A32_D192_ED03);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    Xoshiro256PlusPlus::seed_from_u64(z ^ (z >> 31))
+    Xoshiro256PlusPlus::seed_from_u64(crate::stats::splitmix64(z))
 }
 
 /// The state of one photon of the walk.

@@ -1,6 +1,8 @@
 //! Gauss–Legendre quadrature: n nodes xᵢ on [−1, 1], the roots of Pₙ, with weights
 //! wᵢ = 2/((1 − xᵢ²) Pₙ′(xᵢ)²), found by Newton from Tricomi's initial guesses.
 
+use nephele_runtime::fitting::Legendre;
+
 use std::f64::consts::PI;
 
 /// Nodes and weights of the n-point rule on [−1, 1] (n ≥ 1), nodes increasing.
@@ -28,17 +30,14 @@ pub fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
     (nodes, weights)
 }
 
-/// Pₙ(x) and Pₙ′(x) by the three-term recurrence.
+/// Pₙ(x) and Pₙ′(x) = n (x Pₙ − Pₙ₋₁)/(x² − 1), by the recurrence.
 fn legendre_and_derivative(n: usize, x: f64) -> (f64, f64) {
-    let (mut p0, mut p1) = (1.0, x);
     if n == 0 {
         return (1.0, 0.0);
     }
-    for k in 2..=n {
-        let p2 = ((2 * k - 1) as f64 * x * p1 - (k - 1) as f64 * p0) / k as f64;
-        p0 = p1;
-        p1 = p2;
-    }
+    let (p0, p1) = Legendre::new(x)
+        .take(n + 1)
+        .fold((0.0, 0.0), |(_, last), p| (last, p));
     (p1, n as f64 * (x * p1 - p0) / (x * x - 1.0))
 }
 

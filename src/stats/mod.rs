@@ -4,6 +4,15 @@
 pub mod chi2;
 pub mod gauss;
 
+/// The SplitMix64 finaliser (Steele, Lea & Flood 2014): a bijection of u64 that makes nearby
+/// inputs unrelated, for deriving the seeds of independent random streams (a slab batch, a
+/// pixel) from a run's seed and an index, the same whichever thread asks.
+pub fn splitmix64(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
 /// ∫_a^b f by adaptive Simpson to absolute tolerance `tol` (never below what f64 resolves).
 pub fn adaptive_simpson(f: &dyn Fn(f64) -> f64, a: f64, b: f64, tol: f64) -> f64 {
     #[allow(clippy::too_many_arguments)]

@@ -23,6 +23,7 @@
 
 use super::geometry::SlabPoint;
 use super::single::{exp_m1, scattering_cosine, single_scattering};
+use crate::legendre::Legendre;
 use crate::phase::HenyeyGreenstein;
 use crate::real::Real;
 
@@ -303,18 +304,20 @@ pub fn ln_boundary<F: Real>(at: &SlabPoint<F>) -> Option<F> {
 /// P_0(x) … P_{n−1}(x) (Legendre polynomials; n ≤ [`MAX_LEGENDRE`], the rest 0).
 pub fn legendre<F: Real>(x: F, n: usize) -> [F; MAX_LEGENDRE] {
     let mut p = [F::of(0.0); MAX_LEGENDRE];
-    for j in 0..n.min(MAX_LEGENDRE) {
-        p[j] = match j {
-            0 => F::of(1.0),
-            1 => x,
-            // P_j = ((2j − 1) x P_{j−1} − (j − 1) P_{j−2}) / j.
-            _ => {
-                (F::of((2 * j - 1) as f64) * x * p[j - 1] - F::of((j - 1) as f64) * p[j - 2])
-                    / F::of(j as f64)
-            }
-        };
+    for (slot, v) in p.iter_mut().zip(Legendre::new(x)).take(n) {
+        *slot = v;
     }
     p
+}
+
+/// s ∈ [−1, 1], the place of ln t in a group's span `(a, b)` of ln t (held at ±1 outside it;
+/// 0 for an empty span): the argument of the Legendre polynomials in ln t of the parameters.
+pub fn ln_t_position<F: Real>((a, b): (F, F), ln_t: F) -> F {
+    if b > a {
+        (F::of(2.0) * (ln_t - a) / (b - a) - F::of(1.0)).clamp_to(F::of(-1.0), F::of(1.0))
+    } else {
+        F::of(0.0)
+    }
 }
 
 /// `f(col + node, weight · val)` for the μ_V nodes of `c` (columns col … col + nm − 1) and the

@@ -214,7 +214,8 @@ mod tests {
         }
         // The horizon: T₁ → ϖ p e^{−d/μ_L} from both sides, finite at 0.
         let horizon = |mu_v: f64| single_scattering(&hg, 1.0, &at(0.5, 4.0, 1.0, mu_v, 1.0));
-        let local = hg.pdf_cosine(scattering_cosine(&at(0.5, 4.0, 1.0, 0.0, 1.0))) * (-2.0f64).exp();
+        let local =
+            hg.pdf_cosine(scattering_cosine(&at(0.5, 4.0, 1.0, 0.0, 1.0))) * (-2.0f64).exp();
         for mu_v in [0.0, 1e-9, -1e-9] {
             assert!(
                 (horizon(mu_v) - local).abs() < 1e-6 * local,
@@ -223,8 +224,14 @@ mod tests {
             );
         }
         // Faces: nothing below the far face going up, nothing above the lit face going down.
-        assert_eq!(single_scattering(&hg, 1.0, &at(0.5, 4.0, 4.0, 0.5, 0.0)), 0.0);
-        assert_eq!(single_scattering(&hg, 1.0, &at(0.5, 4.0, 0.0, -0.5, 0.0)), 0.0);
+        assert_eq!(
+            single_scattering(&hg, 1.0, &at(0.5, 4.0, 4.0, 0.5, 0.0)),
+            0.0
+        );
+        assert_eq!(
+            single_scattering(&hg, 1.0, &at(0.5, 4.0, 0.0, -0.5, 0.0)),
+            0.0
+        );
     }
 
     #[test]
@@ -265,7 +272,14 @@ mod tests {
         // Isotropic scattering (g = 0): T₁ varies only through μ_V, and the rule must give the
         // mean of the closed form over the μ_V range.
         let hg = HenyeyGreenstein::new(0.0);
-        let bin = single_scattering_bin(&hg, 1.0, &at(0.5, 2.0, 0.5, 0.0, 0.0), (0.2, 0.4), (0.0, 1.0), 4);
+        let bin = single_scattering_bin(
+            &hg,
+            1.0,
+            &at(0.5, 2.0, 0.5, 0.0, 0.0),
+            (0.2, 0.4),
+            (0.0, 1.0),
+            4,
+        );
         let n = 200_000;
         let exact: f64 = (0..n)
             .map(|i| {

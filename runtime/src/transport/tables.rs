@@ -26,7 +26,8 @@
 use super::collector::{CollectorForm, Statistic, MAX_COLLECTOR_HARMONICS, MAX_COLLECTOR_LEGENDRE};
 use super::geometry::SlabPoint;
 use super::log_additive::{
-    legendre, ln_boundary, Cell, Lerp, LogAdditive, MAX_CROSS, MAX_HARMONICS, MAX_LEGENDRE,
+    legendre, ln_boundary, ln_t_position, Cell, Lerp, LogAdditive, MAX_CROSS, MAX_HARMONICS,
+    MAX_LEGENDRE,
 };
 use super::single::{single_scattering, PhaseValue};
 use crate::container::{ArrayView, Container, FormatError};
@@ -438,8 +439,12 @@ impl CollectorRows {
 /// The T form's sizes and Q from the `form` array, within the runtime's limits.
 fn parse_form(c: &Container) -> Result<(LogAdditive, usize), FormatError> {
     let bad = FormatError::BadArray(names::FORM);
-    let a = c.find(names::FORM).ok_or(FormatError::Missing(names::FORM))?;
-    if !(5..=6).contains(&a.len()) || a.iter().any(|v| !(v >= 0.0 && v <= 4096.0 && v == (v as u32) as f32))
+    let a = c
+        .find(names::FORM)
+        .ok_or(FormatError::Missing(names::FORM))?;
+    if !(5..=6).contains(&a.len())
+        || a.iter()
+            .any(|v| !(v >= 0.0 && v <= 4096.0 && v == (v as u32) as f32))
     {
         return Err(bad);
     }
@@ -502,12 +507,7 @@ fn legendre_in(ranges: &ArrayView, g: usize, ln_t: f32, q: usize) -> [f32; MAX_Q
         ranges.get(2 * g).unwrap_or(0.0),
         ranges.get(2 * g + 1).unwrap_or(0.0),
     );
-    let s = if b > a {
-        (2.0 * (ln_t - a) / (b - a) - 1.0).clamp(-1.0, 1.0)
-    } else {
-        0.0
-    };
-    legendre(s, q.min(MAX_Q))
+    legendre(ln_t_position((a, b), ln_t), q.min(MAX_Q))
 }
 
 /// The optional collector arrays, checked like the others.
@@ -539,12 +539,9 @@ fn collector_part<'a>(
         return Err(bad);
     }
     let mut beta = [None; 3];
-    for (slot, (stat, name)) in
-        beta.iter_mut().zip(
-            Statistic::ALL
-                .iter()
-                .zip(names::COLLECTOR_BETA),
-        )
+    for (slot, (stat, name)) in beta
+        .iter_mut()
+        .zip(Statistic::ALL.iter().zip(names::COLLECTOR_BETA))
     {
         *slot = Some(need(c, name, g * form.n_params(*stat, m, l) * q)?);
     }

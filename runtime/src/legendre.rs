@@ -1,0 +1,78 @@
+//! Legendre polynomials P_0(x), P_1(x), … by Bonnet's recurrence
+//!
+//!   (n + 1) P_{n+1}(x) = (2n + 1) x P_n(x) − n P_{n−1}(x),   P_0 = 1, P_1 = x,
+//!
+//! the one recurrence of the project: the depth and ln t terms of the compressed forms, the
+//! Legendre moments of phase functions and the Gauss–Legendre nodes all step through it.
+
+use crate::real::Real;
+
+/// P_0(x), P_1(x), … without end.
+#[derive(Clone, Copy, Debug)]
+pub struct Legendre<F> {
+    x: F,
+    prev: F,
+    cur: F,
+    n: usize,
+}
+
+impl<F: Real> Legendre<F> {
+    /// The polynomials at `x`.
+    pub fn new(x: F) -> Self {
+        Self {
+            x,
+            prev: F::of(0.0),
+            cur: F::of(1.0),
+            n: 0,
+        }
+    }
+}
+
+impl<F: Real> Iterator for Legendre<F> {
+    type Item = F;
+
+    fn next(&mut self) -> Option<F> {
+        let (p, n) = (self.cur, self.n);
+        let next = if n == 0 {
+            self.x
+        } else {
+            (F::of((2 * n + 1) as f64) * self.x * self.cur - F::of(n as f64) * self.prev)
+                / F::of((n + 1) as f64)
+        };
+        (self.prev, self.cur, self.n) = (self.cur, next, n + 1);
+        Some(p)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The closed forms of P_2 … P_4, and P_n(1) = 1, P_n(−1) = (−1)ⁿ.
+    #[test]
+    fn matches_closed_forms_and_end_values() {
+        for x in [-0.9f64, -0.3, 0.0, 0.4, 0.77] {
+            let p: [f64; 5] = core::array::from_fn({
+                let mut it = Legendre::new(x);
+                move |_| it.next().unwrap_or(f64::NAN)
+            });
+            let closed = [
+                1.0,
+                x,
+                0.5 * (3.0 * x * x - 1.0),
+                0.5 * (5.0 * x * x * x - 3.0 * x),
+                0.125 * (35.0 * x.powi(4) - 30.0 * x * x + 3.0),
+            ];
+            for (a, b) in p.iter().zip(closed) {
+                assert!((a - b).abs() < 1e-14, "x = {x}: {a} vs {b}");
+            }
+        }
+        for (n, (a, b)) in Legendre::new(1.0f64)
+            .zip(Legendre::new(-1.0f64))
+            .take(50)
+            .enumerate()
+        {
+            assert!((a - 1.0).abs() < 1e-12 && (b - (-1f64).powi(n as i32)).abs() < 1e-12);
+        }
+    }
+}
