@@ -574,6 +574,67 @@ fn slab_quick_config_writes_tables_and_refuses_bad_configs() {
 }
 
 /// slab-quick.json with a larger budget, so that a run lasts long enough to be killed.
+/// The slab run stores the phase table it sampled, and the compressor builds order 1 from it,
+/// not from the config (here the table's file is gone by the time it runs).
+#[test]
+fn compress_uses_the_phase_table_the_slab_run_stored() {
+    let dir = tempfile::tempdir().unwrap();
+    let mie = dir.path().join("mie");
+    succeeds(&[
+        "mie",
+        "--diameter",
+        "2",
+        "--sizes",
+        "21",
+        "--wavelengths",
+        "500:600:3",
+        "--no-plot",
+        "--out",
+        mie.to_str().unwrap(),
+    ]);
+    let table = mie.join("phase.npz");
+    let mut cfg: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/fit-configs/slab-quick.json"
+        ))
+        .unwrap(),
+    )
+    .unwrap();
+    cfg["phase"] = serde_json::json!({"kind": "table", "path": table});
+    let cfg_path = dir.path().join("slab.json");
+    std::fs::write(&cfg_path, cfg.to_string()).unwrap();
+    let out = dir.path().join("slab");
+    succeeds(&[
+        "slab",
+        "--config",
+        cfg_path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let read = |path: &Path, names: &[&str]| nephele::io::npz::read_arrays(path, names).unwrap();
+    let stored = read(&out.join("tables.npz"), &["phase_theta_deg", "phase"]);
+    assert_eq!(stored, read(&table, &["theta_deg", "phase"]));
+    std::fs::remove_dir_all(&mie).unwrap();
+    let comp = dir.path().join("compress");
+    succeeds(&[
+        "compress",
+        "--tables",
+        out.join("tables.npz").to_str().unwrap(),
+        "--out",
+        comp.to_str().unwrap(),
+        "--legendre",
+        "3",
+        "--theta-nodes",
+        "8",
+        "--no-held-out",
+    ]);
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(comp.join("report.json")).unwrap()).unwrap();
+    let order1 = report["transport_ntt"]["worst_order1"].as_f64().unwrap();
+    assert!(order1 < 1e-2, "order 1 from the stored table: {order1}");
+}
+
 fn slab_config(dir: &Path, max_photons: u64) -> std::path::PathBuf {
     let text = std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),

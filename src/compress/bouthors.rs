@@ -16,7 +16,7 @@
 use super::fit::for_each_row_of;
 use super::form::Cell;
 use super::joint::NormalEquations;
-use super::tables::SlabTables;
+use crate::slab::SlabTables;
 use anyhow::Result;
 use nephele_runtime::fitting::{legendre, theta_hats};
 use rayon::prelude::*;

@@ -8,7 +8,7 @@
 use super::fit::{cells_of, Row, MAX_REL_SE, MIN_REL_SE};
 use super::form::{Cell, Lerp};
 use super::joint::{coef_at, effective_q, legendre_in_ln_t, pad_q, NormalEquations};
-use super::tables::SlabTables;
+use crate::slab::SlabTables;
 use anyhow::Result;
 use nephele_runtime::fitting::{CollectorForm, Statistic};
 

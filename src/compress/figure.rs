@@ -2,8 +2,8 @@
 //! error per thickness of every group (fitted and held-out slices), and the error per slice.
 
 use super::report::GroupError;
-use super::tables::SlabTables;
 use crate::io::plot::{heat_maps, panels_plot, HeatMap, Panel, Series, Style};
+use crate::slab::SlabTables;
 use anyhow::Result;
 use std::path::Path;
 

@@ -4,7 +4,7 @@
 //! their mean diagonal (the form has exact degeneracies, e.g. a₀(μ_V) + b₀(μ_L)), Cholesky.
 
 use super::form::{features, ln_boundary, Cell, Lerp, LogAdditive};
-use super::tables::SlabTables;
+use crate::slab::SlabTables;
 use anyhow::{anyhow, Result};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
@@ -321,6 +321,7 @@ pub(crate) mod tests {
                 .collect(),
             group_first: vec![1.0, 2.0],
             collector: Default::default(),
+            phase: None,
         };
         let form = LogAdditive {
             legendre: 3,

@@ -7,7 +7,7 @@
 
 use super::fit::{for_each_row, GroupFit, Row, MAX_REL_SE};
 use super::form::LogAdditive;
-use super::tables::SlabTables;
+use crate::slab::SlabTables;
 use anyhow::{anyhow, Result};
 use nalgebra::{DMatrix, DVector};
 use nephele_runtime::fitting::{legendre, ln_t_position};

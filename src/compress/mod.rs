@@ -12,8 +12,7 @@ pub mod joint;
 pub mod report;
 pub mod run;
 pub mod ship;
-pub mod tables;
 
+pub use crate::slab::SlabTables;
 pub use fit::{fit_all, GroupFit};
 pub use form::LogAdditive;
-pub use tables::SlabTables;

@@ -7,7 +7,7 @@
 //! cells, N = √( Σ T (SE/T)² / Σ T ) (a form that follows the tables to their noise has E ≈ N);
 //! and the worst cells among those holding ≥ 1 % of their slice's largest T.
 
-use super::tables::SlabTables;
+use crate::slab::SlabTables;
 use serde::Serialize;
 
 /// One cell named in a report.
@@ -95,13 +95,14 @@ pub fn group_error_on(
         let slice_max = (0..per_slice)
             .map(|r| value(&tab.t, it, r))
             .fold(0.0, f64::max);
-        for r in 0..per_slice {
+        for cell in cells_of_thickness(tab, it, include) {
+            let r = cell.r;
             let (t, se, f) = (value(&tab.t, it, r), se_of(it, r), value(pred, it, r));
-            if !(t > 0.0 && se < 0.3 * t) || !include(it, r / (nd * nm * nk)) {
+            if !(t > 0.0 && se < 0.3 * t) {
                 continue;
             }
             let rel = f / t - 1.0;
-            let slice = &mut by_slice[it * nl + r / (nd * nm * nk)];
+            let slice = &mut by_slice[it * nl + cell.il];
             slice.0 += t * rel * rel;
             slice.1 += t;
             e += t * rel * rel;
@@ -111,16 +112,16 @@ pub fn group_error_on(
             wt += t;
             cells += 1;
             if t >= 0.01 * slice_max {
-                let (il, j, m, k) = (r / (nd * nm * nk), r / (nm * nk) % nd, r / nk % nm, r % nk);
+                let [t_slab, mu_l, depth, mu_v, psi_v_deg] = cell.coords(tab);
                 worst.push((
                     rel.abs(),
                     WorstCell {
                         group: group.unwrap_or(usize::MAX),
-                        t: tab.thickness[it],
-                        mu_l: tab.mu_l[il],
-                        depth: tab.depth[it * nd + j],
-                        mu_v: tab.mu_v(m),
-                        psi_v_deg: tab.psi_v(k).to_degrees(),
+                        t: t_slab,
+                        mu_l,
+                        depth,
+                        mu_v,
+                        psi_v_deg,
                         t_table: t,
                         t_se: se,
                         t_form: f,
@@ -211,8 +212,8 @@ pub fn collector_error_on(
             .copied()
             .fold(0.0, f64::max);
         let (mut et, mut wt) = (0.0, 0.0);
-        for r in 0..per_slice {
-            let i = start + r;
+        for cell in cells_of_thickness(tab, it, include) {
+            let i = start + cell.r;
             let (t, s) = (tab.t[i], c.sigma[i]);
             let usable = t > 0.0
                 && tab.t_se[i] < 0.3 * t
@@ -220,7 +221,7 @@ pub fn collector_error_on(
                 && c.sigma_se[i] < 0.3 * s
                 && c.cx[i].is_finite()
                 && c.cz[i].is_finite();
-            if !usable || !include(it, r / (nd * nm * nk)) {
+            if !usable {
                 continue;
             }
             let [ps, px, pz] = [pred[0][i], pred[1][i], pred[2][i]];
@@ -245,15 +246,8 @@ pub fn collector_error_on(
             wt += t;
             cells += 1;
             if t >= 0.01 * slice_max {
-                let (il, j, m, k) = (r / (nd * nm * nk), r / (nm * nk) % nd, r / nk % nm, r % nk);
                 worst.push(WorstCollectorCell {
-                    at: [
-                        tab.thickness[it],
-                        tab.mu_l[il],
-                        tab.depth[it * nd + j],
-                        tab.mu_v(m),
-                        tab.psi_v(k).to_degrees(),
-                    ],
+                    at: cell.coords(tab),
                     table: [c.cx[i], c.cz[i], s],
                     form: [px, pz, ps],
                     c_error_in_sigma: terms[2].sqrt(),
@@ -279,4 +273,50 @@ pub fn collector_error_on(
         c_in_sigma_by_t: by_t,
         worst,
     }
+}
+
+/// A cell of one thickness: its offset `r` in the [μ_L, depth, μ_V, ψ_V] slice of thickness
+/// `it`, and r's parts.
+#[derive(Clone, Copy, Debug)]
+struct CellAt {
+    it: usize,
+    r: usize,
+    il: usize,
+    j: usize,
+    m: usize,
+    k: usize,
+}
+
+impl CellAt {
+    /// (t, μ_L, depth, μ_V, ψ_V in degrees) of the cell, as reports name it.
+    fn coords(&self, tab: &SlabTables) -> [f64; 5] {
+        let nd = tab.shape[3];
+        [
+            tab.thickness[self.it],
+            tab.mu_l[self.il],
+            tab.depth[self.it * nd + self.j],
+            tab.mu_v(self.m),
+            tab.psi_v(self.k).to_degrees(),
+        ]
+    }
+}
+
+/// The cells of thickness `it`, in layout order, of the slices (t index, μ_L index) that
+/// `include` accepts: the one walk over the tables that the error reports share.
+fn cells_of_thickness<'a>(
+    tab: &SlabTables,
+    it: usize,
+    include: &'a dyn Fn(usize, usize) -> bool,
+) -> impl Iterator<Item = CellAt> + 'a {
+    let [_, _, nl, nd, nm, nk] = tab.shape;
+    (0..nl * nd * nm * nk)
+        .map(move |r| CellAt {
+            it,
+            r,
+            il: r / (nd * nm * nk),
+            j: r / (nm * nk) % nd,
+            m: r / nk % nm,
+            k: r % nk,
+        })
+        .filter(move |c| include(c.it, c.il))
 }

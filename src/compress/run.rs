@@ -112,24 +112,72 @@ pub struct Outcome {
 pub fn compress(tables: &Path, out: &Path, opt: &Options) -> Result<Outcome> {
     let tab = SlabTables::load(tables)?;
     ensure!(tab.shape[0] >= 2, "the tables hold no group of orders ≥ 2");
-    let [ng, _, nl, _, nm, _] = tab.shape;
+    let m = measure(&tab, opt)?;
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create '{}'", out.display()))?;
+    let ntt = if m.joint.is_empty() {
+        None
+    } else {
+        let phase = phase_of_run(&tab, tables)?;
+        Some(write_ntt(out, &tab, opt, &phase, &m)?)
+    };
+    let report = Report::new(tables, opt, &m, ntt.as_ref());
+    write_json(&out.join("report.json"), &report)?;
+    write_arrays(out, &tab, &m)?;
+    write_figures(out, &tab, &m)?;
+    write_json(
+        &out.join("manifest.json"),
+        &manifest(tables, opt, &m, ntt.as_ref())?,
+    )?;
+    Ok(Outcome {
+        errors: m.errors,
+        reference: m.reference,
+        collector: m.collector,
+        held_out: m.held_out,
+        params: m.params,
+        collector_params: m.collector_params,
+        fit_seconds: m.fit_seconds,
+        ntt,
+    })
+}
+
+/// Everything a compression computes before it writes anything.
+struct Measured {
+    fits: Vec<GroupFit>,
+    joint: Vec<JointFit>,
+    coll: Vec<CollectorFit>,
+    /// The form's T and collector (σ, c_x, c_z) over the tables' layout.
+    pred: Vec<f64>,
+    pred_c: [Vec<f64>; 3],
+    errors: Vec<GroupError>,
+    reference: (Vec<GroupError>, usize),
+    collector: Vec<CollectorError>,
+    held_out: Option<HeldOut>,
+    params: usize,
+    collector_params: usize,
+    fit_seconds: f64,
+}
+
+/// Fits T and the collector, the reference form and the held-out study, and measures them on
+/// every cell.
+fn measure(tab: &SlabTables, opt: &Options) -> Result<Measured> {
+    let [ng, nt, nl, _, nm, _] = tab.shape;
     let t0 = Instant::now();
-    let (fits, joint) = fit(&tab, opt, &[], &[])?;
-    let coll = fit_collectors(&tab, opt, &[], &[])?;
+    let (fits, joint) = fit(tab, opt, &[], &[])?;
+    let coll = fit_collectors(tab, opt, &[], &[])?;
     let fit_seconds = t0.elapsed().as_secs_f64();
-    let pred = predict_everywhere(&tab, &opt.form, &fits);
-    let mut errors: Vec<_> = (1..ng).map(|g| group_error(&tab, &pred, Some(g))).collect();
-    errors.push(group_error(&tab, &pred, None));
-    let pred_ref = super::bouthors::fit_and_predict(&tab)?;
-    let mut reference: Vec<_> = (1..ng)
-        .map(|g| group_error(&tab, &pred_ref, Some(g)))
-        .collect();
-    reference.push(group_error(&tab, &pred_ref, None));
-    let reference_params = super::bouthors::n_params(nm, nl) * (ng - 1) * tab.shape[1];
-    let pred_c = predict_collector(&tab, &opt.collector, &coll, &pred, &Lerp::at);
+    let pred = predict_everywhere(tab, &opt.form, &fits);
+    let per_group = |pred: &[f64]| -> Vec<GroupError> {
+        let mut e: Vec<_> = (1..ng).map(|g| group_error(tab, pred, Some(g))).collect();
+        e.push(group_error(tab, pred, None));
+        e
+    };
+    let errors = per_group(&pred);
+    let reference = per_group(&super::bouthors::fit_and_predict(tab)?);
+    let reference_params = super::bouthors::n_params(nm, nl) * (ng - 1) * nt;
+    let pred_c = predict_collector(tab, &opt.collector, &coll, &pred, &Lerp::at);
     let collector: Vec<_> = coll
         .iter()
-        .map(|f| collector_error_on(&tab, &pred_c, f.group, &|_, _| true))
+        .map(|f| collector_error_on(tab, &pred_c, f.group, &|_, _| true))
         .collect();
     let collector_params = if coll.is_empty() {
         0
@@ -141,104 +189,19 @@ pub fn compress(tables: &Path, out: &Path, opt: &Options) -> Result<Outcome> {
             * (ng - 1)
             * opt.collector_q
     };
-    let held_out = opt
-        .held_out
-        .then(|| held_out_study(&tab, opt))
-        .transpose()?;
+    let held_out = opt.held_out.then(|| held_out_study(tab, opt)).transpose()?;
     let params = opt.form.n_params(nm, nl)
         * if opt.smooth_t == 0 {
             fits.len()
         } else {
             (ng - 1) * opt.smooth_t
         };
-    std::fs::create_dir_all(out).with_context(|| format!("cannot create '{}'", out.display()))?;
-    let ntt = if joint.is_empty() {
-        None
-    } else {
-        Some(write_ntt(
-            tables,
-            out,
-            &tab,
-            opt,
-            (&joint, &coll),
-            (&pred, &pred_c),
-        )?)
-    };
-    let report = serde_json::json!({
-        "tables": tables,
-        "form": super::form::to_json(&opt.form),
-        "smooth_t": opt.smooth_t,
-        "parameters": params,
-        "fit_seconds": fit_seconds,
-        "errors": errors,
-        "collector": {
-            "form": {
-                "legendre": opt.collector.legendre,
-                "harmonics": opt.collector.harmonics,
-                "theta_nodes": opt.collector.theta_nodes,
-                "smooth_t": opt.collector_q,
-            },
-            "parameters": collector_params,
-            "errors": collector,
-        },
-        "held_out": held_out,
-        "reference_form": {
-            "kind": "bouthors_like (src/compress/bouthors.rs): ln T = ln B + a(mu_V) + x(mu_L) + [b_V(mu_V) + b_L(mu_L)] x + c2 P2(x) + c3 P3(x) + P(Theta) + sum_k [e_k(mu_V) + f_k(mu_L)] (s_V s_L)^k cos k psi, per (group, thickness)",
-            "parameters": reference_params,
-            "errors": reference,
-        },
-        "transport_ntt": ntt,
-        "version": crate::VERSION,
-        "git_commit": option_env!("NEPHELE_GIT_COMMIT"),
-    });
-    write_atomic(&out.join("report.json"), |w| {
-        serde_json::to_writer_pretty(&mut *w, &report)?;
-        Ok(())
-    })?;
-    let mut npz = Npz::new();
-    npz.add("T_form", &tab.shape, &pred);
-    if !coll.is_empty() {
-        for (name, v) in ["sigma_form", "cx_form", "cz_form"].iter().zip(&pred_c) {
-            npz.add(name, &tab.shape, v);
-        }
-    }
-    for f in &fits {
-        npz.add(
-            &format!("coef_g{}_t{}", f.group, f.it),
-            &[f.coef.len()],
-            &f.coef,
-        );
-    }
-    write_atomic(&out.join("compressed.npz"), |w| npz.write_to(w))?;
-    let mut figures = AtomicFiles::new();
-    figures.write_via_path(&out.join("fit_vs_tables.png"), |p| {
-        figure::fit_vs_tables(p, &tab, &pred)
-    })?;
-    figures.write_via_path(&out.join("error_by_thickness.png"), |p| {
-        figure::error_by_thickness(
-            p,
-            &tab,
-            &errors,
-            held_out.as_ref().map(|h| h.errors.as_slice()),
-        )
-    })?;
-    figures.write_via_path(&out.join("error_map.png"), |p| {
-        figure::error_map(p, &tab, &errors)
-    })?;
-    figures.commit()?;
-    let manifest = manifest(
-        tables,
-        opt,
-        &errors,
-        &collector,
-        held_out.as_ref(),
-        ntt.as_ref(),
-    )?;
-    write_atomic(&out.join("manifest.json"), |w| {
-        serde_json::to_writer_pretty(&mut *w, &manifest)?;
-        Ok(())
-    })?;
-    Ok(Outcome {
+    Ok(Measured {
+        fits,
+        joint,
+        coll,
+        pred,
+        pred_c,
         errors,
         reference: (reference, reference_params),
         collector,
@@ -246,8 +209,130 @@ pub fn compress(tables: &Path, out: &Path, opt: &Options) -> Result<Outcome> {
         params,
         collector_params,
         fit_seconds,
-        ntt,
     })
+}
+
+/// `value` as pretty JSON (keys sorted), atomically.
+fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {
+    let value = serde_json::to_value(value)?;
+    write_atomic(path, |w| {
+        serde_json::to_writer_pretty(&mut *w, &value)?;
+        Ok(())
+    })
+}
+
+/// compressed.npz: the form's T and collector over the tables' layout, and its coefficients.
+fn write_arrays(out: &Path, tab: &SlabTables, m: &Measured) -> Result<()> {
+    let mut npz = Npz::new();
+    npz.add("T_form", &tab.shape, &m.pred);
+    if !m.coll.is_empty() {
+        for (name, v) in ["sigma_form", "cx_form", "cz_form"].iter().zip(&m.pred_c) {
+            npz.add(name, &tab.shape, v);
+        }
+    }
+    for f in &m.fits {
+        npz.add(
+            &format!("coef_g{}_t{}", f.group, f.it),
+            &[f.coef.len()],
+            &f.coef,
+        );
+    }
+    write_atomic(&out.join("compressed.npz"), |w| npz.write_to(w))
+}
+
+/// fit_vs_tables.png, error_by_thickness.png and error_map.png.
+fn write_figures(out: &Path, tab: &SlabTables, m: &Measured) -> Result<()> {
+    let mut figures = AtomicFiles::new();
+    figures.write_via_path(&out.join("fit_vs_tables.png"), |p| {
+        figure::fit_vs_tables(p, tab, &m.pred)
+    })?;
+    figures.write_via_path(&out.join("error_by_thickness.png"), |p| {
+        let held_out = m.held_out.as_ref().map(|h| h.errors.as_slice());
+        figure::error_by_thickness(p, tab, &m.errors, held_out)
+    })?;
+    figures.write_via_path(&out.join("error_map.png"), |p| {
+        figure::error_map(p, tab, &m.errors)
+    })?;
+    figures.commit()
+}
+
+/// report.json: the form, every error, the held-out study, the reference form and the
+/// runtime's agreement with the fit.
+#[derive(Serialize)]
+struct Report<'a> {
+    tables: &'a Path,
+    form: serde_json::Value,
+    smooth_t: usize,
+    parameters: usize,
+    fit_seconds: f64,
+    errors: &'a [GroupError],
+    collector: CollectorReport<'a>,
+    held_out: Option<&'a HeldOut>,
+    reference_form: ReferenceReport<'a>,
+    transport_ntt: Option<&'a NttCheck>,
+    version: &'static str,
+    git_commit: Option<&'static str>,
+}
+
+#[derive(Serialize)]
+struct CollectorReport<'a> {
+    form: CollectorOptions,
+    parameters: usize,
+    errors: &'a [CollectorError],
+}
+
+/// The collector form's sizes and its Q, as reports and manifests write them.
+#[derive(Serialize)]
+struct CollectorOptions {
+    legendre: usize,
+    harmonics: usize,
+    theta_nodes: usize,
+    smooth_t: usize,
+}
+
+impl CollectorOptions {
+    fn of(opt: &Options) -> Self {
+        Self {
+            legendre: opt.collector.legendre,
+            harmonics: opt.collector.harmonics,
+            theta_nodes: opt.collector.theta_nodes,
+            smooth_t: opt.collector_q,
+        }
+    }
+}
+
+#[derive(Serialize)]
+struct ReferenceReport<'a> {
+    kind: &'static str,
+    parameters: usize,
+    errors: &'a [GroupError],
+}
+
+impl<'a> Report<'a> {
+    fn new(tables: &'a Path, opt: &Options, m: &'a Measured, ntt: Option<&'a NttCheck>) -> Self {
+        Report {
+            tables,
+            form: super::form::to_json(&opt.form),
+            smooth_t: opt.smooth_t,
+            parameters: m.params,
+            fit_seconds: m.fit_seconds,
+            errors: &m.errors,
+            collector: CollectorReport {
+                form: CollectorOptions::of(opt),
+                parameters: m.collector_params,
+                errors: &m.collector,
+            },
+            held_out: m.held_out.as_ref(),
+            reference_form: ReferenceReport {
+                kind: "bouthors_like (src/compress/bouthors.rs): ln T = ln B + a(mu_V) + x(mu_L) + [b_V(mu_V) + b_L(mu_L)] x + c2 P2(x) + c3 P3(x) + P(Theta) + sum_k [e_k(mu_V) + f_k(mu_L)] (s_V s_L)^k cos k psi, per (group, thickness)",
+                parameters: m.reference.1,
+                errors: &m.reference.0,
+            },
+            transport_ntt: ntt,
+            version: crate::VERSION,
+            git_commit: option_env!("NEPHELE_GIT_COMMIT"),
+        }
+    }
 }
 
 /// The fits (per thickness, or joint and then read at every thickness), skipping the
@@ -342,8 +427,14 @@ fn held_out_study(tab: &SlabTables, opt: &Options) -> Result<HeldOut> {
     })
 }
 
-/// The phase function of the slab run (its tables.json's config.phase).
-fn phase_model_of_run(tables: &Path) -> Result<Phase> {
+/// The phase function the slab run sampled: the table stored in its tables.npz, or, for an
+/// analytic phase function (or tables written before the table was stored), the one its
+/// tables.json's config.phase names.
+fn phase_of_run(tab: &SlabTables, tables: &Path) -> Result<Phase> {
+    if let Some(source) = &tab.phase {
+        return Phase::from_source(source.clone())
+            .with_context(|| format!("'{}': the stored phase table", tables.display()));
+    }
     let json = tables.with_extension("json");
     let text = std::fs::read_to_string(&json).with_context(|| {
         format!(
@@ -379,14 +470,14 @@ pub struct NttCheck {
 /// Writes transport.ntt (joint fits and the phase function) after loading it back with the
 /// runtime and comparing its f32 evaluation with the fit on every cell the form represents.
 fn write_ntt(
-    tables: &Path,
     out: &Path,
     tab: &SlabTables,
     opt: &Options,
-    (joint, coll): (&[JointFit], &[CollectorFit]),
-    (pred, pred_c): (&[f64], &[Vec<f64>; 3]),
+    model: &Phase,
+    m: &Measured,
 ) -> Result<NttCheck> {
-    let model = phase_model_of_run(tables)?;
+    let (joint, coll) = (m.joint.as_slice(), m.coll.as_slice());
+    let (pred, pred_c) = (&m.pred, &m.pred_c);
     let phase: Vec<f64> = phase_angles()
         .iter()
         .map(|deg| model.with(|p| p.eval(deg.to_radians().cos())))
@@ -463,67 +554,146 @@ fn compare(check: &mut NttCheck, (t, sigma, cx, cz): (f64, f64, f64, f64), got: 
     }
 }
 
-/// What shipped tables are: the slab run they come from (its config, seed, photons, tool
-/// version), the compressor's version and options, the file's size and CRC-32, and the error
-/// summary (per group, fitted and held out, T and the collector).
+/// manifest.json, what shipped tables are: the slab run they come from (its config, seed,
+/// photons, tool version), the compressor's version and options, the file's size and CRC-32,
+/// and the error summary (per group, fitted and held out, T and the collector).
+#[derive(Serialize)]
+struct Manifest {
+    what: &'static str,
+    file: Option<FileId>,
+    slab_run: serde_json::Map<String, serde_json::Value>,
+    compressor: Compressor,
+    errors: ErrorSummary,
+}
+
+#[derive(Serialize)]
+struct FileId {
+    name: &'static str,
+    bytes: usize,
+    crc32: String,
+}
+
+#[derive(Serialize)]
+struct Compressor {
+    version: &'static str,
+    git_commit: Option<&'static str>,
+    form: serde_json::Value,
+    smooth_t: usize,
+    collector: CollectorOptions,
+}
+
+#[derive(Serialize)]
+struct ErrorSummary {
+    definition: &'static str,
+    fitted: Summary,
+    held_out: Option<HeldOutSummary>,
+}
+
+#[derive(Serialize)]
+struct Summary {
+    #[serde(rename = "T")]
+    t: Vec<TSummary>,
+    collector: Vec<CollectorSummary>,
+}
+
+#[derive(Serialize)]
+struct HeldOutSummary {
+    thicknesses: Vec<f64>,
+    mu_l: Vec<f64>,
+    #[serde(flatten)]
+    summary: Summary,
+}
+
+#[derive(Serialize)]
+struct TSummary {
+    first_order: Option<f64>,
+    rel_rms: f64,
+    noise: f64,
+}
+
+#[derive(Serialize)]
+struct CollectorSummary {
+    first_order: f64,
+    sigma_rel: f64,
+    c_in_sigma: f64,
+    sigma_noise: f64,
+    c_noise: f64,
+}
+
+impl Summary {
+    fn of(errors: &[GroupError], collector: &[CollectorError]) -> Self {
+        Summary {
+            t: errors
+                .iter()
+                .map(|e| TSummary {
+                    first_order: e.first_order,
+                    rel_rms: e.rel_rms,
+                    noise: e.noise,
+                })
+                .collect(),
+            collector: collector
+                .iter()
+                .map(|c| CollectorSummary {
+                    first_order: c.first_order,
+                    sigma_rel: c.sigma_rel,
+                    c_in_sigma: c.c_in_sigma,
+                    sigma_noise: c.sigma_noise,
+                    c_noise: c.c_noise,
+                })
+                .collect(),
+        }
+    }
+}
+
 fn manifest(
     tables: &Path,
     opt: &Options,
-    errors: &[GroupError],
-    collector: &[CollectorError],
-    held_out: Option<&HeldOut>,
+    m: &Measured,
     ntt: Option<&NttCheck>,
-) -> Result<serde_json::Value> {
+) -> Result<Manifest> {
     let slab: serde_json::Value = std::fs::read_to_string(tables.with_extension("json"))
         .ok()
         .and_then(|t| serde_json::from_str(&t).ok())
         .unwrap_or_default();
-    let pick = |keys: &[&str]| -> serde_json::Value {
-        keys.iter()
-            .map(|k| (k.to_string(), slab[*k].clone()))
-            .collect()
-    };
-    let summary = |e: &[GroupError]| -> Vec<serde_json::Value> {
-        e.iter()
-            .map(|e| {
-                serde_json::json!({"first_order": e.first_order, "rel_rms": e.rel_rms, "noise": e.noise})
-            })
-            .collect()
-    };
-    let coll = |c: &[CollectorError]| -> Vec<serde_json::Value> {
-        c.iter()
-            .map(|c| {
-                serde_json::json!({"first_order": c.first_order, "sigma_rel": c.sigma_rel,
-                    "c_in_sigma": c.c_in_sigma, "sigma_noise": c.sigma_noise, "c_noise": c.c_noise})
-            })
-            .collect()
-    };
+    let keys = [
+        "config",
+        "seed",
+        "photons",
+        "events",
+        "converged_slices",
+        "version",
+        "git_commit",
+    ];
     let file = match ntt {
         Some(n) => {
             let bytes = std::fs::read(&n.path)?;
-            serde_json::json!({"name": "transport.ntt", "bytes": bytes.len(),
-                "crc32": format!("{:08x}", nephele_runtime::container::crc32(&bytes))})
+            Some(FileId {
+                name: "transport.ntt",
+                bytes: bytes.len(),
+                crc32: format!("{:08x}", nephele_runtime::container::crc32(&bytes)),
+            })
         }
-        None => serde_json::Value::Null,
+        None => None,
     };
-    Ok(serde_json::json!({
-        "what": "compressed slab transport tables: T, c, sigma per order group of orders >= 2 (docs/compress.md); order 1 in closed form from the stored phase function",
-        "file": file,
-        "slab_run": pick(&["config", "seed", "photons", "events", "converged_slices", "version", "git_commit"]),
-        "compressor": {
-            "version": crate::VERSION,
-            "git_commit": option_env!("NEPHELE_GIT_COMMIT"),
-            "form": super::form::to_json(&opt.form),
-            "smooth_t": opt.smooth_t,
-            "collector": {"legendre": opt.collector.legendre, "harmonics": opt.collector.harmonics,
-                "theta_nodes": opt.collector.theta_nodes, "smooth_t": opt.collector_q},
+    Ok(Manifest {
+        what: "compressed slab transport tables: T, c, sigma per order group of orders >= 2 (docs/compress.md); order 1 in closed form from the stored phase function",
+        file,
+        slab_run: keys.iter().map(|k| (k.to_string(), slab[*k].clone())).collect(),
+        compressor: Compressor {
+            version: crate::VERSION,
+            git_commit: option_env!("NEPHELE_GIT_COMMIT"),
+            form: super::form::to_json(&opt.form),
+            smooth_t: opt.smooth_t,
+            collector: CollectorOptions::of(opt),
         },
-        "errors": {
-            "definition": "T-weighted relative RMS of T per group and for the sum of groups (last); sigma relative, c in units of sigma; noise = the tables' own on the same cells",
-            "fitted": {"T": summary(errors), "collector": coll(collector)},
-            "held_out": held_out.map(|h| serde_json::json!({
-                "thicknesses": h.thicknesses, "mu_l": h.mu_l,
-                "T": summary(&h.errors), "collector": coll(&h.collector)})),
+        errors: ErrorSummary {
+            definition: "T-weighted relative RMS of T per group and for the sum of groups (last); sigma relative, c in units of sigma; noise = the tables' own on the same cells",
+            fitted: Summary::of(&m.errors, &m.collector),
+            held_out: m.held_out.as_ref().map(|h| HeldOutSummary {
+                thicknesses: h.thicknesses.clone(),
+                mu_l: h.mu_l.clone(),
+                summary: Summary::of(&h.errors, &h.collector),
+            }),
         },
-    }))
+    })
 }

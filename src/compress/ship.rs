@@ -4,9 +4,9 @@
 
 use super::collector::CollectorFit;
 use super::joint::JointFit;
-use super::tables::SlabTables;
 use super::LogAdditive;
 use crate::io::container::{container_bytes, Array};
+use crate::slab::SlabTables;
 use anyhow::{ensure, Result};
 use nephele_runtime::fitting::{names, pack_u_range, CollectorForm, Statistic};
 

@@ -14,6 +14,7 @@ pub mod figures;
 pub mod loss;
 pub mod model;
 pub mod optimize;
+pub mod output;
 pub mod run;
 
 pub use config::FitConfig;

@@ -20,6 +20,18 @@ pub fn read_arrays(path: &Path, names: &[&str]) -> Result<Vec<Vec<f64>>> {
         .collect()
 }
 
+/// The named float64 array of an `.npz` file, flattened, or None where the file has no such
+/// array (an optional part of a format).
+pub fn read_optional(path: &Path, name: &str) -> Result<Option<Vec<f64>>> {
+    let mut npz = npyz::npz::NpzArchive::open(path)
+        .with_context(|| format!("cannot open '{}'", path.display()))?;
+    let values = match npz.by_name(name)? {
+        Some(arr) => Some(arr.into_vec::<f64>()?),
+        None => None,
+    };
+    Ok(values)
+}
+
 /// Named float64 arrays with their shapes, written in insertion order.
 #[derive(Default)]
 pub struct Npz {

@@ -7,7 +7,7 @@ use serde_json::{json, Value};
 use std::io::Write;
 use std::path::Path;
 
-/// The npz keys of spec 10 plus the extra per-wavelength integrals.
+/// The npz keys of a Mie table (docs/mie.md) plus the extra per-wavelength integrals.
 pub fn table_npz(t: &PhaseTable) -> Npz {
     let n = t.theta_deg.len();
     let nl = t.wavelength_nm.len();

@@ -5,14 +5,14 @@ use super::model::build;
 use super::spec::PhaseSpec;
 use crate::mie::polydisperse::{CONVERGED_DEFAULT, DEFAULT_WAVELENGTHS};
 use crate::mie::MieJob;
-use anyhow::{anyhow, bail, ensure, Result};
+use anyhow::{anyhow, bail, ensure, Context, Result};
 use nephele_runtime::phase::{HenyeyGreenstein, TabulatedTable};
 use nephele_runtime::PhaseFunction;
 
 /// The phase function of a run, owned.
 pub enum Phase {
-    /// A tabulated table (Mie or from a file).
-    Table(TabulatedTable<f64>),
+    /// A tabulated table (Mie or from a file) and the p(θ) it was built from.
+    Table(TabulatedTable<f64>, Source),
     /// An analytic model.
     Analytic(Box<dyn PhaseFunction<f64> + Sync>),
 }
@@ -70,16 +70,15 @@ impl Phase {
                 return Ok(vec![Phase::Analytic(build(*model, params)?.0)]);
             }
         };
-        let source = match spec {
-            PhaseSpec::Table { path, .. } => format!(" '{}'", path.display()),
-            _ => String::new(),
+        let file = match spec {
+            PhaseSpec::Table { path, .. } => format!("'{}'", path.display()),
+            _ => "the Mie table".to_string(),
         };
         columns
-            .iter()
-            .map(|p| {
-                let t = TabulatedTable::<f64>::from_phase(&theta, p)
-                    .map_err(|e| anyhow!("tabulated phase function{source}: {e:?}"))?;
-                Ok(Phase::Table(t))
+            .into_iter()
+            .map(|phase| {
+                let theta_deg = theta.clone();
+                Self::from_source(Source { theta_deg, phase }).with_context(|| file.clone())
             })
             .collect()
     }
@@ -88,7 +87,7 @@ impl Phase {
     pub fn with<R>(&self, f: impl FnOnce(&(dyn PhaseFunction<f64> + Sync)) -> R) -> R {
         // (Not via with_all: callers use this per evaluation, and with_all allocates.)
         match self {
-            Phase::Table(t) => f(&t.view()),
+            Phase::Table(t, _) => f(&t.view()),
             Phase::Analytic(b) => f(b.as_ref()),
         }
     }
@@ -101,7 +100,7 @@ impl Phase {
         let views: Vec<_> = models
             .iter()
             .map(|m| match m {
-                Phase::Table(t) => Some(t.view()),
+                Phase::Table(t, _) => Some(t.view()),
                 Phase::Analytic(_) => None,
             })
             .collect();
@@ -111,10 +110,37 @@ impl Phase {
             .map(|(m, v)| match (m, v) {
                 (_, Some(v)) => v as &(dyn PhaseFunction<f64> + Sync),
                 (Phase::Analytic(b), None) => b.as_ref(),
-                (Phase::Table(_), None) => unreachable!("every table has its view"),
+                (Phase::Table(..), None) => unreachable!("every table has its view"),
             })
             .collect();
         f(&refs)
+    }
+}
+
+/// The p(θ) a table was built from: what a run stores so that later stages rebuild the very
+/// same table without the Mie computation or the file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Source {
+    /// Angles (degrees, 0 … 180).
+    pub theta_deg: Vec<f64>,
+    /// p (sr⁻¹) there.
+    pub phase: Vec<f64>,
+}
+
+impl Phase {
+    /// The table `source` describes (as [`Phase::build`] makes it from a spec).
+    pub fn from_source(source: Source) -> Result<Self> {
+        let t = TabulatedTable::<f64>::from_phase(&source.theta_deg, &source.phase)
+            .map_err(|e| anyhow!("tabulated phase function: {e:?}"))?;
+        Ok(Phase::Table(t, source))
+    }
+
+    /// The p(θ) of a tabulated phase function; None for an analytic one.
+    pub fn source(&self) -> Option<&Source> {
+        match self {
+            Phase::Table(_, s) => Some(s),
+            Phase::Analytic(_) => None,
+        }
     }
 }
 

@@ -10,6 +10,6 @@ mod function;
 mod model;
 mod spec;
 
-pub use function::Phase;
+pub use function::{Phase, Source};
 pub use model::{build, Boxed, Model, ModelParams, Preset};
 pub use spec::PhaseSpec;

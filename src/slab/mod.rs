@@ -7,11 +7,13 @@
 //! - [`run`]: a slice run to its stopping rule, deterministic for any thread count.
 //! - [`single`]: order 1 in closed form, for validation.
 //! - [`config`], [`tables`]: a whole run over (t, μ_L) from a config.
+//! - [`output`]: tables.npz and tables.json, written and read.
 //! - [`checkpoint`]: exact sums of finished and running slices, for resuming and for shards.
 
 pub mod checkpoint;
 pub mod config;
 pub mod grid;
+pub mod output;
 pub mod run;
 pub mod single;
 pub mod tables;
@@ -20,5 +22,6 @@ pub mod walk;
 
 pub use config::SlabConfig;
 pub use grid::SlabGrid;
+pub use output::SlabTables;
 pub use run::{run_slice, run_slice_from, SliceReport, SliceRun, StopRule};
 pub use walk::Slice;
