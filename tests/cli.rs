@@ -537,7 +537,7 @@ fn slab_quick_config_writes_tables_and_refuses_bad_configs() {
         ("worst_t", 1e-4),
         ("worst_sigma", 1e-4),
         ("worst_c_in_sigma", 1e-4),
-        ("worst_order1", 1e-2),
+        ("worst_order1", 1e-4),
     ] {
         let v = ntt[key].as_f64().unwrap();
         assert!(v < limit, "{key} = {v}");
@@ -632,7 +632,8 @@ fn compress_uses_the_phase_table_the_slab_run_stored() {
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(comp.join("report.json")).unwrap()).unwrap();
     let order1 = report["transport_ntt"]["worst_order1"].as_f64().unwrap();
-    assert!(order1 < 1e-2, "order 1 from the stored table: {order1}");
+    // The stored table at the walk's own nodes, read with the walk's interpolant: f32 digits.
+    assert!(order1 < 1e-4, "order 1 from the stored table: {order1}");
 }
 
 fn slab_config(dir: &Path, max_photons: u64) -> std::path::PathBuf {

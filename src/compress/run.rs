@@ -14,6 +14,7 @@ use crate::io::{write_atomic, AtomicFiles, Npz};
 use crate::phase::{Phase, PhaseSpec};
 use anyhow::{anyhow, ensure, Context, Result};
 use nephele_runtime::fitting::{CollectorForm, Statistic};
+use nephele_runtime::phase::Cosine;
 use nephele_runtime::transport::{single_scattering, SlabPoint};
 use nephele_runtime::transport::{Transport, TransportTables};
 use rayon::prelude::*;
@@ -478,12 +479,26 @@ fn write_ntt(
 ) -> Result<NttCheck> {
     let (joint, coll) = (m.joint.as_slice(), m.coll.as_slice());
     let (pred, pred_c) = (&m.pred, &m.pred_c);
-    let phase: Vec<f64> = phase_angles()
+    // The nodes the walk's table has (or, analytic, a fine grid) and p there as it sampled it.
+    let theta = model
+        .source()
+        .map_or_else(phase_angles, |s| s.theta_deg.clone());
+    let phase: Vec<f64> = theta
         .iter()
-        .map(|deg| model.with(|p| p.eval(deg.to_radians().cos())))
+        .map(|deg| {
+            let half = (0.5 * deg.to_radians()).sin();
+            model.with(|p| p.pdf_cosine(Cosine::from_one_minus_mu(2.0 * half * half)))
+        })
         .collect();
     let collector = (!coll.is_empty()).then_some((&opt.collector, coll));
-    let bytes = ntt_bytes(tab, &opt.form, opt.smooth_t, joint, collector, &phase)?;
+    let bytes = ntt_bytes(
+        tab,
+        &opt.form,
+        opt.smooth_t,
+        joint,
+        collector,
+        (&theta, &phase),
+    )?;
     let rt = TransportTables::from_bytes(&bytes).map_err(|e| anyhow!("{e}"))?;
     let [_, nt, nl, nd, nm, nk] = tab.shape;
     let mut check = NttCheck {

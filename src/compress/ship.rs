@@ -10,9 +10,11 @@ use crate::slab::SlabTables;
 use anyhow::{ensure, Result};
 use nephele_runtime::fitting::{names, pack_u_range, CollectorForm, Statistic};
 
-/// Angles (degrees) at which the phase function is stored: 0.02° steps to 5° (the Mie forward
-/// peak, ~1° wide at 10 µm), 0.2° beyond; linear between them (the compressor reports the
-/// largest error this gives order 1 on the tables' cells).
+/// Angles (degrees) at which an analytic phase function is stored: 0.02° steps to 5° (a
+/// forward peak, ~1° wide for 10 µm droplets), 0.2° beyond. A tabulated one is stored at its own
+/// nodes. Between nodes the runtime interpolates as the tabulated model samples (2π p sin θ
+/// linear in θ); the compressor reports the largest error this gives order 1 on the tables'
+/// cells.
 pub fn phase_angles() -> Vec<f64> {
     (0..250)
         .map(|i| i as f64 * 0.02)
@@ -20,16 +22,16 @@ pub fn phase_angles() -> Vec<f64> {
         .collect()
 }
 
-/// The container's bytes. `phase` holds p (sr⁻¹) at [`phase_angles`].
+/// The container's bytes. `(theta, phase)`: the phase function's nodes (degrees, 0 … 180) and
+/// p (sr⁻¹) there.
 pub fn ntt_bytes(
     tab: &SlabTables,
     form: &LogAdditive,
     q: usize,
     fits: &[JointFit],
     collector: Option<(&CollectorForm, &[CollectorFit])>,
-    phase: &[f64],
+    (theta, phase): (&[f64], &[f64]),
 ) -> Result<Vec<u8>> {
-    let theta = phase_angles();
     ensure!(
         phase.len() == theta.len(),
         "phase: {} values for {} angles",

@@ -23,6 +23,7 @@ pub use reynolds_mccormick::ReynoldsMcCormick;
 pub use schlick::Schlick;
 #[cfg(feature = "std")]
 pub use tabulated::TabulatedTable;
+pub(crate) use tabulated::{angle, phase_between};
 pub use tabulated::{TableError, Tabulated};
 pub use vmf::VonMisesFisher;
 pub use xlf::{Xlf, XLF_G_MAX};

@@ -63,12 +63,6 @@ impl<'a, F: Real> Tabulated<'a, F> {
         })
     }
 
-    /// f(θ) on interval `i`.
-    fn density_at(&self, i: usize, theta: F) -> F {
-        let h = self.theta[i + 1] - self.theta[i];
-        self.f[i] + (self.f[i + 1] - self.f[i]) * (theta - self.theta[i]) / h
-    }
-
     /// Interval containing θ.
     fn interval(&self, theta: F) -> usize {
         let n = self.theta.len();
@@ -76,8 +70,21 @@ impl<'a, F: Real> Tabulated<'a, F> {
     }
 }
 
+/// p(θ) = f(θ)/(2π sin θ) with f linear between the nodes (θ_a, f_a) and (θ_b, f_b): the
+/// phase function a tabulated model samples, between two of its nodes; at a pole (sin θ = 0),
+/// where f vanishes, its limit |f_b − f_a|/(2π h). `sin` = sin θ. Compressed tables evaluate
+/// their stored phase function (order 1) with this very interpolant.
+pub(crate) fn phase_between<F: Real>((ta, fa): (F, F), (tb, fb): (F, F), theta: F, sin: F) -> F {
+    let two_pi = F::of(2.0) * F::PI;
+    let h = tb - ta;
+    if sin <= F::of(0.0) {
+        return (fb - fa).abs() / h / two_pi;
+    }
+    (fa + (fb - fa) * (theta - ta) / h) / (two_pi * sin)
+}
+
 /// θ and sin θ of a cosine, accurate near both poles.
-fn angle<F: Real>(c: Cosine<F>) -> (F, F) {
+pub(crate) fn angle<F: Real>(c: Cosine<F>) -> (F, F) {
     let (one, two) = (F::of(1.0), F::of(2.0));
     let omm = c.one_minus_mu.clamp_to(F::of(0.0), two);
     let theta = if c.mu >= F::of(0.0) {
@@ -96,13 +103,8 @@ impl<F: Real> PhaseFunction<F> for Tabulated<'_, F> {
     fn pdf_cosine(&self, c: Cosine<F>) -> F {
         let (theta, sin) = angle(c);
         let i = self.interval(theta);
-        let two_pi = F::of(2.0) * F::PI;
-        if sin <= F::of(0.0) {
-            // p = f/(2π sin θ) → f'(θ)/(2π) at the poles, where f vanishes.
-            let h = self.theta[i + 1] - self.theta[i];
-            return (self.f[i + 1] - self.f[i]).abs() / h / two_pi;
-        }
-        self.density_at(i, theta) / (two_pi * sin)
+        let node = |k: usize| (self.theta[k], self.f[k]);
+        phase_between(node(i), node(i + 1), theta, sin)
     }
 
     fn sample_cosine(&self, xi: F) -> Cosine<F> {

@@ -16,7 +16,7 @@
 //! | `ln_t_range` | [G, 2] | ln t span of each group's polynomials in ln t |
 //! | `beta` | [G, P, Q] | the parameters' Legendre coefficients in s(ln t) |
 //! | `u_range` | [G, N, L·M] | per thickness and (μ_L, μ_V) pair, the stretched depths fitted: [`U_STEPS`]-step integers lo · 4096 + hi (u = step/4095, widened outward; lo > hi: none) |
-//! | `phase_theta` | [n] | phase function angles (degrees, increasing, 0 … 180) |
+//! | `phase_theta` | [n] | phase function nodes (degrees, increasing, 0 … 180); between them 2π p sin θ is linear in θ, as the tabulated model samples |
 //! | `phase` | [n] | phase function p(θ) (sr⁻¹) |
 //! | `collector_form` | [4] | optional: the collector form's J, K, Θ nodes, Q |
 //! | `sigma_beta`, `cz_beta`, `cx_beta` | [G, P_s, Q] | with it: ln σ, c_z/σ̂, c_x/σ̂ ([`super::collector`]) |
@@ -31,7 +31,7 @@ use super::log_additive::{
 };
 use super::single::{single_scattering, PhaseValue};
 use crate::container::{ArrayView, Container, FormatError};
-use crate::phase::Cosine;
+use crate::phase::{angle, phase_between, Cosine};
 use crate::real::Real;
 
 /// The names of the arrays of a `.ntt` (the table above), shared by the reader here and the
@@ -392,33 +392,18 @@ impl<'a> TransportTables<'a> {
         })
     }
 
-    /// p(θ) by linear interpolation of the stored table.
-    fn phase_at(&self, theta_deg: f32) -> f32 {
-        let n = self.phase_theta.len();
-        let mut lo = 0;
-        let mut hi = n - 1;
-        while hi - lo > 1 {
-            let mid = (lo + hi) / 2;
-            if self.phase_theta.get(mid).unwrap_or(0.0) <= theta_deg {
-                lo = mid
-            } else {
-                hi = mid
-            }
-        }
-        let (a, b) = (
-            self.phase_theta.get(lo).unwrap_or(0.0),
-            self.phase_theta.get(hi).unwrap_or(180.0),
-        );
-        let (pa, pb) = (
-            self.phase.get(lo).unwrap_or(0.0),
-            self.phase.get(hi).unwrap_or(0.0),
-        );
-        let w = if b > a {
-            ((theta_deg - a) / (b - a)).clamp(0.0, 1.0)
-        } else {
-            0.0
+    /// p(θ) of the stored table between its nodes as the tabulated model samples it: the
+    /// density per unit angle f = 2π p sin θ linear between nodes ([`phase_between`]).
+    fn phase_at(&self, c: Cosine<f32>) -> f32 {
+        let (theta, sin) = angle(c);
+        let to_rad = core::f32::consts::PI / 180.0;
+        let i = bracket(&self.phase_theta, theta / to_rad);
+        let node = |k: usize| {
+            let t = self.phase_theta.get(k).unwrap_or(0.0) * to_rad;
+            let p = self.phase.get(k).unwrap_or(0.0);
+            (t, 2.0 * core::f32::consts::PI * p * Real::sin_cos(t).0)
         };
-        pa + w * (pb - pa)
+        phase_between(node(i), node(i + 1), theta, sin)
     }
 }
 
@@ -589,7 +574,19 @@ fn lerp(a: &ArrayView, x: f32) -> Lerp<f32> {
     if x >= a.get(n - 1).unwrap_or(0.0) {
         return Lerp::at(n - 1);
     }
-    let (mut lo, mut hi) = (0, n - 1);
+    let lo = bracket(a, x);
+    let (va, vb) = (a.get(lo).unwrap_or(0.0), a.get(lo + 1).unwrap_or(1.0));
+    Lerp {
+        lo,
+        hi: lo + 1,
+        w: (x - va) / (vb - va),
+    }
+}
+
+/// The interval i of the increasing values of `a` (at least two) that holds x: a[i] ≤ x <
+/// a[i + 1], held to the first and the last interval outside them.
+fn bracket(a: &ArrayView, x: f32) -> usize {
+    let (mut lo, mut hi) = (0, a.len().max(2) - 1);
     while hi - lo > 1 {
         let mid = (lo + hi) / 2;
         if a.get(mid).unwrap_or(0.0) <= x {
@@ -598,12 +595,7 @@ fn lerp(a: &ArrayView, x: f32) -> Lerp<f32> {
             hi = mid
         }
     }
-    let (va, vb) = (a.get(lo).unwrap_or(0.0), a.get(hi).unwrap_or(1.0));
-    Lerp {
-        lo,
-        hi,
-        w: (x - va) / (vb - va),
-    }
+    lo
 }
 
 /// The stretched depth u ∈ [0, 1] of depth d in a slab of thickness t: the inverse of the slab
@@ -621,10 +613,7 @@ struct StoredPhase<'t, 'a>(&'t TransportTables<'a>);
 
 impl PhaseValue<f32> for StoredPhase<'_, '_> {
     fn value(&self, c: Cosine<f32>) -> f32 {
-        // θ from 1 − μ keeps the forward peak's digits: θ = 2 asin √((1 − μ)/2).
-        let half = Real::sqrt((0.5 * c.one_minus_mu).max(0.0)).min(1.0);
-        self.0
-            .phase_at(2.0 * Real::asin(half) * (180.0 / core::f32::consts::PI))
+        self.0.phase_at(c)
     }
 }
 
