@@ -205,7 +205,7 @@ fn tables_are_bit_identical_for_any_thread_count() {
     let (a, b) = (run_with(1), run_with(2));
     let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
     assert_eq!(bits(&a.tables.t), bits(&b.tables.t));
-    assert_eq!(bits(&a.tables.sigma_se), bits(&b.tables.sigma_se));
+    assert_eq!(bits(&a.tables.collector.sigma_se), bits(&b.tables.collector.sigma_se));
     assert_eq!(a.acc.total.events, b.acc.total.events);
 }
 
@@ -270,9 +270,9 @@ fn collector_case(mu_l: f64) {
                     2,
                 );
                 for (mc, se, ex) in [
-                    (t.cx[c], t.cx_se[c], exact[0]),
-                    (t.cz[c], t.cz_se[c], exact[1]),
-                    (t.sigma[c], t.sigma_se[c], exact[2]),
+                    (t.collector.cx[c], t.collector.cx_se[c], exact[0]),
+                    (t.collector.cz[c], t.collector.cz_se[c], exact[1]),
+                    (t.collector.sigma[c], t.collector.sigma_se[c], exact[2]),
                 ] {
                     let z = (mc - ex) / se;
                     chi2 += z * z;

@@ -6,6 +6,7 @@
 
 use super::config::SlabConfig;
 use super::tables::SlabRun;
+pub use super::tally::Collector;
 use crate::io::npz::{read_arrays, read_optional};
 use crate::io::plot::{panels_plot, Panel, Series, Style};
 use crate::io::{AtomicFiles, Npz};
@@ -90,12 +91,12 @@ fn arrays(cfg: &SlabConfig, run: &SlabRun, phase: &Phase) -> Npz {
         let src = [
             &t.t,
             &t.t_se,
-            &t.cx,
-            &t.cx_se,
-            &t.cz,
-            &t.cz_se,
-            &t.sigma,
-            &t.sigma_se,
+            &t.collector.cx,
+            &t.collector.cx_se,
+            &t.collector.cz,
+            &t.collector.cz_se,
+            &t.collector.sigma,
+            &t.collector.sigma_se,
         ];
         for c in 0..grid.n_cells() {
             let (g, j, m, k) = grid.cell_parts(c);
@@ -178,7 +179,7 @@ fn figure(path: &Path, cfg: &SlabConfig, run: &SlabRun) -> Result<()> {
     };
     let t = &slice.tables;
     let data: Vec<Vec<(String, Vec<f64>)>> =
-        [(&t.t, up), (&t.t, down), (&t.cz, down), (&t.sigma, down)]
+        [(&t.t, up), (&t.t, down), (&t.collector.cz, down), (&t.collector.sigma, down)]
             .iter()
             .map(|(v, m)| {
                 (0..grid.groups.len())
@@ -246,24 +247,6 @@ pub struct SlabTables {
     /// The phase function the run sampled, where it is a table (files of runs before it was
     /// stored have none).
     pub phase: Option<Source>,
-}
-
-/// The collector (mfp) and its spread σ (mfp) per cell, with standard errors
-/// (docs/conventions.md).
-#[derive(Clone, Debug, Default)]
-pub struct Collector {
-    /// c_x, across the sun's horizontal travel.
-    pub cx: Vec<f64>,
-    /// Its standard error.
-    pub cx_se: Vec<f64>,
-    /// c_z, along the sun's horizontal travel.
-    pub cz: Vec<f64>,
-    /// Its standard error.
-    pub cz_se: Vec<f64>,
-    /// σ.
-    pub sigma: Vec<f64>,
-    /// Its standard error.
-    pub sigma_se: Vec<f64>,
 }
 
 impl SlabTables {

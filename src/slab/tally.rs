@@ -212,20 +212,20 @@ impl Accumulator {
             let [w, x, z, q] = mean;
             out.t[c] = scale * w;
             out.t_se[c] = se([scale, 0.0, 0.0, 0.0]);
-            out.cx[c] = -x / w;
-            out.cx_se[c] = se([x / (w * w), -1.0 / w, 0.0, 0.0]);
-            out.cz[c] = -z / w;
-            out.cz_se[c] = se([z / (w * w), 0.0, -1.0 / w, 0.0]);
+            out.collector.cx[c] = -x / w;
+            out.collector.cx_se[c] = se([x / (w * w), -1.0 / w, 0.0, 0.0]);
+            out.collector.cz[c] = -z / w;
+            out.collector.cz_se[c] = se([z / (w * w), 0.0, -1.0 / w, 0.0]);
             let var = (q / w - (x / w).powi(2) - (z / w).powi(2)).max(0.0);
             let sigma = var.sqrt();
-            out.sigma[c] = sigma;
+            out.collector.sigma[c] = sigma;
             let d_var = [
                 -q / (w * w) + 2.0 * (x * x + z * z) / (w * w * w),
                 -2.0 * x / (w * w),
                 -2.0 * z / (w * w),
                 1.0 / w,
             ];
-            out.sigma_se[c] = if sigma > 0.0 {
+            out.collector.sigma_se[c] = if sigma > 0.0 {
                 se(d_var) / (2.0 * sigma)
             } else {
                 f64::NAN
@@ -235,23 +235,32 @@ impl Accumulator {
     }
 }
 
-/// T, c_x, c_z, σ and their standard errors for every cell of one slice (flat, in
-/// [`SlabGrid::cell`] order). Cells no photon reached hold T = 0 and NaN elsewhere.
+/// T and its standard error for every cell of one slice (flat, in [`SlabGrid::cell`] order),
+/// with the collector. Cells no photon reached hold T = 0 and NaN elsewhere.
 #[derive(Clone, Debug)]
 pub struct SliceTables {
     /// L/E⊥ (sr⁻¹).
     pub t: Vec<f64>,
     /// Standard error of `t`.
     pub t_se: Vec<f64>,
-    /// Collector mean across the sun's horizontal direction (mfp).
+    /// c and σ.
+    pub collector: Collector,
+}
+
+/// The collector c = (c_x, c_z) (mfp, from the viewpoint's horizontal position: x across, z
+/// along the sun's horizontal travel) and its spread σ (mfp) per cell, with standard errors;
+/// NaN where undefined. The same for one slice and for the tables of a whole run.
+#[derive(Clone, Debug, Default)]
+pub struct Collector {
+    /// c_x (mfp).
     pub cx: Vec<f64>,
     /// Standard error of `cx`.
     pub cx_se: Vec<f64>,
-    /// Collector mean along the sun's horizontal direction (mfp).
+    /// c_z (mfp).
     pub cz: Vec<f64>,
     /// Standard error of `cz`.
     pub cz_se: Vec<f64>,
-    /// Collector width (mfp).
+    /// σ (mfp).
     pub sigma: Vec<f64>,
     /// Standard error of `sigma`.
     pub sigma_se: Vec<f64>,
@@ -263,12 +272,14 @@ impl SliceTables {
         Self {
             t: vec![0.0; n],
             t_se: vec![0.0; n],
-            cx: nan.clone(),
-            cx_se: nan.clone(),
-            cz: nan.clone(),
-            cz_se: nan.clone(),
-            sigma: nan.clone(),
-            sigma_se: nan,
+            collector: Collector {
+                cx: nan.clone(),
+                cx_se: nan.clone(),
+                cz: nan.clone(),
+                cz_se: nan.clone(),
+                sigma: nan.clone(),
+                sigma_se: nan,
+            },
         }
     }
 
