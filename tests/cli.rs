@@ -573,7 +573,6 @@ fn slab_quick_config_writes_tables_and_refuses_bad_configs() {
     refuses_bad_configs(dir.path(), "slab", &cases);
 }
 
-/// slab-quick.json with a larger budget, so that a run lasts long enough to be killed.
 /// The slab run stores the phase table it sampled, and the compressor builds order 1 from it,
 /// not from the config (here the table's file is gone by the time it runs).
 #[test]
@@ -636,6 +635,7 @@ fn compress_uses_the_phase_table_the_slab_run_stored() {
     assert!(order1 < 1e-4, "order 1 from the stored table: {order1}");
 }
 
+/// slab-quick.json with a larger budget, so that a run lasts long enough to be killed.
 fn slab_config(dir: &Path, max_photons: u64) -> std::path::PathBuf {
     let text = std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),

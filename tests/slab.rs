@@ -205,7 +205,10 @@ fn tables_are_bit_identical_for_any_thread_count() {
     let (a, b) = (run_with(1), run_with(2));
     let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
     assert_eq!(bits(&a.tables.t), bits(&b.tables.t));
-    assert_eq!(bits(&a.tables.collector.sigma_se), bits(&b.tables.collector.sigma_se));
+    assert_eq!(
+        bits(&a.tables.collector.sigma_se),
+        bits(&b.tables.collector.sigma_se)
+    );
     assert_eq!(a.acc.total.events, b.acc.total.events);
 }
 

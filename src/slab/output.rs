@@ -178,15 +178,19 @@ fn figure(path: &Path, cfg: &SlabConfig, run: &SlabRun) -> Result<()> {
         (0..d.len()).map(|j| v[grid.cell(g, j, m, 0)]).collect()
     };
     let t = &slice.tables;
-    let data: Vec<Vec<(String, Vec<f64>)>> =
-        [(&t.t, up), (&t.t, down), (&t.collector.cz, down), (&t.collector.sigma, down)]
-            .iter()
-            .map(|(v, m)| {
-                (0..grid.groups.len())
-                    .map(|g| (label(g), column(v, g, *m)))
-                    .collect()
-            })
-            .collect();
+    let data: Vec<Vec<(String, Vec<f64>)>> = [
+        (&t.t, up),
+        (&t.t, down),
+        (&t.collector.cz, down),
+        (&t.collector.sigma, down),
+    ]
+    .iter()
+    .map(|(v, m)| {
+        (0..grid.groups.len())
+            .map(|g| (label(g), column(v, g, *m)))
+            .collect()
+    })
+    .collect();
     let titles = [
         format!(
             "T, light going up (μ_V bin nearest 1), t = {}, μ_L = {}",

@@ -194,12 +194,7 @@ impl<'a> TransportTables<'a> {
                 return Err(FormatError::BadArray(name));
             }
         }
-        let packed_max = (U_STEPS * U_STEPS - 1) as f32;
-        if self
-            .u_range
-            .iter()
-            .any(|v| !(v >= 0.0 && v <= packed_max && v == (v as u32) as f32))
-        {
+        if !whole_numbers(&self.u_range, (U_STEPS * U_STEPS - 1) as f32) {
             return Err(FormatError::BadArray(names::U_RANGE));
         }
         if self.phase_theta.len() < 2 || self.phase.iter().any(|v| v < 0.0) {
@@ -427,10 +422,7 @@ fn parse_form(c: &Container) -> Result<(LogAdditive, usize), FormatError> {
     let a = c
         .find(names::FORM)
         .ok_or(FormatError::Missing(names::FORM))?;
-    if !(5..=6).contains(&a.len())
-        || a.iter()
-            .any(|v| !(v >= 0.0 && v <= 4096.0 && v == (v as u32) as f32))
-    {
+    if !(5..=6).contains(&a.len()) || !whole_numbers(&a, 4096.0) {
         return Err(bad);
     }
     let int = |i: usize| a.get(i).map_or(0, |v| v as usize);
@@ -506,11 +498,7 @@ fn collector_part<'a>(
         return Ok(None);
     };
     let bad = FormatError::BadArray(names::COLLECTOR_FORM);
-    if sizes.len() != 4
-        || sizes
-            .iter()
-            .any(|v| !(v >= 0.0 && v <= 512.0 && v == (v as u32) as f32))
-    {
+    if sizes.len() != 4 || !whole_numbers(&sizes, 512.0) {
         return Err(bad);
     }
     let int = |i: usize| sizes.get(i).map_or(0, |v| v as usize);
@@ -538,6 +526,12 @@ fn collector_part<'a>(
         })),
         _ => Err(bad),
     }
+}
+
+/// Whether every value of `a` is a whole number in [0, `max`] (sizes stored as f32).
+fn whole_numbers(a: &ArrayView, max: f32) -> bool {
+    a.iter()
+        .all(|v| v >= 0.0 && v <= max && v == (v as u32) as f32)
 }
 
 /// Steps of the packed depth ranges: u = step / (U_STEPS − 1).
