@@ -81,3 +81,25 @@ fn the_embedded_tables_answer_sensibly_over_their_range() {
     }
     assert!(resolved > 1000, "{resolved} group values resolved");
 }
+
+/// μ_V = −0 is the horizon as +0 is: the same finite values for every group and order 1.
+#[test]
+fn minus_zero_is_the_horizon() {
+    let tab = mie_10um();
+    for (t, mu_l, d) in [(4.0f32, 0.8f32, 1.0f32), (16.0, 0.5, 0.3), (1.0, 1.0, 0.5)] {
+        let at = |mu_v: f32| SlabPoint {
+            depth: d,
+            thickness: t,
+            mu_v,
+            psi_v: 0.3,
+            mu_l,
+        };
+        let (plus, minus) = (at(0.0), at(-0.0));
+        assert!(tab.order1(&plus).is_finite());
+        assert_eq!(tab.order1(&plus).to_bits(), tab.order1(&minus).to_bits());
+        let (mut a, mut b) = ([Transport::default(); 8], [Transport::default(); 8]);
+        tab.evaluate_all(&plus, &mut a);
+        tab.evaluate_all(&minus, &mut b);
+        assert_eq!(a, b, "t {t} mu_L {mu_l} d {d}");
+    }
+}

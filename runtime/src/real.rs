@@ -86,8 +86,9 @@ macro_rules! impl_real {
             }
             #[inline]
             fn abs(self) -> Self {
-                if self < 0.0 {
-                    -self
+                // 0 − x: exactly −x for x ≠ 0, and +0 for −0 (whose reciprocal must be +∞).
+                if self <= 0.0 {
+                    0.0 - self
                 } else {
                     self
                 }

@@ -78,8 +78,10 @@ pub fn single_scattering<F: Real, P: PhaseValue<F> + ?Sized>(
         if t - d <= zero {
             return zero;
         }
-        let a = one / mu_l + one / mu_v;
-        source * -exp_m1(-a * (t - d)) / (one + mu_v / mu_l)
+        // |μ_V|: −0 is the horizon as +0 is (1/−0 = −∞ would make the factor NaN).
+        let m = mu_v.abs();
+        let a = one / mu_l + one / m;
+        source * -exp_m1(-a * (t - d)) / (one + m / mu_l)
     } else {
         if d <= zero {
             return zero;
@@ -216,7 +218,7 @@ mod tests {
         let horizon = |mu_v: f64| single_scattering(&hg, 1.0, &at(0.5, 4.0, 1.0, mu_v, 1.0));
         let local =
             hg.pdf_cosine(scattering_cosine(&at(0.5, 4.0, 1.0, 0.0, 1.0))) * (-2.0f64).exp();
-        for mu_v in [0.0, 1e-9, -1e-9] {
+        for mu_v in [0.0, -0.0, 1e-9, -1e-9] {
             assert!(
                 (horizon(mu_v) - local).abs() < 1e-6 * local,
                 "{mu_v}: {} vs {local}",
