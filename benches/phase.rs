@@ -75,7 +75,7 @@ fn models<F: Real>(c: &mut Criterion, prec: &str) {
 fn all(c: &mut Criterion) {
     models::<f32>(c, "f32");
     models::<f64>(c, "f64");
-    // The 50 µm Mie table of stage 1 (product rule 41 × 16: the peak is what matters here).
+    // The 50 µm Mie table of `nephele mie` (product rule 41 × 16: the peak is what matters here).
     let job = nephele::mie::MieJob::paper(50.0, nephele::mie::SizeRule::Product { sizes: 41 }, 16);
     let mie = job.compute(&|_, _| {}).expect("Mie table").0.remove(0);
     let table = TabulatedTable::<f32>::from_phase(&mie.theta_deg, &mie.phase).expect("valid table");

@@ -3,7 +3,7 @@
 
 use crate::real::Real;
 
-/// A unit vector.
+/// A 3-vector (a direction or a point).
 pub type Vec3<F> = [F; 3];
 
 /// Two unit vectors completing `n` (unit) to a right-handed orthonormal basis.

@@ -32,6 +32,10 @@ pub use phase::PhaseFunction;
 /// (which writers must respect), the packed depth ranges, and the Legendre recurrence.
 #[cfg(feature = "fitting")]
 pub mod fitting {
+    /// The modules themselves, for their documentation (the equations of each form, the
+    /// `.ntt` array table).
+    pub use crate::transport::{collector, log_additive, single, tables};
+
     pub use crate::legendre::Legendre;
     pub use crate::transport::collector::{
         CollectorForm, Statistic, MAX_COLLECTOR_HARMONICS, MAX_COLLECTOR_LEGENDRE,

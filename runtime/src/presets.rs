@@ -22,7 +22,7 @@
 //!
 //! The largest is at 1.5 µm, where α drops from 250 to 9.3.
 //!
-//! [`nephele_refit`] is nephele's own refit (stage 3, `nephele fit` with fit-configs/paper.json
+//! [`nephele_refit`] is nephele's own refit (`nephele fit` with fit-configs/paper.json
 //! and small-droplets.json): the paper's forms on 5–50 µm, quintics (α = 250) on 0.1–1.5 µm and
 //! quartics on 1.5–5 µm in ln d, each polished on the total E_AS over its branch. On our Mie
 //! tables its total E_AS is 0.010 % above the per-diameter optima on 5–50 µm (the paper's curves:

@@ -3,11 +3,12 @@
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use nephele::io::{phase, plot, AtomicFiles};
+use nephele::io::{plot, AtomicFiles};
 use nephele::mie::colour::Illuminant;
 use nephele::mie::distribution::SizeDistribution;
 use nephele::mie::grid::angles_from_spec;
 use nephele::mie::index::RefractiveIndex;
+use nephele::mie::output::write_table;
 use nephele::mie::polydisperse::{JobStats, CONVERGED_DEFAULT, DEFAULT_WAVELENGTHS};
 use nephele::mie::{MieJob, PhaseTable, SizeRule};
 use serde::{Deserialize, Deserializer, Serialize};
@@ -54,10 +55,10 @@ pub struct MieArgs {
     medium_index: Option<f64>,
     /// Angle grid: "default" (0–5° by 0.01°, 5–180° by 0.1°), a comma-separated list or a file
     /// of angles in degrees, one per line, increasing from 0 to 180.
-    #[arg(long, value_name = "default|FILE")]
+    #[arg(long, value_name = "default|LIST|FILE")]
     angles: Option<String>,
     /// Illuminant of the sRGB channel phase functions.
-    #[arg(long, value_enum)]
+    #[arg(long, value_parser = super::names(&Illuminant::NAMES))]
     illuminant: Option<Illuminant>,
     /// Number of Legendre moments beyond χ_0 to write. [default: 64]
     #[arg(long, value_name = "K")]
@@ -327,7 +328,7 @@ pub(super) fn write_outputs(
     });
     for t in tables {
         let dir = table_dir(out, t, tables.len());
-        phase::write_table(&mut set, &dir, t, extra.clone(), args.csv)?;
+        write_table(&mut set, &dir, t, extra.clone(), args.csv)?;
     }
     if !args.no_plot {
         std::fs::create_dir_all(out)?;

@@ -65,17 +65,16 @@ fn names<T: Copy + Send + Sync + 'static>(
     names: &'static [(T, &'static str)],
 ) -> impl clap::builder::TypedValueParser<Value = T> {
     use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
-    let values = names.iter().map(|(_, n)| {
-        let snake: &'static str = Box::leak(n.replace('-', "_").into_boxed_str());
-        PossibleValue::new(*n).alias(snake)
-    });
-    PossibleValuesParser::new(values).map(move |s: String| {
+    let values = names
+        .iter()
+        .map(|(_, n)| PossibleValue::new(*n).alias(n.replace('-', "_")));
+    PossibleValuesParser::new(values).try_map(move |s: String| {
         let kebab = s.replace('_', "-");
         names
             .iter()
             .find(|(_, n)| *n == kebab)
             .map(|(v, _)| *v)
-            .unwrap_or(names[0].0)
+            .ok_or_else(|| format!("unknown name '{s}'"))
     })
 }
 

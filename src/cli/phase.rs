@@ -203,7 +203,6 @@ pub fn run(args: PhaseArgs) -> Result<()> {
 
 /// theta_deg and phase of a `nephele mie` npz.
 fn read_table(path: &std::path::Path) -> Result<(Vec<f64>, Vec<f64>)> {
-    let mut arrays = nephele::io::npz::read_arrays(path, &["theta_deg", "phase"])?;
-    let phase = arrays.pop().unwrap_or_default();
-    Ok((arrays.pop().unwrap_or_default(), phase))
+    let (theta, mut columns) = nephele::mie::output::read_phase(path, false)?;
+    Ok((theta, columns.pop().unwrap_or_default()))
 }

@@ -138,7 +138,7 @@ pub fn run_config(
     }
     let timings =
         json!({"phase_s": phase_s, "monte_carlo_s": mc_s, "threads": rayon::current_num_threads()});
-    write_tables(cfg, &run, &phase, out, plot, timings)?;
+    write_tables(cfg, &run, Some(&phase), out, plot, timings)?;
     checkpoint.remove()?;
     summary(&run, mc_s);
     println!("wrote {}/tables.npz, tables.json", out.display());
@@ -154,12 +154,15 @@ pub fn merge_shards(args: MergeArgs) -> Result<()> {
         .map(|d| Checkpoint::existing(&d.join("checkpoint"), &cfg))
         .collect::<Result<Vec<_>>>()?;
     let run = merge(&cfg, &shards)?;
-    // The shards sampled this phase function; its table is stored with the tables.
-    let phase = Phase::build(&cfg.phase)?;
+    // The shards sampled this phase function; its table is stored with the tables where it
+    // can be built here (else the compressor builds it from the config).
+    let phase = Phase::build(&cfg.phase)
+        .map_err(|e| eprintln!("warning: the phase table is not stored with the tables: {e:#}"))
+        .ok();
     let out = args.out.unwrap_or_else(|| PathBuf::from("outputs/slab"));
     let seconds: f64 = run.done().map(|(r, _)| r.seconds).sum();
     let timings = json!({"monte_carlo_s_summed_over_shards": seconds, "shards": args.shards.len()});
-    write_tables(&cfg, &run, &phase, &out, !args.no_plot, timings)?;
+    write_tables(&cfg, &run, phase.as_ref(), &out, !args.no_plot, timings)?;
     summary(&run, seconds);
     println!(
         "merged {} shards into {}/tables.npz, tables.json",

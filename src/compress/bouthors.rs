@@ -1,4 +1,4 @@
-//! The reference form of spec 50: Bouthors et al.'s structure for T — an amplitude that factors
+//! The reference form (docs/compress.md): Bouthors et al.'s structure for T — an amplitude that factors
 //! into a view part A(t, μ_V) and a light part X(t, μ_L), a skewed Gaussian in depth whose peak
 //! moves with μ_V and μ_L, a table P(t, Θ) for the remaining anisotropy and azimuth terms —
 //! written in ln T so that it is linear in its parameters and fitted like ours:

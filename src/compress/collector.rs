@@ -1,4 +1,4 @@
-//! Fits of the collector form ([`nephele_runtime::transport::collector`], equations there) to
+//! Fits of the collector form ([`nephele_runtime::fitting::collector`], equations there) to
 //! the tables' c_x, c_z and σ, per order group and jointly across thicknesses (the same
 //! polynomials in ln t and span as the group's T, [`super::joint`]). First ln σ, weighted by
 //! 1/max(rel SE, 0.2 %) like T; then c_z/σ̂ and c_x/σ̂ with σ̂ the fitted σ, weighted by

@@ -1,4 +1,4 @@
-//! The compressed form is the runtime's ([`nephele_runtime::transport::log_additive`], module
+//! The compressed form is the runtime's ([`nephele_runtime::fitting::log_additive`], module
 //! docs there have the equation): the toolchain fits it with the very features renderers
 //! evaluate. This module adapts it to the fitter's sparse rows.
 

@@ -1,4 +1,4 @@
-//! Stage 5 — compression of the 5D slab tables (spec 50): per order group, an analytic form
+//! Compression of the 5D slab tables (docs/compress.md): per order group, an analytic form
 //! whose parameters are small tables in (t, μ_V), (t, μ_L) and (t, Θ), fitted to the Monte
 //! Carlo tables by weighted least squares (weights from their standard errors: noise is never
 //! fitted), with the error measured on every cell against the tables' own noise.

@@ -111,6 +111,7 @@ pub struct Outcome {
 
 /// Fits, measures and writes everything into `out`.
 pub fn compress(tables: &Path, out: &Path, opt: &Options) -> Result<Outcome> {
+    opt.check()?;
     let tab = SlabTables::load(tables)?;
     ensure!(tab.shape[0] >= 2, "the tables hold no group of orders ≥ 2");
     let m = measure(&tab, opt)?;

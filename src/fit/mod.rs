@@ -1,12 +1,13 @@
-//! Stage 3: fitting analytic phase functions to Mie (spec 30).
+//! Fitting analytic phase functions to Mie (docs/fit.md).
 //!
 //! - [`loss`]: E_AS (Jendersie & d'Eon eq. 1) as a grid-independent integral, with its gradient.
-//! - [`model`]: the candidate models (HG, two-term HG, Cornette–Shanks, Draine, HG+Draine):
-//!   ln p and ∂ ln p/∂θ in closed form, bounds as smooth maps.
+//! - [`model`]: what fitting needs of the fitted models (HG, two-term HG, Cornette–Shanks,
+//!   Draine, HG+Draine — `crate::phase::Model`): ln p and ∂ ln p/∂θ in closed form, bounds as
+//!   smooth maps.
 //! - [`optimize`]: coarse-grid start + L-BFGS (argmin) in unconstrained variables.
 //! - [`curves`]: HG+Draine parameters as functions of the diameter.
 //! - [`run`]: a whole config — per-diameter fits, warm-start sweeps, curves, the paper beside.
-//! - [`figures`], [`config`].
+//! - [`output`]: fits.json and fits.npz; [`figures`], [`config`].
 
 pub mod config;
 pub mod curves;

@@ -1,4 +1,4 @@
-//! The candidate analytic models of stage 3, as functions of a parameter vector θ: ln p(μ; θ)
+//! The models fitted to Mie, as functions of a parameter vector θ: ln p(μ; θ)
 //! and its gradient ∂ ln p/∂θ in closed form, bounds and the smooth maps that enforce them.
 //!
 //! Values come from the runtime's evaluators (`HenyeyGreenstein::eval`, `phase_draine`); only
@@ -15,7 +15,7 @@ use crate::phase::{build, Boxed, ModelParams};
 use nephele_runtime::phase::{phase_draine, HenyeyGreenstein};
 use nephele_runtime::PhaseFunction;
 
-/// The models stage 3 fits (those of [`crate::phase::Model`] that it has gradients for), in the
+/// The models `nephele fit` fits (those of [`crate::phase::Model`] that it has gradients for), in the
 /// order of reports.
 pub const FITTED: [Model; 5] = [
     Model::Hg,

@@ -4,7 +4,6 @@
 pub mod atomic;
 pub mod container;
 pub mod npz;
-pub mod phase;
 pub mod plot;
 
 pub use atomic::{write_atomic, AtomicFiles};

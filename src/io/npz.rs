@@ -25,8 +25,9 @@ pub fn read_arrays(path: &Path, names: &[&str]) -> Result<Vec<Vec<f64>>> {
 pub fn read_optional(path: &Path, name: &str) -> Result<Option<Vec<f64>>> {
     let mut npz = npyz::npz::NpzArchive::open(path)
         .with_context(|| format!("cannot open '{}'", path.display()))?;
-    let values = match npz.by_name(name)? {
-        Some(arr) => Some(arr.into_vec::<f64>()?),
+    let context = || format!("'{}': array '{name}'", path.display());
+    let values = match npz.by_name(name).with_context(context)? {
+        Some(arr) => Some(arr.into_vec::<f64>().with_context(context)?),
         None => None,
     };
     Ok(values)

@@ -23,13 +23,19 @@ const CMF_CSV: &str = include_str!("../../data/cie1931_2deg_1nm.csv");
 const D65_CSV: &str = include_str!("../../data/illuminant_d65_1nm.csv");
 
 /// Spectral power distribution of the light the channels are white-balanced for.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Illuminant {
     /// CIE standard illuminant D65 (daylight, sRGB's white).
     D65,
     /// Equal-energy illuminant E.
     E,
+}
+
+impl Illuminant {
+    /// Every illuminant with its name (command line and JSON).
+    pub const NAMES: [(Illuminant, &'static str); 2] =
+        [(Illuminant::D65, "d65"), (Illuminant::E, "e")];
 }
 
 /// A 1-nm table: first wavelength and rows of values.

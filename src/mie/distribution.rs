@@ -43,7 +43,7 @@ pub struct SizeNodes {
     pub weight: Vec<f64>,
 }
 
-/// Half-width of the explicit product rule in units of σ: z ∈ [−4, 4] (spec 10).
+/// Half-width of the explicit product rule in units of σ: z ∈ [−4, 4] (docs/mie.md).
 pub const PRODUCT_RULE_Z: f64 = 4.0;
 
 impl SizeDistribution {
@@ -139,7 +139,7 @@ impl SizeDistribution {
         }
     }
 
-    /// The explicit product rule of spec 10 with `n` sizes: for the log-normal, z uniform in
+    /// The explicit product rule (docs/mie.md) with `n` sizes: for the log-normal, z uniform in
     /// [−4, 4] inclusive, d_i = d_med e^{σ z_i}, w_i ∝ e^{−z_i²/2}; for the gamma distribution
     /// n points uniform in ln d over its ±4σ-equivalent support, w_i ∝ f(ln d_i).
     pub fn product_rule(&self, n: usize) -> SizeNodes {

@@ -18,7 +18,7 @@ pub fn angles_from_spec(spec: &str) -> Result<Vec<f64>> {
     if spec == "default" {
         return Ok(reference_angles_deg());
     }
-    if spec.contains(',') {
+    if spec.contains(',') && !Path::new(spec).exists() {
         let out = angle_list(spec)?;
         validate_angles(&out).with_context(|| format!("angles '{spec}'"))?;
         return Ok(out);

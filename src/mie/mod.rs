@@ -1,4 +1,4 @@
-//! Stage 1: Lorenz–Mie scattering by water droplets (spec 10).
+//! Lorenz–Mie scattering by water droplets (docs/mie.md).
 //!
 //! - [`sphere`]: one sphere — a_n, b_n, efficiencies, S1/S2;
 //! - [`angular`]: π_n, τ_n and the tabulated angle basis;
@@ -12,6 +12,7 @@ pub mod colour;
 pub mod distribution;
 pub mod grid;
 pub mod index;
+pub mod output;
 pub mod polydisperse;
 pub mod sphere;
 pub mod water;

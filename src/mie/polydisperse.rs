@@ -1,4 +1,4 @@
-//! Polydisperse, spectrally averaged phase functions (spec 10).
+//! Polydisperse, spectrally averaged phase functions (docs/mie.md).
 //!
 //! For a number distribution with weights w_i at wavelength λ, the phase function is
 //!   p_λ(θ) = Σ_i w_i (|S1|² + |S2|²)_i / 2 / k²  ÷  Σ_i w_i C_sca,i,
@@ -28,7 +28,7 @@ use std::f64::consts::PI;
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum SizeRule {
-    /// The explicit product rule of spec 10 with `sizes` sizes.
+    /// The explicit product rule (docs/mie.md) with `sizes` sizes.
     Product {
         /// Number of sizes N_s.
         sizes: usize,
@@ -246,7 +246,7 @@ impl MieJob {
         grid::validate_angles(&self.angles_deg)
     }
 
-    /// Quadrature weights of the wavelength mean (sum 1). The product rule uses spec 10's
+    /// Quadrature weights of the wavelength mean (sum 1). The product rule uses the explicit rule's
     /// equal weights, so that its tables can be compared digit for digit; the converged rule
     /// uses the trapezoid rule, whose error falls as 1/N_λ² instead of 1/N_λ (with equal
     /// weights the end points are over-weighted by half a step: 2e-3 at 61 wavelengths).

@@ -3,6 +3,7 @@
 
 use super::model::build;
 use super::spec::PhaseSpec;
+use crate::mie::output::channels;
 use crate::mie::polydisperse::{CONVERGED_DEFAULT, DEFAULT_WAVELENGTHS};
 use crate::mie::MieJob;
 use anyhow::{anyhow, bail, ensure, Context, Result};
@@ -44,18 +45,7 @@ impl Phase {
                 };
                 (t.theta_deg, columns)
             }
-            PhaseSpec::Table { path, rgb } => {
-                let name = if *rgb { "phase_rgb" } else { "phase" };
-                let mut a = crate::io::npz::read_arrays(path, &["theta_deg", name])?;
-                let p = a.pop().unwrap_or_default();
-                let theta = a.pop().unwrap_or_default();
-                ensure!(
-                    p.len() == theta.len() * if *rgb { 3 } else { 1 },
-                    "'{}': {name} does not match theta_deg",
-                    path.display()
-                );
-                (theta, if *rgb { channels(&p) } else { vec![p] })
-            }
+            PhaseSpec::Table { path, rgb } => crate::mie::output::read_phase(path, *rgb)?,
             PhaseSpec::Hg { g } => {
                 return Ok(vec![Phase::Analytic(Box::new(HenyeyGreenstein::new(*g)))])
             }
@@ -142,11 +132,4 @@ impl Phase {
             Phase::Analytic(_) => None,
         }
     }
-}
-
-/// The three columns of an interleaved [n, 3] array.
-fn channels(rgb: &[f64]) -> Vec<Vec<f64>> {
-    (0..3)
-        .map(|c| rgb.iter().skip(c).step_by(3).copied().collect())
-        .collect()
 }

@@ -27,6 +27,7 @@ pub enum PhaseSpec {
         g: f64,
     },
     /// HG + Draine from a diameter preset: jendersie_deon (default) or nephele.
+    #[serde(alias = "hg-draine")]
     HgDraine {
         /// Median diameter (µm; also `diameter`).
         #[serde(alias = "diameter")]

@@ -19,7 +19,7 @@ pub trait Medium: Sync {
     fn majorants(&self) -> Majorants<'_>;
 }
 
-/// A homogeneous slab z ∈ [0, h] (m), unbounded in x and y: the canonical slab of spec 40 with
+/// A homogeneous slab z ∈ [0, h] (m), unbounded in x and y: the canonical slab (docs/conventions.md) with
 /// its lit face at z = h.
 #[derive(Clone, Copy, Debug)]
 pub struct Slab {

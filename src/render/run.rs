@@ -13,8 +13,8 @@ use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
-/// The slab tables' order groups: first orders 1, 2, 3, 5, 7, 9, 13, 19, 31.
-pub const GROUP_FIRST: [u32; 9] = [1, 2, 3, 5, 7, 9, 13, 19, 31];
+/// The slab tables' order groups (their first orders), which the renders are split into.
+pub const GROUP_FIRST: [u32; 9] = crate::slab::grid::DEFAULT_GROUP_FIRST;
 
 /// A rendered image and its arrays (linear radiance, W m⁻² sr⁻¹; row 0 at the top).
 pub struct Rendered {

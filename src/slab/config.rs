@@ -1,7 +1,7 @@
 //! A slab run's config (fit-configs/slab-*.json): the grids (docs/slab.md), the phase function,
 //! the seed and the stopping rule. Unknown keys and impossible values are errors.
 
-use super::grid::{stretched_depths, SlabGrid, DEFAULT_GROUPS};
+use super::grid::{stretched_depths, SlabGrid, DEFAULT_GROUP_FIRST};
 use super::run::StopRule;
 use crate::phase::PhaseSpec;
 use anyhow::{bail, Result};
@@ -59,7 +59,7 @@ fn default_mu_l() -> Vec<f64> {
     (1..=8).map(|k| k as f64 / 8.0).collect()
 }
 fn default_group_starts() -> Vec<u32> {
-    DEFAULT_GROUPS.iter().map(|&(first, _)| first).collect()
+    DEFAULT_GROUP_FIRST.to_vec()
 }
 fn default_grazing() -> f64 {
     super::grid::DEFAULT_GRAZING_MU

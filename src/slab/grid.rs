@@ -1,4 +1,4 @@
-//! The cells of the canonical tables (spec 40): tally planes in depth, view-direction bins in
+//! The cells of the canonical tables (docs/slab.md): tally planes in depth, view-direction bins in
 //! (μ_V, ψ_V) and groups of scattering orders.
 //!
 //! - μ_V = cosine of the light's direction with the upward normal (> 0 going up).
@@ -24,6 +24,17 @@ pub const DEFAULT_GROUPS: [(u32, u32); 9] = [
     (19, 30),
     (31, u32::MAX),
 ];
+
+/// The first orders of [`DEFAULT_GROUPS`]: 1, 2, 3, 5, 7, 9, 13, 19, 31.
+pub const DEFAULT_GROUP_FIRST: [u32; 9] = {
+    let mut first = [0; 9];
+    let mut i = 0;
+    while i < 9 {
+        first[i] = DEFAULT_GROUPS[i].0;
+        i += 1;
+    }
+    first
+};
 
 /// Default of [`SlabGrid::grazing_mu`].
 pub const DEFAULT_GRAZING_MU: f64 = 0.01;
@@ -117,7 +128,7 @@ impl SlabGrid {
         })
     }
 
-    /// The defaults of spec 40 for thickness `t`: 16 stretched planes, 16 μ_V bins, 12 ψ_V bins,
+    /// The default grid for thickness `t`: 16 stretched planes, 16 μ_V bins, 12 ψ_V bins,
     /// nine order groups.
     pub fn default_for(t: f64) -> Result<Self> {
         let pi = std::f64::consts::PI;

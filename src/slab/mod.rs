@@ -1,11 +1,12 @@
-//! Stage 4: slab Monte Carlo and the canonical transport tables ⟨T, c, σ⟩ of Bouthors et al.
-//! 2008 (spec 40).
+//! Slab Monte Carlo and the canonical transport tables ⟨T, c, σ⟩ of Bouthors et al. 2008
+//! (docs/slab.md).
 //!
 //! - [`grid`]: tally planes, view-direction bins, order groups.
 //! - [`walk`]: the photon walk of one slice (t, μ_L) and its per-batch random streams.
 //! - [`tally`]: per-batch sums, batch-means statistics, the tables of a slice.
 //! - [`run`]: a slice run to its stopping rule, deterministic for any thread count.
-//! - [`single`]: order 1 in closed form, for validation.
+//! - [`single`]: the order-1 collector by quadrature, for validation (T₁ itself is the
+//!   runtime's closed form).
 //! - [`config`], [`tables`]: a whole run over (t, μ_L) from a config.
 //! - [`output`]: tables.npz and tables.json, written and read.
 //! - [`checkpoint`]: exact sums of finished and running slices, for resuming and for shards.

@@ -23,11 +23,11 @@ pub const PHASE: &str = "phase";
 
 /// Writes tables.npz and tables.json (and slab.png if `plot`) into `out`, atomically: the 5D
 /// tables of a whole run, its grids and groups, the phase function it sampled where it is a
-/// table, and the run's report (config, seed, slices, `timings`).
+/// table (and given), and the run's report (config, seed, slices, `timings`).
 pub fn write_tables(
     cfg: &SlabConfig,
     run: &SlabRun,
-    phase: &Phase,
+    phase: Option<&Phase>,
     out: &Path,
     plot: bool,
     timings: serde_json::Value,
@@ -65,7 +65,7 @@ fn report(cfg: &SlabConfig, run: &SlabRun, timings: serde_json::Value) -> serde_
 }
 
 /// The 5D tables, their grids and groups, and the phase function's table if it has one.
-fn arrays(cfg: &SlabConfig, run: &SlabRun, phase: &Phase) -> Npz {
+fn arrays(cfg: &SlabConfig, run: &SlabRun, phase: Option<&Phase>) -> Npz {
     let (nt, nl, np) = (cfg.thicknesses.len(), cfg.mu_l.len(), cfg.planes);
     let (ng, nm, nk) = (cfg.group_starts.len(), cfg.mu_v_bins, cfg.psi_v_bins);
     let n = ng * nt * nl * np * nm * nk;
@@ -144,7 +144,7 @@ fn arrays(cfg: &SlabConfig, run: &SlabRun, phase: &Phase) -> Npz {
         .collect();
     z.add("group_first", &[ng], &first);
     z.add("group_last", &[ng], &last);
-    if let Some(s) = phase.source() {
+    if let Some(s) = phase.and_then(Phase::source) {
         z.add(PHASE_THETA, &[s.theta_deg.len()], &s.theta_deg);
         z.add(PHASE, &[s.phase.len()], &s.phase);
     }

@@ -1,5 +1,5 @@
 //! A whole slab run: every slice (t, μ_L) of a config, one after the other (each parallel over
-//! its batches), gathered into the 5D tables of spec 40 with shape
+//! its batches), gathered into the 5D tables with shape
 //! [group, t, μ_L, depth, μ_V, ψ_V].
 
 use super::checkpoint::Checkpoint;

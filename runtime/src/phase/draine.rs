@@ -165,7 +165,7 @@ fn invert_cdf_f64(g: f64, alpha: f64, xi: f64, guess: &InverseGuess) -> f64 {
 }
 
 /// Draine's p(μ) (sr⁻¹) without building the sampler's table: for callers that only evaluate
-/// at ever-changing (g, α), such as the fits of stage 3.
+/// at ever-changing (g, α), such as the fits of `nephele fit`.
 #[inline]
 pub fn phase_draine<F: Real>(g: F, alpha: F, mu: F) -> F {
     let one = F::of(1.0);

@@ -7,15 +7,28 @@
 //! — features, parameter grids, packing — are for the toolchain that fits and writes the
 //! tables: the module `nephele_runtime::fitting`, behind the `fitting` feature.
 
-#[cfg_attr(not(feature = "fitting"), allow(dead_code))]
-pub(crate) mod collector;
+// The forms' modules are public (through `nephele_runtime::fitting`) only for the toolchain.
+#[cfg(feature = "fitting")]
+pub mod collector;
+#[cfg(not(feature = "fitting"))]
+#[allow(dead_code)]
+mod collector;
 mod geometry;
-#[cfg_attr(not(feature = "fitting"), allow(dead_code))]
-pub(crate) mod log_additive;
-#[cfg_attr(not(feature = "fitting"), allow(dead_code))]
-pub(crate) mod single;
-#[cfg_attr(not(feature = "fitting"), allow(dead_code))]
-pub(crate) mod tables;
+#[cfg(feature = "fitting")]
+pub mod log_additive;
+#[cfg(not(feature = "fitting"))]
+#[allow(dead_code)]
+mod log_additive;
+#[cfg(feature = "fitting")]
+pub mod single;
+#[cfg(not(feature = "fitting"))]
+#[allow(dead_code)]
+mod single;
+#[cfg(feature = "fitting")]
+pub mod tables;
+#[cfg(not(feature = "fitting"))]
+#[allow(dead_code)]
+mod tables;
 
 pub use geometry::SlabPoint;
 pub use single::{scattering_cosine, single_scattering, PhaseValue};

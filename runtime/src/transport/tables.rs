@@ -175,14 +175,21 @@ impl<'a> TransportTables<'a> {
             thickness: need(c, names::THICKNESS, n)?,
             ln_t_range: need(c, names::LN_T_RANGE, 2 * g)?,
             beta: need(c, names::BETA, beta_len)?,
-            u_range: need(c, names::U_RANGE, g * n * l * m)?,
+            u_range: need(
+                c,
+                names::U_RANGE,
+                [n, l, m]
+                    .iter()
+                    .try_fold(g, |acc, &k| acc.checked_mul(k))
+                    .ok_or(FormatError::BadArray(names::U_RANGE))?,
+            )?,
             phase_theta: need(c, names::PHASE_THETA, theta_len)?,
             phase: need(c, names::PHASE, theta_len)?,
         })
     }
 
     /// Checks the values the shapes do not: increasing grids, depth ranges packed as exact
-    /// integers, a phase function of at least two non-negative values.
+    /// integers, a phase function of at least two non-negative values from 0° to 180°.
     fn check(&self) -> Result<(), FormatError> {
         for (a, name) in [
             (&self.mu_l, names::MU_L_NODES),
@@ -197,7 +204,9 @@ impl<'a> TransportTables<'a> {
         if !whole_numbers(&self.u_range, (U_STEPS * U_STEPS - 1) as f32) {
             return Err(FormatError::BadArray(names::U_RANGE));
         }
-        if self.phase_theta.len() < 2 || self.phase.iter().any(|v| v < 0.0) {
+        let n = self.phase_theta.len();
+        let ends = (self.phase_theta.get(0), self.phase_theta.get(n.max(1) - 1));
+        if n < 2 || ends != (Some(0.0), Some(180.0)) || self.phase.iter().any(|v| v < 0.0) {
             return Err(FormatError::BadArray(names::PHASE));
         }
         Ok(())

@@ -1,7 +1,9 @@
-//! Writing a Mie phase-function table: phase.npz, phase.json and optionally phase.csv.
+//! A Mie phase-function table's artefacts, written and read here: phase.npz, phase.json and
+//! optionally phase.csv (`nephele mie`, and the main job's tables).
 
-use super::{AtomicFiles, Npz};
-use crate::mie::PhaseTable;
+use super::PhaseTable;
+use crate::io::npz::read_arrays;
+use crate::io::{AtomicFiles, Npz};
 use anyhow::Result;
 use serde_json::{json, Value};
 use std::io::Write;
@@ -83,4 +85,26 @@ pub fn write_table(
         })?;
     }
     Ok(())
+}
+
+/// θ (degrees) and p (sr⁻¹) of a phase.npz: `phase`, or with `rgb` the three linear-sRGB
+/// channels of `phase_rgb` (one column each).
+pub fn read_phase(path: &Path, rgb: bool) -> Result<(Vec<f64>, Vec<Vec<f64>>)> {
+    let name = if rgb { "phase_rgb" } else { "phase" };
+    let mut a = read_arrays(path, &["theta_deg", name])?;
+    let p = a.pop().unwrap_or_default();
+    let theta = a.pop().unwrap_or_default();
+    anyhow::ensure!(
+        p.len() == theta.len() * if rgb { 3 } else { 1 },
+        "'{}': {name} does not match theta_deg",
+        path.display()
+    );
+    Ok((theta, if rgb { channels(&p) } else { vec![p] }))
+}
+
+/// The three columns of an interleaved [n, 3] array (the sRGB channels of `phase_rgb`).
+pub fn channels(rgb: &[f64]) -> Vec<Vec<f64>> {
+    (0..3)
+        .map(|c| rgb.iter().skip(c).step_by(3).copied().collect())
+        .collect()
 }
