@@ -2,11 +2,12 @@
 
 mod common;
 
-use common::{gauss_legendre, half_ulp_of_print, reference};
+use common::{half_ulp_of_print, reference};
 use nephele::mie::angular::AngleBasis;
 use nephele::mie::batch::{weighted_intensity, Particle, WeightRow};
 use nephele::mie::sphere::n_terms;
 use nephele::mie::MieCoefficients;
+use nephele::stats::gauss::gauss_legendre;
 use num_complex::Complex64;
 use proptest::prelude::*;
 

@@ -686,7 +686,12 @@ fn manifest(
             Some(FileId {
                 name: "transport.ntt",
                 bytes: bytes.len(),
-                crc32: format!("{:08x}", nephele_runtime::container::crc32(&bytes)),
+                // The CRC of the body (the file's own trailer): the CRC of the whole file,
+                // trailer included, is the same constant for every file (CRC-32's residue).
+                crc32: format!(
+                    "{:08x}",
+                    nephele_runtime::container::crc32(&bytes[..bytes.len().saturating_sub(4)])
+                ),
             })
         }
         None => None,
