@@ -20,6 +20,7 @@ CHECKS=(
     check_mitsuba.py
     check_fit.py
     check_slab.py
+    check_transport.py
     check_render_mitsuba.py
 )
 

@@ -507,6 +507,7 @@ fn slab_quick_config_writes_tables_and_refuses_bad_configs() {
         files_in(&comp),
         [
             "compressed.npz",
+            "domain_check.npz",
             "error_by_thickness.png",
             "error_map.png",
             "fit_vs_tables.png",
@@ -517,6 +518,14 @@ fn slab_quick_config_writes_tables_and_refuses_bad_configs() {
     );
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(comp.join("report.json")).unwrap()).unwrap();
+    // Coverage over every cell with light: per group and the sum, and the light all groups
+    // drop together stays under 0.5 % of every slice's.
+    let coverage = &report["coverage"];
+    assert_eq!(coverage["groups"].as_array().unwrap().len(), 9);
+    let worst = coverage["worst_slice_all_groups"]["share"]
+        .as_f64()
+        .unwrap();
+    assert!(worst < 0.005, "light dropped in the worst slice: {worst}");
     let errors = report["errors"].as_array().unwrap();
     assert_eq!(errors.len(), 9, "8 groups of orders ≥ 2 and their sum");
     assert!(errors

@@ -108,15 +108,41 @@ pub fn print_outcome(o: &Outcome, out: &Path) {
         println!(
             "wrote {} ({:.0} KB); the runtime's f32 evaluation against the fit: T within {:.1e}, \
              σ within {:.1e}, c within {:.1e} σ; order 1 from the stored phase table within {:.1e} \
-             of the phase function's",
+             of the phase function's; {} cells where only one of them is 0",
             n.path.display(),
             n.bytes as f64 / 1024.0,
             n.worst_t,
             n.worst_sigma,
             n.worst_c_in_sigma,
-            n.worst_order1
+            n.worst_order1,
+            n.zero_mismatches
         );
     }
+    let (worst, groups) = &o.coverage;
+    println!(
+        "coverage over every cell with light: group  orders  dropped (0 or off > 2x)  zero     \
+         worst slice   E all cells (noise)"
+    );
+    for c in groups {
+        let (name, orders) = match (c.group, c.first_order) {
+            (Some(g), Some(f)) => (g.to_string(), format!("{f}+")),
+            _ => ("all".to_string(), "sum ≥ 2".to_string()),
+        };
+        println!(
+            "{name:>41} {orders:>7}  {:>8.3} %  {:>20.4} %  {:>7.3} %   {:>6.2} % ({:.2} %)",
+            100.0 * c.dropped,
+            100.0 * c.zero,
+            100.0 * c.worst_slice.share,
+            100.0 * c.rel_rms_all,
+            100.0 * c.noise_all
+        );
+    }
+    println!(
+        "light of orders ≥ 2 the groups drop together: at most {:.3} % of a slice's (t = {}, mu_L = {})",
+        100.0 * worst.share,
+        worst.t,
+        worst.mu_l
+    );
 }
 
 fn print_errors(what: &str, errors: &[GroupError]) {

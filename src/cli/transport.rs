@@ -67,8 +67,19 @@ pub fn run(a: TransportArgs) -> Result<()> {
             e
         })
         .collect();
+    let dom = tab.domain();
+    let inside = dom.contains(&at);
+    if !inside {
+        eprintln!(
+            "warning: t = {} or mu_L = {} is outside the tables' grid (t {}..{}, mu_L {}..{}): \
+             their parameters are held at the grid's nearest end",
+            a.t, a.mu_l, dom.thickness.0, dom.thickness.1, dom.mu_l.0, dom.mu_l.1
+        );
+    }
     let out = serde_json::json!({
         "point": {"t": a.t, "mu_l": a.mu_l, "depth": a.depth, "mu_v": a.mu_v, "psi_deg": a.psi},
+        "inside_domain": inside,
+        "domain": {"t": [dom.thickness.0, dom.thickness.1], "mu_l": [dom.mu_l.0, dom.mu_l.1]},
         "units": "T = L / E_perp (1/sr); c_x, c_z, sigma in mean free paths (the collector: where the light entered, from the viewpoint's horizontal position, z along the sun's horizontal travel; 0 where T is 0); orders >= 2 per group from the compressed form, order 1 (T only) in closed form",
         "order1": tab.order1(&at),
         "groups": groups,

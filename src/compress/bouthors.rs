@@ -44,8 +44,8 @@ fn features(c: &Cell, nm: usize, nl: usize, row: &mut Vec<(usize, f64)>) -> bool
     row.extend([(shape, p[2]), (shape + 1, p[3])]);
     let table = shape + 2;
     // The Θ hats with their depth slopes, of which the reference keeps the constants only.
-    theta_hats(THETA_NODES, c, 1.0, table, &mut |col, v| {
-        if (col - table) % 2 == 0 {
+    theta_hats(THETA_NODES, c, 1.0, table, &mut |col, v, j| {
+        if j == 0 {
             row.push((col, v));
         }
     });

@@ -5,7 +5,7 @@
 //! σ̂/max(SE, 0.002 σ̂): the residuals are the error in units of σ that the report gives. Cells
 //! enter where T is usable (as for T's fit) and σ's relative SE is below 30 %.
 
-use super::fit::{cells_of, Row, MAX_REL_SE, MIN_REL_SE};
+use super::fit::{cells_of, fitted_range, GroupFit, Row, MAX_REL_SE, MIN_REL_SE};
 use super::form::{Cell, Lerp};
 use super::joint::{coef_at, effective_q, legendre_in_ln_t, pad_q, NormalEquations};
 use crate::slab::SlabTables;
@@ -78,6 +78,7 @@ pub fn fit_collector(
                     features: &row,
                     w,
                     y,
+                    t: 0.0,
                 };
                 ne.add(&r, &l);
             }
@@ -146,7 +147,7 @@ pub fn predict_collector(
     tab: &SlabTables,
     form: &CollectorForm,
     fits: &[CollectorFit],
-    t_pred: &[f64],
+    (t_fits, t_pred): (&[GroupFit], &[f64]),
     l_of: &dyn Fn(usize) -> Lerp,
 ) -> [Vec<f64>; 3] {
     let [_, nt, nl, _, nm, _] = tab.shape;
@@ -154,10 +155,15 @@ pub fn predict_collector(
     for fit in fits {
         for it in 0..nt {
             let coef = fit.at(tab.thickness[it]);
+            let t_fit = t_fits.iter().find(|f| f.group == fit.group && f.it == it);
             for (mut cell, [il, j, m, k], _) in cells_of(tab, it) {
                 let i = tab.index(fit.group, it, il, j, m, k);
                 if t_pred[i] > 0.0 {
                     cell.l = l_of(il);
+                    // Held within T's fitted depths, as the runtime reads it.
+                    if let Some(r) = t_fit.and_then(|f| fitted_range(f, &cell, nm)) {
+                        cell.u = r.held(cell.u);
+                    }
                     let v = predict_at(form, &coef, &cell, nm, nl);
                     for (o, v) in out.iter_mut().zip(v) {
                         o[i] = v;
@@ -215,7 +221,7 @@ mod tests {
         let span: Vec<usize> = (0..nt).collect();
         let range = (tab.thickness[0].ln(), tab.thickness[nt - 1].ln());
         let fit = fit_collector(&tab, &form, 1, 2, (&span, range), &[]).unwrap();
-        let pred = predict_collector(&tab, &form, &[fit], &tab.t, &Lerp::at);
+        let pred = predict_collector(&tab, &form, &[fit], (&[], &tab.t), &Lerp::at);
         let mut worst = 0.0f64;
         let mut compared = 0;
         for i in 0..n {

@@ -7,6 +7,7 @@ use super::form::{features, ln_boundary, Cell, Lerp, LogAdditive};
 use crate::slab::SlabTables;
 use anyhow::{anyhow, Result};
 use nalgebra::{DMatrix, DVector};
+use nephele_runtime::fitting::{FittedDepths, CEILING_FACTOR};
 use rayon::prelude::*;
 
 /// Cells noisier than this (relative SE) are left out of the fit.
@@ -25,9 +26,61 @@ pub struct GroupFit {
     /// Cells fitted.
     pub cells: usize,
     /// Per (μ_L, μ_V) pair (index il · nm + m): the range of stretched depth u the fitted cells
-    /// cover. Beyond it the form gives 0 — the group's T there is below what the tables resolve
-    /// (no photon, or a relative SE over 30 %) — rather than extrapolate its polynomials.
+    /// cover. Beyond it the form's depth polynomials are not extrapolated but continued from
+    /// the range's end ([`nephele_runtime::fitting::depth_polynomial`]); a pair without
+    /// fitted cells has an empty range (lo > hi).
     pub u_range: Vec<(f64, f64)>,
+    /// Per sun cosine, the largest T of the fitted cells (0: none): the form's T is capped at
+    /// [`CEILING_FACTOR`] times the largest of the nodes a point draws on.
+    pub ceiling: Vec<f64>,
+}
+
+/// Fewest fitted cells (of a pair's depths × azimuths) for a (μ_L, μ_V) pair's depth range to
+/// count: a stray usable cell or two of a group where it is mostly noise would otherwise let
+/// the form's value there stand for the pair's other depths.
+pub const MIN_PAIR_CELLS: usize = 4;
+
+/// The fitted depth range of every (μ_L, μ_V) pair of one thickness, accumulated cell by cell.
+pub(crate) struct DepthRanges {
+    range: Vec<(f64, f64)>,
+    cells: Vec<usize>,
+    top: Vec<f64>,
+}
+
+impl DepthRanges {
+    /// For `pairs` pairs, all empty.
+    pub fn new(pairs: usize) -> Self {
+        Self {
+            range: vec![(f64::INFINITY, f64::NEG_INFINITY); pairs],
+            cells: vec![0; pairs],
+            top: vec![0.0; pairs],
+        }
+    }
+
+    /// A fitted cell `r`.
+    pub fn add(&mut self, r: &Row) {
+        let range = &mut self.range[r.pair];
+        *range = (range.0.min(r.u), range.1.max(r.u));
+        self.cells[r.pair] += 1;
+        self.top[r.pair] = self.top[r.pair].max(r.t);
+    }
+
+    /// The ranges, empty (lo > hi) where a pair has fewer than [`MIN_PAIR_CELLS`] cells, and
+    /// per sun cosine (`nl` of them) the largest T of those pairs' fitted cells (0: none).
+    pub fn finish(self, nl: usize) -> (Vec<(f64, f64)>, Vec<f64>) {
+        let nm = self.range.len() / nl.max(1);
+        let mut ceiling = vec![0.0f64; nl];
+        let mut ranges = Vec::with_capacity(self.range.len());
+        for (pair, (r, n)) in self.range.into_iter().zip(self.cells).enumerate() {
+            if n >= MIN_PAIR_CELLS {
+                ranges.push(r);
+                ceiling[pair / nm] = ceiling[pair / nm].max(self.top[pair]);
+            } else {
+                ranges.push((f64::INFINITY, f64::NEG_INFINITY));
+            }
+        }
+        (ranges, ceiling)
+    }
 }
 
 /// Every cell (and its [μ_L, depth, μ_V, ψ_V] indices) of thickness `it` with medium behind
@@ -67,6 +120,8 @@ pub(crate) struct Row<'r> {
     pub w: f64,
     /// ln T − ln B.
     pub y: f64,
+    /// T.
+    pub t: f64,
 }
 
 /// Calls `f` with the row of every cell of (group `g`, thickness `it`) that enters a fit: T > 0,
@@ -112,6 +167,7 @@ pub(crate) fn for_each_row_of(
             features: row,
             w: 1.0 / (se / t).max(MIN_REL_SE),
             y: t.ln() - off,
+            t,
         });
     }
 }
@@ -130,7 +186,7 @@ pub fn fit_one(
     let mut aty = DVector::<f64>::zeros(np);
     let mut row = Vec::new();
     let mut cells = 0;
-    let mut u_range = vec![(f64::INFINITY, f64::NEG_INFINITY); nl * nm];
+    let mut u_range = DepthRanges::new(nl * nm);
     // Rows are accumulated in blocks through a dense matrix product (fast), not one by one.
     let block = 2048;
     let mut a = DMatrix::<f64>::zeros(block, np);
@@ -146,8 +202,7 @@ pub fn fit_one(
         }
     };
     for_each_row(tab, form, g, it, skip_l, &mut row, |r| {
-        let range = &mut u_range[r.pair];
-        *range = (range.0.min(r.u), range.1.max(r.u));
+        u_range.add(&r);
         for &(col, v) in r.features {
             a[(filled, col)] += r.w * v;
         }
@@ -159,6 +214,7 @@ pub fn fit_one(
         }
     });
     flush(&mut a, &mut y, &mut filled);
+    let (u_range, ceiling) = u_range.finish(nl);
     let ridge = 1e-10 * (0..np).map(|i| ata[(i, i)]).sum::<f64>() / np as f64;
     for i in 0..np {
         ata[(i, i)] += ridge.max(1e-300);
@@ -172,6 +228,7 @@ pub fn fit_one(
         coef: chol.solve(&aty).iter().copied().collect(),
         cells,
         u_range,
+        ceiling,
     })
 }
 
@@ -213,20 +270,29 @@ pub fn predict_ln(
 ) -> Vec<Option<f64>> {
     let [_, _, nl, nd, nm, nk] = tab.shape;
     let mut out = vec![None; nl * nd * nm * nk];
-    let mut row = Vec::new();
-    for (mut c, [il, j, m, k], off) in cells_of(tab, it_geom) {
+    for (mut c, [il, j, m, k], _) in cells_of(tab, it_geom) {
         c.l = l_of(il);
-        // Inside the fitted depth range of every node it draws on.
-        let inside = [c.l.lo, c.l.hi].iter().all(|&l| {
-            let (lo, hi) = fit.u_range[l * nm + m];
-            c.u >= lo && c.u <= hi
-        });
-        if inside && features(form, &c, nm, nl, &mut row) {
-            let s: f64 = row.iter().map(|&(col, v)| v * fit.coef[col]).sum();
-            out[((il * nd + j) * nm + m) * nk + k] = Some(off + s);
+        // The depth polynomials read within the fitted depths, as the runtime reads them.
+        let Some(range) = fitted_range(fit, &c, nm) else {
+            continue;
+        };
+        if let Some(v) = form.ln_t_in_range(&c, (nm, nl), |col| fit.coef[col], &range) {
+            let mut top = 0.0f64;
+            c.l.each(|l, _| top = top.max(fit.ceiling[l]));
+            out[((il * nd + j) * nm + m) * nk + k] = Some(v.min((CEILING_FACTOR * top).ln()));
         }
     }
     out
+}
+
+/// The depths `fit` had cells at around `c` (its μ_L nodes, its own μ_V node).
+pub fn fitted_range(fit: &GroupFit, c: &Cell, nm: usize) -> Option<FittedDepths<f64>> {
+    let mut ranges = Vec::with_capacity(2);
+    c.l.each(|l, w| {
+        let (lo, hi) = fit.u_range[l * nm + c.v.lo];
+        ranges.push((w, lo, hi));
+    });
+    FittedDepths::of(ranges)
 }
 
 /// Where sun cosine il sits among the fitted ones (all but `skip_l`): its own node, or between
@@ -339,6 +405,7 @@ pub(crate) mod tests {
                 .collect(),
             cells: 0,
             u_range: vec![(0.0, 1.0); nl * nm],
+            ceiling: vec![f64::INFINITY; nl],
         };
         for it in 0..nt {
             truth.it = it;

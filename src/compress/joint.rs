@@ -5,7 +5,7 @@
 //! thickness do not: docs/compress.md). Same weights and ridge as [`super::fit`]; the normal
 //! equations are accumulated from the sparse rows directly.
 
-use super::fit::{for_each_row, GroupFit, Row, MAX_REL_SE};
+use super::fit::{for_each_row, DepthRanges, GroupFit, Row, MAX_REL_SE};
 use super::form::LogAdditive;
 use crate::slab::SlabTables;
 use anyhow::{anyhow, Result};
@@ -24,6 +24,9 @@ pub struct JointFit {
     /// Per thickness index, the fitted depth range per (μ_L, μ_V) pair (see [`GroupFit`]);
     /// a held-out thickness takes the intersection of its fitted neighbours'.
     pub u_range: Vec<Vec<(f64, f64)>>,
+    /// Per thickness index, the largest T of the fitted cells per sun cosine (see
+    /// [`GroupFit`]); a held-out thickness takes the larger of its fitted neighbours'.
+    pub ceiling: Vec<Vec<f64>>,
     /// Cells fitted.
     pub cells: usize,
     /// ln of the thickness range the fit spans (where the group has enough usable cells);
@@ -168,18 +171,22 @@ pub fn fit_joint(
     let qe = effective_q(q, spanned.len());
     let mut ne = NormalEquations::new(form.n_params(nm, nl) * qe);
     let mut row = Vec::new();
-    let mut u_range = vec![vec![(f64::INFINITY, f64::NEG_INFINITY); nl * nm]; nt];
+    let mut ranges: Vec<DepthRanges> = (0..nt).map(|_| DepthRanges::new(nl * nm)).collect();
     for it in (0..nt).filter(|it| !skip_t.contains(it)) {
         let lq = legendre_in_ln_t(ln_t_range, tab.thickness[it], qe);
         let in_fit = spanned.contains(&it);
+        // Depth ranges only where the polynomials span: beyond, their parameters are the
+        // span's ends, not this thickness's (a stray usable cell of a high order in a thin
+        // slab would light its whole pair with them).
         for_each_row(tab, form, g, it, skip_l, &mut row, |r| {
-            let range = &mut u_range[it][r.pair];
-            *range = (range.0.min(r.u), range.1.max(r.u));
             if in_fit {
+                ranges[it].add(&r);
                 ne.add(&r, &lq);
             }
         });
     }
+    let (mut u_range, mut ceiling): (Vec<_>, Vec<_>) =
+        ranges.into_iter().map(|r| r.finish(nl)).unzip();
     let cells = ne.cells;
     let beta = pad_q(&ne.solve(&format!("group {g}"))?, qe, q);
     // Held-out thicknesses: the depth ranges both fitted neighbours cover.
@@ -193,6 +200,11 @@ pub fn fit_joint(
                 .zip(&u_range[b])
                 .map(|(x, y)| (x.0.max(y.0), x.1.min(y.1)))
                 .collect();
+            ceiling[it] = ceiling[a]
+                .iter()
+                .zip(&ceiling[b])
+                .map(|(x, y)| x.max(*y))
+                .collect();
         }
     }
     Ok(JointFit {
@@ -200,6 +212,7 @@ pub fn fit_joint(
         q,
         beta,
         u_range,
+        ceiling,
         cells,
         ln_t_range,
     })
@@ -214,6 +227,7 @@ impl JointFit {
             coef: coef_at(&self.beta, self.q, self.ln_t_range, tab.thickness[it]),
             cells: self.cells,
             u_range: self.u_range[it].clone(),
+            ceiling: self.ceiling[it].clone(),
         }
     }
 }

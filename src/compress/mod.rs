@@ -5,6 +5,7 @@
 
 pub mod bouthors;
 pub mod collector;
+pub mod coverage;
 pub mod figure;
 pub mod fit;
 pub mod form;

@@ -3,6 +3,7 @@
 //! figures and transport.ntt (loaded back by the runtime and compared with the fit).
 
 use super::collector::{fit_collector, predict_collector, CollectorFit};
+use super::coverage::{coverage, domain_check, worst_slice_of_all, Coverage, SliceShare};
 use super::figure;
 use super::fit::{fit_all, held_out_l, predict, predict_held_out, GroupFit};
 use super::form::Lerp;
@@ -85,6 +86,9 @@ pub struct HeldOut {
     pub errors: Vec<GroupError>,
     /// Collector errors on the held-out slices, per group.
     pub collector: Vec<CollectorError>,
+    /// The held-out fit's T over the tables' layout (compressed.npz `T_held_out`).
+    #[serde(skip)]
+    pub pred: Vec<f64>,
 }
 
 /// What a compression produced.
@@ -107,6 +111,9 @@ pub struct Outcome {
     pub fit_seconds: f64,
     /// transport.ntt and the runtime's agreement with the fit (joint fits only).
     pub ntt: Option<NttCheck>,
+    /// Coverage: the worst slice's share of light the groups drop together, and per group
+    /// then for the sum.
+    pub coverage: (SliceShare, Vec<Coverage>),
 }
 
 /// Fits, measures and writes everything into `out`.
@@ -128,9 +135,13 @@ pub fn compress(tables: &Path, out: &Path, opt: &Options) -> Result<Outcome> {
     write_figures(out, &tab, &m)?;
     write_json(
         &out.join("manifest.json"),
-        &manifest(tables, opt, &m, ntt.as_ref())?,
+        &manifest(tables, &tab, opt, &m, ntt.as_ref())?,
     )?;
+    write_atomic(&out.join("domain_check.npz"), |w| {
+        domain_check(&tab, DOMAIN_CHECK_SAMPLES).write_to(w)
+    })?;
     Ok(Outcome {
+        coverage: (m.coverage.worst_slice_all_groups, m.coverage.groups.clone()),
         errors: m.errors,
         reference: m.reference,
         collector: m.collector,
@@ -141,6 +152,9 @@ pub fn compress(tables: &Path, out: &Path, opt: &Options) -> Result<Outcome> {
         ntt,
     })
 }
+
+/// Random cells and random points in domain_check.npz.
+const DOMAIN_CHECK_SAMPLES: usize = 1500;
 
 /// Everything a compression computes before it writes anything.
 struct Measured {
@@ -157,6 +171,31 @@ struct Measured {
     params: usize,
     collector_params: usize,
     fit_seconds: f64,
+    coverage: CoverageReport,
+}
+
+/// The coverage of every group and of the sum ([`super::coverage`]).
+#[derive(Serialize)]
+struct CoverageReport {
+    definition: &'static str,
+    /// The largest share of one (t, μ_L) slice's light of orders ≥ 2 dropped by the groups
+    /// together.
+    worst_slice_all_groups: SliceShare,
+    groups: Vec<Coverage>,
+}
+
+impl CoverageReport {
+    fn of(tab: &SlabTables, pred: &[f64]) -> Self {
+        let mut groups: Vec<_> = (1..tab.shape[0])
+            .map(|g| coverage(tab, pred, Some(g)))
+            .collect();
+        groups.push(coverage(tab, pred, None));
+        Self {
+            definition: "over every cell with T > 0 (horizon bins, cells next to the faces and noisy cells included): the share of the light in cells where the form is 0 (zero) or off by more than a factor 2 either way (dropped); worst_slice: the largest share of one (t, mu_L) slice's light of orders >= 2 a group drops; rel_rms_all: T-weighted relative RMS over the same cells, noise_all the tables' own, rel_rms_all_net = sqrt(max(0, E^2 - N^2))",
+            worst_slice_all_groups: worst_slice_of_all(tab, pred),
+            groups,
+        }
+    }
 }
 
 /// Fits T and the collector, the reference form and the held-out study, and measures them on
@@ -174,9 +213,10 @@ fn measure(tab: &SlabTables, opt: &Options) -> Result<Measured> {
         e
     };
     let errors = per_group(&pred);
+    let coverage = CoverageReport::of(tab, &pred);
     let reference = per_group(&super::bouthors::fit_and_predict(tab)?);
     let reference_params = super::bouthors::n_params(nm, nl) * (ng - 1) * nt;
-    let pred_c = predict_collector(tab, &opt.collector, &coll, &pred, &Lerp::at);
+    let pred_c = predict_collector(tab, &opt.collector, &coll, (&fits, &pred), &Lerp::at);
     let collector: Vec<_> = coll
         .iter()
         .map(|f| collector_error_on(tab, &pred_c, f.group, &|_, _| true))
@@ -211,6 +251,7 @@ fn measure(tab: &SlabTables, opt: &Options) -> Result<Measured> {
         params,
         collector_params,
         fit_seconds,
+        coverage,
     })
 }
 
@@ -227,6 +268,9 @@ fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {
 fn write_arrays(out: &Path, tab: &SlabTables, m: &Measured) -> Result<()> {
     let mut npz = Npz::new();
     npz.add("T_form", &tab.shape, &m.pred);
+    if let Some(h) = &m.held_out {
+        npz.add("T_held_out", &tab.shape, &h.pred);
+    }
     if !m.coll.is_empty() {
         for (name, v) in ["sigma_form", "cx_form", "cz_form"].iter().zip(&m.pred_c) {
             npz.add(name, &tab.shape, v);
@@ -271,6 +315,7 @@ struct Report<'a> {
     collector: CollectorReport<'a>,
     held_out: Option<&'a HeldOut>,
     reference_form: ReferenceReport<'a>,
+    coverage: &'a CoverageReport,
     transport_ntt: Option<&'a NttCheck>,
     version: &'static str,
     git_commit: Option<&'static str>,
@@ -330,6 +375,7 @@ impl<'a> Report<'a> {
                 parameters: m.reference.1,
                 errors: &m.reference.0,
             },
+            coverage: &m.coverage,
             transport_ntt: ntt,
             version: crate::VERSION,
             git_commit: option_env!("NEPHELE_GIT_COMMIT"),
@@ -416,7 +462,7 @@ fn held_out_study(tab: &SlabTables, opt: &Options) -> Result<HeldOut> {
     errors.push(group_error_on(tab, &pred, None, &held));
     let coll = fit_collectors(tab, opt, &skip_t, &skip_l)?;
     let l_of = held_out_l(tab, &skip_l);
-    let pred_c = predict_collector(tab, &opt.collector, &coll, &pred, &l_of);
+    let pred_c = predict_collector(tab, &opt.collector, &coll, (&fits, &pred), &l_of);
     let collector = coll
         .iter()
         .map(|f| collector_error_on(tab, &pred_c, f.group, &held))
@@ -426,6 +472,7 @@ fn held_out_study(tab: &SlabTables, opt: &Options) -> Result<HeldOut> {
         mu_l: skip_l.iter().map(|&i| tab.mu_l[i]).collect(),
         errors,
         collector,
+        pred,
     })
 }
 
@@ -467,6 +514,8 @@ pub struct NttCheck {
     /// Largest |T₁/T₁_exact − 1| of order 1 from the stored phase table against the phase
     /// function itself, over the cells' centres where T₁_exact > 10⁻⁶ of its slice maximum.
     pub worst_order1: f64,
+    /// Cells where exactly one of the fit and the runtime is 0 (f32 underflow, a lost group).
+    pub zero_mismatches: usize,
 }
 
 /// Writes transport.ntt (joint fits and the phase function) after loading it back with the
@@ -509,6 +558,7 @@ fn write_ntt(
         worst_sigma: 0.0,
         worst_c_in_sigma: 0.0,
         worst_order1: 0.0,
+        zero_mismatches: 0,
     };
     let mut all = vec![Transport::default(); joint.len()];
     for it in 0..nt {
@@ -557,6 +607,9 @@ fn write_ntt(
 
 /// Folds one cell's runtime values `got` against the fit's (T, σ, c_x, c_z) into `check`.
 fn compare(check: &mut NttCheck, (t, sigma, cx, cz): (f64, f64, f64, f64), got: &Transport) {
+    if (t > 0.0) != (got.t > 0.0) {
+        check.zero_mismatches += 1;
+    }
     if !(t > 0.0 && got.t > 0.0) {
         return;
     }
@@ -580,6 +633,30 @@ struct Manifest {
     slab_run: serde_json::Map<String, serde_json::Value>,
     compressor: Compressor,
     errors: ErrorSummary,
+    coverage: CoverageSummary,
+    domain: Domain,
+}
+
+/// What a renderer may ask and what the tables answer outside their grid.
+#[derive(Serialize)]
+struct Domain {
+    thickness: [f64; 2],
+    mu_l: [f64; 2],
+    mu_v: [f64; 2],
+    psi_v: [f64; 2],
+    depth: &'static str,
+    outside: &'static str,
+}
+
+#[derive(Serialize)]
+struct CoverageSummary {
+    definition: &'static str,
+    worst_slice_all_groups: SliceShare,
+    /// Per group then the sum: dropped share, zero share, relative RMS over every cell.
+    dropped: Vec<f64>,
+    zero: Vec<f64>,
+    rel_rms_all: Vec<f64>,
+    noise_all: Vec<f64>,
 }
 
 #[derive(Serialize)]
@@ -663,6 +740,7 @@ impl Summary {
 
 fn manifest(
     tables: &Path,
+    tab: &SlabTables,
     opt: &Options,
     m: &Measured,
     ntt: Option<&NttCheck>,
@@ -715,6 +793,22 @@ fn manifest(
                 mu_l: h.mu_l.clone(),
                 summary: Summary::of(&h.errors, &h.collector),
             }),
+        },
+        coverage: CoverageSummary {
+            definition: m.coverage.definition,
+            worst_slice_all_groups: m.coverage.worst_slice_all_groups,
+            dropped: m.coverage.groups.iter().map(|c| c.dropped).collect(),
+            zero: m.coverage.groups.iter().map(|c| c.zero).collect(),
+            rel_rms_all: m.coverage.groups.iter().map(|c| c.rel_rms_all).collect(),
+            noise_all: m.coverage.groups.iter().map(|c| c.noise_all).collect(),
+        },
+        domain: Domain {
+            thickness: [tab.thickness[0], tab.thickness[tab.thickness.len() - 1]],
+            mu_l: [tab.mu_l[0], tab.mu_l[tab.mu_l.len() - 1]],
+            mu_v: [-1.0, 1.0],
+            psi_v: [0.0, std::f64::consts::PI],
+            depth: "[0, t]",
+            outside: "t or mu_L outside their ranges: the form's parameters are held at the nearest end of the grid while the geometry (boundary factor, single-scattering factor, scattering angle) follows the point; TransportTables::domain() tells a caller whether a point is inside",
         },
     })
 }

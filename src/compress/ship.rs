@@ -72,6 +72,11 @@ pub fn ntt_bytes(
                 .map(|&(lo, hi)| pack_u_range(lo, hi))
         })
         .collect();
+    let ceiling = f32s(
+        &mut fits
+            .iter()
+            .flat_map(|f| f.ceiling.iter().flatten().copied()),
+    );
     let theta32 = f32s(&mut theta.iter().copied());
     let phase32 = f32s(&mut phase.iter().copied());
     let g = fits.len();
@@ -85,6 +90,7 @@ pub fn ntt_bytes(
         (names::LN_T_RANGE, vec![g, 2], ln_t),
         (names::BETA, vec![g, p, q], beta),
         (names::U_RANGE, vec![g, nt, nl * nm], u_range),
+        (names::T_CEILING, vec![g, nt, nl], ceiling),
         (names::PHASE_THETA, vec![theta32.len()], theta32),
         (names::PHASE, vec![phase32.len()], phase32),
     ];

@@ -261,17 +261,20 @@ fn bin(edges: &[f64], x: f64) -> usize {
 
 /// `n` ≥ 2 planes from 0 to t, stretched toward the lit face (module docs).
 pub fn stretched_depths(t: f64, n: usize) -> Vec<f64> {
-    let beta = 0.3 * t.powf(0.65);
     (0..n)
-        .map(|j| {
-            let u = j as f64 / (n - 1) as f64;
-            match j {
-                0 => 0.0,
-                _ if j == n - 1 => t,
-                _ => t * (beta * u).exp_m1() / beta.exp_m1(),
-            }
+        .map(|j| match j {
+            0 => 0.0,
+            _ if j == n - 1 => t,
+            _ => stretched_depth(t, j as f64 / (n - 1) as f64),
         })
         .collect()
+}
+
+/// The depth (mfp) at stretched depth u ∈ [0, 1] of a slab of thickness t:
+/// t (e^{βu} − 1)/(e^β − 1), β = 0.3 t^0.65 (module docs).
+pub fn stretched_depth(t: f64, u: f64) -> f64 {
+    let beta = 0.3 * t.powf(0.65);
+    t * (beta * u).exp_m1() / beta.exp_m1()
 }
 
 #[cfg(test)]

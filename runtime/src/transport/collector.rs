@@ -187,6 +187,26 @@ impl CollectorForm {
         nl: usize,
         mut f: impl FnMut(usize, F),
     ) {
+        let p = legendre(F::of(2.0) * c.u - F::of(1.0), self.depth_terms());
+        self.for_each_feature_in_depth(stat, c, sigma, nm, nl, |col, v, j| f(col, v * p[j]));
+    }
+
+    /// Legendre terms in x = 2u − 1 the features use (the J depth terms, the Θ table's slope).
+    pub fn depth_terms(&self) -> usize {
+        self.legendre.max(2).min(MAX_LEGENDRE)
+    }
+
+    /// As [`Self::for_each_feature`], split as `f(column, value, j)`: the feature is
+    /// value · P_j(2u − 1), value independent of u.
+    pub fn for_each_feature_in_depth<F: Real>(
+        &self,
+        stat: Statistic,
+        c: &Cell<F>,
+        sigma: F,
+        nm: usize,
+        nl: usize,
+        mut f: impl FnMut(usize, F, usize),
+    ) {
         let inv_sigma = if sigma > F::of(0.0) {
             F::of(1.0) / sigma
         } else {
@@ -194,8 +214,6 @@ impl CollectorForm {
         };
         let mut blocks = [Block::Theta(F::of(0.0)); MAX_BLOCKS];
         let n = self.blocks(stat, c, inv_sigma, &mut blocks);
-        let j_max = self.legendre.min(MAX_LEGENDRE);
-        let p = legendre(F::of(2.0) * c.u - F::of(1.0), j_max);
         let mut col = 0;
         for b in &blocks[..n] {
             match *b {
@@ -204,8 +222,8 @@ impl CollectorForm {
                     col += 2 * self.theta_nodes;
                 }
                 Block::Depth(v) => {
-                    for &pj in &p[..j_max] {
-                        on_nodes(c, nm, col, v * pj, &mut f);
+                    for j in 0..self.legendre.min(MAX_LEGENDRE) {
+                        on_nodes(c, nm, col, v, &mut |col, v| f(col, v, j));
                         col += nm + nl;
                     }
                 }

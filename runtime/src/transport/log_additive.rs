@@ -108,7 +108,7 @@ impl<F: Real> Lerp<F> {
     }
 
     /// Calls `f(node, weight)` for its one or two nodes.
-    pub(crate) fn each(&self, mut f: impl FnMut(usize, F)) {
+    pub fn each(&self, mut f: impl FnMut(usize, F)) {
         if self.hi != self.lo && self.w > F::of(0.0) {
             f(self.lo, F::of(1.0) - self.w);
             f(self.hi, self.w);
@@ -192,7 +192,7 @@ impl LogAdditive {
     }
 
     /// Calls `f(column, value)` for every feature of `c` that is not zero by construction;
-    /// false (and no call) where F₁ = 0 and the form cannot represent the cell.
+    /// false (and no call) where F₁ is not a number (a point outside the slab).
     pub fn for_each_feature<F: Real>(
         &self,
         c: &Cell<F>,
@@ -200,41 +200,61 @@ impl LogAdditive {
         nl: usize,
         mut f: impl FnMut(usize, F),
     ) -> bool {
+        let p = legendre(F::of(2.0) * c.u - F::of(1.0), self.depth_terms());
+        self.for_each_feature_in_depth(c, nm, nl, |col, v, j| f(col, v * p[j]))
+    }
+
+    /// Legendre terms in x = 2u − 1 the features use: every feature is a depth-free value times
+    /// one of P_0(x) … P_{n−1}(x) (the J depth terms, the Θ table's slope, the interaction's 3).
+    pub fn depth_terms(&self) -> usize {
+        let cross = if self.cross > 0 { CROSS_DEPTH } else { 0 };
+        self.legendre.max(2).max(cross).min(MAX_LEGENDRE)
+    }
+
+    /// As [`Self::for_each_feature`], the feature split as `f(column, value, j)`: the feature
+    /// is value · P_j(2u − 1), value independent of u. The runtime evaluates the depth
+    /// polynomials of each group at its own (held) depth with one set of features.
+    pub fn for_each_feature_in_depth<F: Real>(
+        &self,
+        c: &Cell<F>,
+        nm: usize,
+        nl: usize,
+        mut f: impl FnMut(usize, F, usize),
+    ) -> bool {
         let four_pi = F::of(4.0 * core::f64::consts::PI);
         let hg0 = HenyeyGreenstein::new(F::of(0.0));
         let f1 = four_pi * single_scattering(&hg0, F::of(1.0), &c.at);
-        if !(f1 > F::of(0.0)) {
+        if !(f1 >= F::of(0.0)) {
             return false;
         }
-        let ln_f1 = {
-            let l = f1.ln();
-            if l < F::of(LN_F1_FLOOR) {
-                F::of(LN_F1_FLOOR)
-            } else {
-                l
-            }
+        // Deep in thick slabs F₁ ~ e^{−d/μ_L} underflows f32 (e^{−107} at d = 80, μ_L = 0.75)
+        // where multiple scattering is at its strongest: the floor, as f64 gives it.
+        let ln_f1 = if f1 > F::of(0.0) && f1.ln() > F::of(LN_F1_FLOOR) {
+            f1.ln()
+        } else {
+            F::of(LN_F1_FLOOR)
         };
-        let x = F::of(2.0) * c.u - F::of(1.0);
         let mut col = 0;
-        let both = |f: &mut dyn FnMut(usize, F), col: usize, val: F| on_nodes(c, nm, col, val, f);
-        let p = legendre(x, self.legendre.max(CROSS_DEPTH));
-        for &pj in &p[..self.legendre.min(MAX_LEGENDRE)] {
-            both(&mut f, col, pj);
+        let both = |f: &mut dyn FnMut(usize, F, usize), col: usize, val: F, j: usize| {
+            on_nodes(c, nm, col, val, &mut |col, v| f(col, v, j))
+        };
+        for j in 0..self.legendre.min(MAX_LEGENDRE) {
+            both(&mut f, col, F::of(1.0), j);
             col += nm + nl;
         }
         if self.pairs {
             let each_pair = |g: &mut dyn FnMut(usize, F)| {
                 c.v.each(|m, wm| c.l.each(|il, wl| g(m * nl + il, wm * wl)));
             };
-            each_pair(&mut |p, w| f(col + p, w * ln_f1));
+            each_pair(&mut |p, w| f(col + p, w * ln_f1, 0));
             col += nm * nl;
             each_pair(&mut |p, w| {
-                f(col + 2 * p, w);
-                f(col + 2 * p + 1, w * x);
+                f(col + 2 * p, w, 0);
+                f(col + 2 * p + 1, w, 1);
             });
             col += 2 * nm * nl;
         } else {
-            c.v.each(|m, w| f(col + m, w * ln_f1));
+            c.v.each(|m, w| f(col + m, w * ln_f1, 0));
             col += nm;
         }
         theta_hats(self.theta_nodes, c, F::of(1.0), col, &mut f);
@@ -248,7 +268,7 @@ impl LogAdditive {
         for k in 1..=self.harmonics {
             s_k = s_k * s;
             let (_, cos_k) = (F::of(k as f64) * c.at.psi_v).sin_cos();
-            both(&mut f, col, s_k * cos_k);
+            both(&mut f, col, s_k * cos_k, 0);
             col += nm + nl;
         }
         let a = self.cross.min(MAX_CROSS);
@@ -256,17 +276,17 @@ impl LogAdditive {
             // γ_L(μ_L) ln F₁, and Σ e_jab P_j(x) P_a(2|μ_V| − 1) P_b(2μ_L − 1) per hemisphere:
             // the view × sun interaction the additive terms lack, smooth in both cosines so
             // that it interpolates (per-pair terms do not).
-            c.l.each(|il, w| f(col + il, w * ln_f1));
+            c.l.each(|il, w| f(col + il, w * ln_f1, 0));
             col += nl;
             let two = F::of(2.0);
             let pv = legendre(two * mu_v.abs() - one, a);
             let pl = legendre(two * mu_l - one, a);
             let hemi = if mu_v > F::of(0.0) { 0 } else { a * a };
-            for (j, &pj) in p[..CROSS_DEPTH].iter().enumerate() {
+            for j in 0..CROSS_DEPTH {
                 let base = col + j * 2 * a * a + hemi;
                 for (ia, &va) in pv[..a].iter().enumerate() {
                     for (ib, &vb) in pl[..a].iter().enumerate() {
-                        f(base + ia * a + ib, pj * va * vb);
+                        f(base + ia * a + ib, va * vb, j);
                     }
                 }
             }
@@ -289,9 +309,33 @@ impl LogAdditive {
     }
 }
 
+impl LogAdditive {
+    /// ln T at `c` with parameters `coef(column)` as the runtime reads it around the group's
+    /// fitted depths `range`: the depth polynomials by [`depth_polynomial`], T scaled by the
+    /// range's share; None where the form says T = 0.
+    pub fn ln_t_in_range<F: Real>(
+        &self,
+        c: &Cell<F>,
+        (nm, nl): (usize, usize),
+        coef: impl Fn(usize) -> F,
+        range: &FittedDepths<F>,
+    ) -> Option<F> {
+        let offset = ln_boundary(&c.at)?;
+        let mut d = [F::of(0.0); MAX_LEGENDRE];
+        let ok = self.for_each_feature_in_depth(c, nm, nl, |col, v, j| d[j] = d[j] + v * coef(col));
+        let depth = depth_polynomial(&d, self.depth_terms(), c.u, range);
+        ok.then(|| offset + depth + range.share.ln())
+    }
+}
+
 /// ln B at `c`, or None where the form says T = 0 (no medium behind the viewpoint): the
 /// boundary factor depends on the geometry only, not on the form's sizes.
 pub fn ln_boundary<F: Real>(at: &SlabPoint<F>) -> Option<F> {
+    // The horizon (either sign of zero): the medium behind is unbounded, B = 1, at the faces
+    // too (the limit from inside).
+    if at.mu_v == F::of(0.0) {
+        return Some(F::of(0.0));
+    }
     let path = if at.mu_v > F::of(0.0) {
         at.thickness - at.depth
     } else {
@@ -299,6 +343,99 @@ pub fn ln_boundary<F: Real>(at: &SlabPoint<F>) -> Option<F> {
     };
     let b = -exp_m1(-path / at.mu_v.abs());
     (b > F::of(0.0)).then(|| b.ln())
+}
+
+/// The depths a group's fit had cells at, around a point, and how much of the point's
+/// parameter weight lies on nodes that had any.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FittedDepths<F> {
+    /// Shallowest fitted stretched depth.
+    pub lo: F,
+    /// Deepest.
+    pub hi: F,
+    /// The share of the weight on nodes with fitted cells, in (0, 1]: T is scaled by it, so
+    /// that a group fades continuously toward nodes where the tables resolve none of its light
+    /// (a high order in a thin slab) instead of jumping to 0 there.
+    pub share: F,
+}
+
+impl<F: Real> FittedDepths<F> {
+    /// From (weight, lo, hi) of the parameter nodes a point draws on (lo > hi: a node without
+    /// fitted cells): the ranges of the nodes with cells averaged by their weights. None where
+    /// no node has fitted cells: the tables resolve no light of the group there.
+    pub fn of(ranges: impl IntoIterator<Item = (F, F, F)>) -> Option<Self> {
+        let zero = F::of(0.0);
+        let (mut all, mut w, mut lo, mut hi) = (zero, zero, zero, zero);
+        for (wk, a, b) in ranges {
+            all = all + wk;
+            if a <= b && wk > zero {
+                w = w + wk;
+                lo = lo + wk * a;
+                hi = hi + wk * b;
+            }
+        }
+        (w > zero).then(|| Self {
+            lo: lo / w,
+            hi: hi / w,
+            share: w / all,
+        })
+    }
+
+    /// `u` held inside the fitted depths.
+    pub fn held(&self, u: F) -> F {
+        if u < self.lo {
+            self.lo
+        } else if u > self.hi {
+            self.hi
+        } else {
+            u
+        }
+    }
+}
+
+/// The stretch of depth (in u) over which [`depth_polynomial`] measures the slope at the end of
+/// the fitted depths: one plane spacing of the default grid (16 planes).
+pub const EDGE_STEP: f64 = 1.0 / 15.0;
+
+/// Σ_{j<n} d_j P_j(2u − 1), the depth part of ln T, read as the tables' information allows:
+/// inside the fitted depths `range` the polynomial itself; beyond them its value at the range's
+/// end continued with its slope over the last [`EDGE_STEP`] where ln T falls outward, and held
+/// where it rises. So T decays where the light fades away from the fitted cells (the far face
+/// of a thick slab for low orders) and never exceeds its value at the fitted edge, while B and
+/// F₁, which follow the point itself, take T to 0 where the light goes (a face behind the
+/// viewpoint) — a polynomial's swing beyond its data never does.
+pub fn depth_polynomial<F: Real>(
+    d: &[F; MAX_LEGENDRE],
+    n: usize,
+    u: F,
+    range: &FittedDepths<F>,
+) -> F {
+    let at = |u: F| {
+        let p = legendre(F::of(2.0) * u - F::of(1.0), n);
+        d.iter().zip(&p).fold(F::of(0.0), |s, (a, b)| s + *a * *b)
+    };
+    let edge = range.held(u);
+    let value = at(edge);
+    if edge == u {
+        return value;
+    }
+    let step = F::of(EDGE_STEP);
+    // One step back inside (the range itself if narrower), and the outward rate of change.
+    let inside = range.held(if u > range.hi {
+        range.hi - step
+    } else {
+        range.lo + step
+    });
+    let run = (edge - inside).abs();
+    if !(run > F::of(0.0)) {
+        return value;
+    }
+    let slope = (value - at(inside)) / run;
+    if slope < F::of(0.0) {
+        value + slope * (u - edge).abs()
+    } else {
+        value
+    }
 }
 
 /// P_0(x) … P_{n−1}(x) (Legendre polynomials; n ≤ [`MAX_LEGENDRE`], the rest 0).
@@ -333,14 +470,15 @@ pub(crate) fn on_nodes<F: Real>(
     c.l.each(|il, w| f(col + nm + il, w * val));
 }
 
-/// The Θ-table features `val · h_i(Θ) · (1, 2u − 1)` at columns col + 2i, col + 2i + 1: h_i the
-/// hat functions of the nodes Θ_i = π (i/(n − 1))², n = `nodes` (dense at the forward peak).
+/// The Θ-table features `val · h_i(Θ) · (P_0, P_1)(2u − 1)` at columns col + 2i, col + 2i + 1,
+/// as `f(column, val · h_i, j)` with j the Legendre degree in depth (0, 1): h_i the hat
+/// functions of the nodes Θ_i = π (i/(n − 1))², n = `nodes` (dense at the forward peak).
 pub fn theta_hats<F: Real>(
     nodes: usize,
     c: &Cell<F>,
     val: F,
     col: usize,
-    f: &mut dyn FnMut(usize, F),
+    f: &mut dyn FnMut(usize, F, usize),
 ) {
     let cos = scattering_cosine(&c.at);
     let half = (F::of(0.5) * cos.one_minus_mu).sqrt();
@@ -356,10 +494,9 @@ pub fn theta_hats<F: Real>(
     }
     let (a, b) = (node(i - 1), node(i));
     let w = ((theta - a) / (b - a)).clamp_to(F::of(0.0), F::of(1.0));
-    let x = F::of(2.0) * c.u - F::of(1.0);
     for (k, h) in [(i - 1, F::of(1.0) - w), (i, w)] {
-        f(col + 2 * k, val * h);
-        f(col + 2 * k + 1, val * h * x);
+        f(col + 2 * k, val * h, 0);
+        f(col + 2 * k + 1, val * h, 1);
     }
 }
 
@@ -423,6 +560,36 @@ mod tests {
         assert!((l.w - 0.5f64).abs() < 1e-15);
         assert_eq!(Lerp::between(&[0.0, 1.0], 5.0), Lerp::at(1));
         assert_eq!(Lerp::between(&[0.0, 1.0], -5.0), Lerp::at(0));
+    }
+
+    /// Inside the fitted depths the polynomial itself; beyond them it falls on with its edge
+    /// slope where it falls outward and is held where it would rise; nodes without cells do
+    /// not count and none at all is None.
+    #[test]
+    fn depth_polynomial_reads_within_the_fitted_depths() {
+        // ln T part = 2 P_1(x) = 2x: rising with depth.
+        let mut d = [0.0f64; MAX_LEGENDRE];
+        d[1] = 2.0;
+        let range = FittedDepths::of([(1.0, 0.25, 0.75)]).unwrap();
+        let x = |u: f64| 2.0 * u - 1.0;
+        assert!((depth_polynomial(&d, 2, 0.5, &range) - 2.0 * x(0.5)).abs() < 1e-15);
+        // Deeper than the range: rising outward, held at the edge.
+        assert!((depth_polynomial(&d, 2, 0.9, &range) - 2.0 * x(0.75)).abs() < 1e-15);
+        // Toward the lit face: falling outward with slope 4 per unit u.
+        let v = depth_polynomial(&d, 2, 0.05, &range);
+        assert!((v - (2.0 * x(0.25) - 4.0 * 0.2)).abs() < 1e-12, "{v}");
+        // A narrow range (one depth) holds.
+        let one = FittedDepths::of([(1.0, 0.5, 0.5)]).unwrap();
+        assert!((depth_polynomial(&d, 2, 0.9, &one) - 0.0).abs() < 1e-15);
+        assert_eq!(FittedDepths::of([(1.0, 0.6, 0.2)]), None);
+        assert_eq!(FittedDepths::<f64>::of([]), None);
+        let r = FittedDepths::of([(0.25, 0.0, 1.0), (0.75, 0.4, 0.8), (0.5, 0.9, 0.1)]).unwrap();
+        assert!(
+            (r.lo - 0.3).abs() < 1e-15 && (r.hi - 0.85).abs() < 1e-15,
+            "{r:?}"
+        );
+        assert!((r.share - 2.0 / 3.0).abs() < 1e-15);
+        assert_eq!(r.held(2.0), r.hi);
     }
 
     #[test]

@@ -32,4 +32,4 @@ mod tables;
 
 pub use geometry::SlabPoint;
 pub use single::{scattering_cosine, single_scattering, PhaseValue};
-pub use tables::{Transport, TransportTables};
+pub use tables::{Domain, Transport, TransportTables};

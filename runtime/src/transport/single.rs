@@ -74,12 +74,16 @@ pub fn single_scattering<F: Real, P: PhaseValue<F> + ?Sized>(
     } = *at;
     let p = albedo * phase.value(scattering_cosine(at));
     let source = p * (-d / mu_l).exp();
-    if mu_v >= zero {
+    if mu_v == zero {
+        // The horizon (either zero): the local source, at the faces too (the limit from
+        // inside; the boundary factor of the forms says the same).
+        return source;
+    }
+    if mu_v > zero {
         if t - d <= zero {
             return zero;
         }
-        // |μ_V|: −0 is the horizon as +0 is (1/−0 = −∞ would make the factor NaN).
-        let m = mu_v.abs();
+        let m = mu_v;
         let a = one / mu_l + one / m;
         source * -exp_m1(-a * (t - d)) / (one + m / mu_l)
     } else {

@@ -16,6 +16,7 @@
 //! | `ln_t_range` | [G, 2] | ln t span of each group's polynomials in ln t |
 //! | `beta` | [G, P, Q] | the parameters' Legendre coefficients in s(ln t) |
 //! | `u_range` | [G, N, L·M] | per thickness and (μ_L, μ_V) pair, the stretched depths fitted: [`U_STEPS`]-step integers lo · 4096 + hi (u = step/4095, widened outward; lo > hi: none) |
+//! | `t_ceiling` | [G, N, L] | optional: per thickness and sun cosine, the largest T of the fitted cells; T is capped at [`CEILING_FACTOR`] × the largest of the nodes a point draws on |
 //! | `phase_theta` | [n] | phase function nodes (degrees, increasing, 0 … 180); between them 2π p sin θ is linear in θ, as the tabulated model samples |
 //! | `phase` | [n] | phase function p(θ) (sr⁻¹) |
 //! | `collector_form` | [4] | optional: the collector form's J, K, Θ nodes, Q |
@@ -26,8 +27,8 @@
 use super::collector::{CollectorForm, Statistic, MAX_COLLECTOR_HARMONICS, MAX_COLLECTOR_LEGENDRE};
 use super::geometry::SlabPoint;
 use super::log_additive::{
-    legendre, ln_boundary, ln_t_position, Cell, Lerp, LogAdditive, MAX_CROSS, MAX_HARMONICS,
-    MAX_LEGENDRE,
+    depth_polynomial, legendre, ln_boundary, ln_t_position, Cell, FittedDepths, Lerp, LogAdditive,
+    MAX_CROSS, MAX_HARMONICS, MAX_LEGENDRE,
 };
 use super::single::{single_scattering, PhaseValue};
 use crate::container::{ArrayView, Container, FormatError};
@@ -53,6 +54,8 @@ pub mod names {
     pub const BETA: &str = "beta";
     /// Packed fitted depth ranges.
     pub const U_RANGE: &str = "u_range";
+    /// The largest T of the fitted cells per group, thickness and sun cosine.
+    pub const T_CEILING: &str = "t_ceiling";
     /// Phase function angles (degrees).
     pub const PHASE_THETA: &str = "phase_theta";
     /// Phase function values (sr⁻¹).
@@ -65,6 +68,10 @@ pub mod names {
 
 /// Most Legendre terms in ln t.
 pub const MAX_Q: usize = MAX_LEGENDRE;
+/// A group's T never exceeds this factor times the largest value its fitted cells hold at the
+/// thickness and sun-cosine nodes a point draws on: where a form's polynomials are thin on data
+/// (a high order in a thin slab) their swings stay within what the tables saw.
+pub const CEILING_FACTOR: f64 = 1.5;
 /// Most order groups.
 pub const MAX_GROUPS: usize = 64;
 /// Most nodes of each grid (sun cosines, view cosines, thicknesses).
@@ -91,6 +98,31 @@ pub struct Transport {
     pub sigma: f32,
 }
 
+/// Where the tables hold information: the thicknesses and sun cosines of their grid. Every
+/// other coordinate is covered whole (d ∈ [0, t], μ_V ∈ [−1, 1] with the horizon, any ψ_V).
+/// Outside the grid the form's parameters are held at its nearest end while the geometry (the
+/// boundary factor, the single-scattering factor, the scattering angle) follows the point:
+/// finite and bounded, but an extrapolation a caller can detect with [`Domain::contains`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Domain {
+    /// Smallest and largest thickness (mfp).
+    pub thickness: (f32, f32),
+    /// Smallest and largest sun cosine.
+    pub mu_l: (f32, f32),
+}
+
+impl Domain {
+    /// Whether `at` is inside: t and μ_L within the grid (ends included), 0 ≤ d ≤ t and
+    /// −1 ≤ μ_V ≤ 1.
+    pub fn contains(&self, at: &SlabPoint<f32>) -> bool {
+        let within = |x: f32, (a, b): (f32, f32)| x >= a && x <= b;
+        within(at.thickness, self.thickness)
+            && within(at.mu_l, self.mu_l)
+            && within(at.depth, (0.0, at.thickness))
+            && within(at.mu_v, (-1.0, 1.0))
+    }
+}
+
 /// The collector part of the tables.
 #[derive(Clone, Copy, Debug)]
 struct CollectorPart<'a> {
@@ -112,6 +144,7 @@ pub struct TransportTables<'a> {
     ln_t_range: ArrayView<'a>,
     beta: ArrayView<'a>,
     u_range: ArrayView<'a>,
+    t_ceiling: Option<ArrayView<'a>>,
     phase_theta: ArrayView<'a>,
     phase: ArrayView<'a>,
 }
@@ -183,6 +216,10 @@ impl<'a> TransportTables<'a> {
                     .try_fold(g, |acc, &k| acc.checked_mul(k))
                     .ok_or(FormatError::BadArray(names::U_RANGE))?,
             )?,
+            t_ceiling: match c.find(names::T_CEILING) {
+                Some(_) => Some(need(c, names::T_CEILING, g * n * l)?),
+                None => None,
+            },
             phase_theta: need(c, names::PHASE_THETA, theta_len)?,
             phase: need(c, names::PHASE, theta_len)?,
         })
@@ -269,6 +306,20 @@ impl<'a> TransportTables<'a> {
         }
     }
 
+    /// The thicknesses and sun cosines the tables cover ([`Domain`]).
+    pub fn domain(&self) -> Domain {
+        let ends = |a: &ArrayView| {
+            (
+                a.get(0).unwrap_or(0.0),
+                a.get(a.len().max(1) - 1).unwrap_or(0.0),
+            )
+        };
+        Domain {
+            thickness: ends(&self.thickness),
+            mu_l: ends(&self.mu_l),
+        }
+    }
+
     /// Whether the tables hold the collector (c, σ).
     pub fn has_collector(&self) -> bool {
         self.collector.is_some()
@@ -295,12 +346,14 @@ impl<'a> TransportTables<'a> {
         let offset = ln_boundary(at)?;
         let mut row = [(0u32, 0.0f32); MAX_FEATURES];
         let mut n = 0;
-        let ok = self.form.for_each_feature(&cell, nm, nl, |col, v| {
-            if n < MAX_FEATURES {
-                row[n] = (col as u32, v);
-                n += 1;
-            }
-        });
+        let ok = self
+            .form
+            .for_each_feature_in_depth(&cell, nm, nl, |col, v, j| {
+                if n < MAX_FEATURES {
+                    row[n] = (packed(col, j), v);
+                    n += 1;
+                }
+            });
         ok.then(|| Point {
             cell,
             offset,
@@ -311,15 +364,39 @@ impl<'a> TransportTables<'a> {
         })
     }
 
-    /// T of group `g` at `pt`.
+    /// T of group `g` at `pt`: its depth polynomials read within its fitted depths
+    /// ([`depth_polynomial`]), at most its ceiling; 0 where it has none.
     fn t_of(&self, pt: &Point, g: usize) -> f32 {
-        if !self.inside_fitted_depths(g, pt.near_t, &pt.cell) {
-            return 0.0;
-        }
+        self.fitted_range(g, pt)
+            .map_or(0.0, |range| self.t_within(pt, g, &range))
+    }
+
+    /// T of group `g` at `pt` given its fitted depths there.
+    fn t_within(&self, pt: &Point, g: usize, range: &FittedDepths<f32>) -> f32 {
         let (nl, nm) = (self.mu_l.len(), self.mu_v.len());
         let lq = legendre_in(&self.ln_t_range, g, pt.ln_t, self.q);
-        let p = self.form.n_params(nm, nl);
-        Real::exp(pt.offset + dot_at_t(&self.beta, g * p, self.q, &lq, &pt.row[..pt.n]))
+        let first = g * self.form.n_params(nm, nl);
+        let d = depth_sums(&self.beta, first, self.q, &lq, &pt.row[..pt.n]);
+        let n = self.form.depth_terms();
+        let t = range.share * Real::exp(pt.offset + depth_polynomial(&d, n, pt.cell.u, range));
+        match self.ceiling(g, pt) {
+            Some(top) if t > top => top,
+            _ => t,
+        }
+    }
+
+    /// [`CEILING_FACTOR`] × the largest T group `g`'s fitted cells hold at the thickness and
+    /// sun-cosine nodes `pt` draws on; None for files without the ceiling.
+    fn ceiling(&self, g: usize, pt: &Point) -> Option<f32> {
+        let top = self.t_ceiling.as_ref()?;
+        let (nt, nl) = (self.thickness.len(), self.mu_l.len());
+        let mut most = 0.0f32;
+        pt.near_t.each(|it, _| {
+            pt.cell.l.each(|il, _| {
+                most = most.max(top.get((g * nt + it) * nl + il).unwrap_or(0.0));
+            })
+        });
+        Some(CEILING_FACTOR as f32 * most)
     }
 
     /// The collector features at `pt`, the same for every group: c_z's ℓ/σ̂ terms are
@@ -336,22 +413,25 @@ impl<'a> TransportTables<'a> {
         let (nl, nm) = (self.mu_l.len(), self.mu_v.len());
         for ((stat, row), n) in Statistic::ALL.iter().zip(&mut rows.row).zip(&mut rows.len) {
             cp.form
-                .for_each_feature(*stat, &pt.cell, 1.0, nm, nl, |col, v| {
+                .for_each_feature_in_depth(*stat, &pt.cell, 1.0, nm, nl, |col, v, j| {
                     if *n < MAX_C_FEATURES {
-                        row[*n] = (col as u32, v);
+                        row[*n] = (packed(col, j), v);
                         *n += 1;
                     }
                 });
         }
         // The ℓ/σ̂ terms are c_z's last blocks: a suffix of its row.
         let reach = cp.form.cz_reach_start(nm, nl) as u32;
-        rows.reach = rows.row[1][..rows.len[1]].partition_point(|&(col, _)| col < reach);
+        rows.reach = rows.row[1][..rows.len[1]].partition_point(|&(key, _)| key & COL < reach);
         rows
     }
 
     /// T, c and σ of group `g` at `pt`.
     fn transport_of(&self, pt: &Point, rows: &CollectorRows, g: usize) -> Transport {
-        let t = self.t_of(pt, g);
+        let Some(range) = self.fitted_range(g, pt) else {
+            return Transport::default();
+        };
+        let t = self.t_within(pt, g, &range);
         let (Some(cp), true) = (&self.collector, t > 0.0) else {
             return Transport {
                 t,
@@ -360,9 +440,12 @@ impl<'a> TransportTables<'a> {
         };
         let (nl, nm) = (self.mu_l.len(), self.mu_v.len());
         let lq = legendre_in(&self.ln_t_range, g, pt.ln_t, cp.q);
+        // c and σ are held within the fitted depths.
+        let u = range.held(pt.cell.u);
+        let p_x = legendre(2.0 * u - 1.0, cp.form.depth_terms());
         let dot = |s: usize, row: &[(u32, f32)]| {
             let first = g * cp.form.n_params(Statistic::ALL[s], nm, nl);
-            dot_at_t(&cp.beta[s], first, cp.q, &lq, row)
+            dot_at_t(&cp.beta[s], first, cp.q, &lq, &p_x, row)
         };
         let sigma = Real::exp(dot(0, rows.of(0)));
         let (near, reach) = rows.of(1).split_at(rows.reach);
@@ -375,25 +458,27 @@ impl<'a> TransportTables<'a> {
         }
     }
 
-    /// Whether u lies within the fitted depths of the thickness nodes `k` around t and of the
-    /// (μ_L, μ_V) nodes the cell draws on.
-    fn inside_fitted_depths(&self, g: usize, k: Lerp<f32>, c: &Cell<f32>) -> bool {
-        let n = self.thickness.len();
+    /// Group `g`'s fitted depths around `pt` (of the thickness and (μ_L, μ_V) nodes the point
+    /// draws on); None where none of them has fitted cells.
+    fn fitted_range(&self, g: usize, pt: &Point) -> Option<FittedDepths<f32>> {
+        let nt = self.thickness.len();
         let (nl, nm) = (self.mu_l.len(), self.mu_v.len());
-        [k.lo, k.hi].iter().all(|&it| {
-            [c.l.lo, c.l.hi].iter().all(|&il| {
-                [c.v.lo, c.v.hi].iter().all(|&m| {
-                    let at = ((g * n + it) * nl + il) * nm + m;
-                    match self.u_range.get(at) {
-                        Some(v) => {
-                            let (lo, hi) = unpack_u_range(v);
-                            c.u >= lo - 1e-6 && c.u <= hi + 1e-6
-                        }
-                        None => false,
+        let c = &pt.cell;
+        let mut corners = [(0.0f32, 1.0f32, 0.0f32); 8];
+        let mut k = 0;
+        pt.near_t.each(|it, wt| {
+            c.l.each(|il, wl| {
+                c.v.each(|m, wm| {
+                    let at = ((g * nt + it) * nl + il) * nm + m;
+                    if let Some(v) = self.u_range.get(at) {
+                        let (lo, hi) = unpack_u_range(v);
+                        corners[k] = (wt * wl * wm, lo, hi);
+                        k += 1;
                     }
                 })
             })
-        })
+        });
+        FittedDepths::of(corners[..k].iter().copied())
     }
 
     /// p(θ) of the stored table between its nodes as the tabulated model samples it: the
@@ -459,19 +544,53 @@ struct Point {
     ln_t: f32,
 }
 
-/// Σ_features v · Σ_k β[(first + col) · q + k] L_k: a dot product with the parameters at t.
+/// Σ_features v P_j(x) Σ_k β[(first + col) · q + k] L_k: a dot product with the parameters at
+/// t, each feature (column and depth degree j [`packed`]) times P_j at the group's held depth.
 fn dot_at_t(
     beta: &ArrayView,
     first: usize,
     q: usize,
     lq: &[f32; MAX_Q],
+    p_x: &[f32; MAX_LEGENDRE],
     row: &[(u32, f32)],
 ) -> f32 {
     let mut sum = 0.0;
-    for &(col, v) in row {
-        sum += v * coef_at_t(beta, first + col as usize, q, lq);
+    for &(key, v) in row {
+        let j = (key >> DEGREE_SHIFT) as usize;
+        let pj = p_x.get(j).copied().unwrap_or(0.0);
+        sum += v * pj * coef_at_t(beta, first + (key & COL) as usize, q, lq);
     }
     sum
+}
+
+/// Per depth degree j, Σ_features of degree j v Σ_k β[(first + col) · q + k] L_k: the
+/// coefficients of ln T's depth polynomial at this point ([`depth_polynomial`]).
+fn depth_sums(
+    beta: &ArrayView,
+    first: usize,
+    q: usize,
+    lq: &[f32; MAX_Q],
+    row: &[(u32, f32)],
+) -> [f32; MAX_LEGENDRE] {
+    let mut d = [0.0; MAX_LEGENDRE];
+    for &(key, v) in row {
+        let j = (key >> DEGREE_SHIFT) as usize;
+        if let Some(slot) = d.get_mut(j) {
+            *slot += v * coef_at_t(beta, first + (key & COL) as usize, q, lq);
+        }
+    }
+    d
+}
+
+/// Bits of a packed feature key below its depth degree: the column.
+const DEGREE_SHIFT: u32 = 24;
+/// Mask of the column in a packed feature key.
+const COL: u32 = (1 << DEGREE_SHIFT) - 1;
+
+/// A feature's column and the degree j of its depth polynomial P_j as one key (columns are
+/// below 2^24: [`MAX_NODES`] bounds the form's parameters).
+fn packed(col: usize, j: usize) -> u32 {
+    (col as u32 & COL) | ((j as u32) << DEGREE_SHIFT)
 }
 
 /// Parameter `p` of a [G·P, Q] array at t: Σ_k β[p · q + k] L_k.
@@ -564,8 +683,9 @@ pub fn pack_u_range(lo: f64, hi: f64) -> f32 {
 /// The inverse of [`pack_u_range`].
 pub fn unpack_u_range(v: f32) -> (f32, f32) {
     let v = v as u32;
-    let top = (U_STEPS - 1) as f32;
-    ((v / U_STEPS) as f32 / top, (v % U_STEPS) as f32 / top)
+    // × 1/4095 rather than ÷ 4095: a product is cheaper and the ranges were widened outward.
+    let step = 1.0 / (U_STEPS - 1) as f32;
+    ((v / U_STEPS) as f32 * step, (v % U_STEPS) as f32 * step)
 }
 
 /// Where x sits among the values of `a` (held at the ends).
