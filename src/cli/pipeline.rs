@@ -63,8 +63,8 @@ pub fn run(full: bool) -> Result<()> {
     let comp_s = t2.elapsed().as_secs_f64();
     if full {
         eprintln!(
-            "to ship these tables (nephele_runtime::embedded), copy transport.ntt, manifest.json \
-             and report.json from {comp_out} into runtime/tables/mie10um/"
+            "to ship these tables (nephele_runtime::embedded), copy transport.ntt, manifest.json, \
+             report.json and domain_check.npz from {comp_out} into runtime/tables/mie10um/"
         );
     }
     let sum = o.errors.last().map_or(f64::NAN, |e| e.rel_rms);
