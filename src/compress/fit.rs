@@ -338,10 +338,22 @@ pub fn predict_held_out(
                 None => {
                     let ln_t: Vec<f64> = fitted.iter().map(|&i| tab.thickness[i].ln()).collect();
                     let p = Lerp::between(&ln_t, tab.thickness[it].ln());
-                    let (a, b) = (
-                        ln(of_t[fitted[p.lo]].unwrap()),
-                        ln(of_t[fitted[p.hi]].unwrap()),
-                    );
+                    // Each neighbour's fit read at this thickness, capped by the larger of
+                    // the two neighbours' ceilings (its own is another thickness's).
+                    let (fa, fb) = (of_t[fitted[p.lo]].unwrap(), of_t[fitted[p.hi]].unwrap());
+                    let top: Vec<f64> = fa
+                        .ceiling
+                        .iter()
+                        .zip(&fb.ceiling)
+                        .map(|(x, y)| x.max(*y))
+                        .collect();
+                    let capped = |f: &GroupFit| GroupFit {
+                        coef: f.coef.clone(),
+                        u_range: f.u_range.clone(),
+                        ceiling: top.clone(),
+                        ..*f
+                    };
+                    let (a, b) = (ln(&capped(fa)), ln(&capped(fb)));
                     a.iter()
                         .zip(&b)
                         .map(|(x, y)| Some((1.0 - p.w) * (*x)? + p.w * (*y)?))
