@@ -7,28 +7,19 @@
 //! — features, parameter grids, packing — are for the toolchain that fits and writes the
 //! tables: the module `nephele_runtime::fitting`, behind the `fitting` feature.
 
-// The forms' modules are public (through `nephele_runtime::fitting`) only for the toolchain.
-#[cfg(feature = "fitting")]
-pub mod collector;
-#[cfg(not(feature = "fitting"))]
-#[allow(dead_code)]
-mod collector;
+/// A form's module: public (through `nephele_runtime::fitting`) only for the toolchain.
+macro_rules! form_module {
+    ($($name:ident),*) => {$(
+        #[cfg(feature = "fitting")]
+        pub mod $name;
+        #[cfg(not(feature = "fitting"))]
+        #[allow(dead_code)]
+        mod $name;
+    )*};
+}
+
+form_module!(collector, log_additive, single, tables);
 mod geometry;
-#[cfg(feature = "fitting")]
-pub mod log_additive;
-#[cfg(not(feature = "fitting"))]
-#[allow(dead_code)]
-mod log_additive;
-#[cfg(feature = "fitting")]
-pub mod single;
-#[cfg(not(feature = "fitting"))]
-#[allow(dead_code)]
-mod single;
-#[cfg(feature = "fitting")]
-pub mod tables;
-#[cfg(not(feature = "fitting"))]
-#[allow(dead_code)]
-mod tables;
 
 pub use geometry::SlabPoint;
 pub use single::{scattering_cosine, single_scattering, PhaseValue};
