@@ -40,7 +40,8 @@ def nephele_run(bin_path: Path, tmp: Path, phase: dict, w: int, h: int, spp: int
         env["RAYON_NUM_THREADS"] = str(threads)
     path = check.write_scene(tmp, check.density_grid(), phase, w, h, spp, seed)
     scene = json.loads(path.read_text())
-    scene["guided_nee"] = guided
+    if not guided:
+        scene["sun_lobe_steps"] = 0  # plain next-event estimation; else the scene's default
     path.write_text(json.dumps(scene))
     out = tmp / "bench"
     subprocess.run([str(bin_path), "render", "--scene", str(path), "--out", str(out)],
@@ -79,17 +80,17 @@ def main(argv=None) -> int:
         for case, phase_n, phase_m in check.cases(args.bin, tmp):
             for threads in [None, 1]:
                 spp = args.spp if threads is None else max(args.spp // 4, 1)
-                runs = {"nephele": [], "nephele, guided NEE off": [], "mitsuba": []}
+                runs = {"nephele": [], "nephele, sun-lobe NEE off": [], "mitsuba": []}
                 for r in range(1, args.rounds + 1):
                     runs["nephele"].append(nephele_run(args.bin, tmp, phase_n, w, h, spp, r, threads, True))
-                    runs["nephele, guided NEE off"].append(
+                    runs["nephele, sun-lobe NEE off"].append(
                         nephele_run(args.bin, tmp, phase_n, w, h, spp, r, threads, False))
                     runs["mitsuba"].append(mitsuba_run(phase_m, w, h, spp, r, threads))
                 paths = w * h * spp
                 rate = {k: statistics.median(paths / s for _, s in v) for k, v in runs.items()}
                 eff = {k: efficiency(v) for k, v in runs.items()}
                 n_threads = threads or os.cpu_count()
-                for k in ["nephele", "nephele, guided NEE off"]:
+                for k in ["nephele", "nephele, sun-lobe NEE off"]:
                     print(f"{case:20} {n_threads} thread(s)  {k:24} {rate[k]:>11,.0f} paths/s vs mitsuba "
                           f"{rate['mitsuba']:>11,.0f}: ratio {rate[k] / rate['mitsuba']:5.2f};  efficiency "
                           f"ratio {eff[k] / eff['mitsuba']:5.2f}")

@@ -25,6 +25,10 @@ pub struct RenderArgs {
     /// while the next one fits.
     #[arg(long, value_name = "SECONDS")]
     pub time_budget: Option<f64>,
+    /// Steps of the sun-lobe walk (variance reduction for forward peaks), overriding the
+    /// scene's: 0 is plain next-event estimation, up to 8.
+    #[arg(long, value_name = "K")]
+    pub sun_lobe_steps: Option<usize>,
 }
 
 /// Runs `nephele render`.
@@ -35,6 +39,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
     }
     if let Some(budget) = args.time_budget {
         scene.time_budget_s = Some(budget);
+    }
+    if let Some(k) = args.sun_lobe_steps {
+        scene.sun_lobe_steps = k;
     }
     scene.validate()?;
     let out = args.out.unwrap_or_else(|| PathBuf::from("outputs/render"));

@@ -20,25 +20,27 @@
 //! channel's throughput takes the weight β_k ← β_k p_k(cos) / p̄(cos) — unbiased wherever p̄ > 0,
 //! and never more than 3.
 //!
-//! Two-vertex next-event estimation (`guided_nee`). With a forward peak (Mie: p(1) ~ 10³ sr⁻¹
-//! at 10 µm) the estimate above is heavy-tailed: the rare segment w′ within a few degrees of s
-//! brings p(s · w′) ≫ 1 at its next collision x′ (fireflies). So order n + 1 gets a second
-//! strategy at every collision x: B samples w′ from p around s (density p_B = p(s · w′)), flies
-//! to x′ and adds NEE there; the path's own next collision (strategy A, density p_A = p(w · w′))
-//! is the first. Balance-heuristic MIS between the two, both giving
+//! Sun-lobe next-event estimation (`sun_lobe_steps` = K, see `sun_lobe`): every collision also
+//! launches a K-step walk with directions drawn from p around the sun, whose collisions score
+//! NEE for the next K orders, and each order's estimates are combined by the balance heuristic
+//! over the last K directions — the Mie forward peak's fireflies are divided out. The camera
+//! path itself continues as before (no weights compound).
 //!
-//!   L_{n+1} += β ϖ² p_A p_B T_r(x′ → sun) E_sun / (p_A + p_B) / p_strategy,
-//!
-//! i.e. A's NEE at x′ takes the weight p_A/(p_A + p_B) and B's contribution is β ϖ² p_A
-//! T_r E_sun · p_B/(p_A + p_B) ≤ β ϖ² p_A T_r E_sun: the peak cancels. The path itself
-//! continues as before (no weights compound), orders 1 keep plain NEE. With per-channel
-//! phase functions p_A, p_B in the MIS weights are the channel means (the densities sampled).
+//! Roulette: a deterministic schedule by order, so that the strategies' densities can include
+//! it: once ϖⁿ falls below 10⁻³ the path survives with probability 0.1 per decade (its weight
+//! ×10) — never for ϖ = 1.
 
 use super::geometry::{dot, normalize, Vec3};
 use super::medium::Medium;
+use super::sun_lobe::{mis_weight, History, Step, SunLobe, MAX_STEPS};
 use nephele_runtime::PhaseFunction;
 use rand::Rng;
+use std::f64::consts::PI;
 use std::ops::ControlFlow;
+
+/// Shadow rays play roulette once their estimate falls below this fraction of a fresh path's
+/// isotropic single scattering (`Volume::to_sun`).
+pub const SHADOW_ROULETTE: f64 = 0.05;
 
 /// Most order groups.
 pub const MAX_GROUPS: usize = 16;
@@ -59,8 +61,8 @@ pub struct Volume<'a> {
     pub sky: f64,
     /// First scattering order of each group, increasing from 1.
     pub group_first: &'a [u32],
-    /// Two-vertex next-event estimation (see the module's docs).
-    pub guided_nee: bool,
+    /// The sun-lobe walks launched at every collision (`SunLobe::OFF`: plain NEE).
+    pub sun_lobe: SunLobe,
 }
 
 /// RGB.
@@ -143,19 +145,46 @@ pub fn collide<R: Rng>(m: &dyn Medium, o: Vec3, w: Vec3, rng: &mut R) -> Option<
 /// Transmittance along o + t w to the medium's end: closed form exp(−σ Δt) on homogeneous
 /// cells, else ratio tracking (unbiased, never 0 by a single event).
 pub fn transmittance<R: Rng>(m: &dyn Medium, o: Vec3, w: Vec3, rng: &mut R) -> f64 {
+    transmittance_roulette(m, o, w, 0.0, rng)
+}
+
+/// `transmittance` with Russian roulette once the running value falls below `floor`: it goes on
+/// as `floor` with probability tr/floor, else ends at 0 — unbiased, and it spares the density
+/// lookups (noise) of the cells a deep collision's shadow ray would cross for nothing.
+pub fn transmittance_roulette<R: Rng>(
+    m: &dyn Medium,
+    o: Vec3,
+    w: Vec3,
+    floor: f64,
+    rng: &mut R,
+) -> f64 {
     let Some(segment) = m.clip(o, w) else {
         return 1.0;
     };
     let mut tr = 1.0;
     let mut flight = Flight::new(rng);
+    let roulette = |tr: &mut f64, rng: &mut R| {
+        if *tr < floor {
+            *tr = if rng.random::<f64>() * floor < *tr {
+                floor
+            } else {
+                0.0
+            };
+        }
+    };
     m.majorants().walk(o, w, segment, |a, b, bounds| {
         if bounds.homogeneous() {
             tr *= (-bounds.max * (b - a)).exp();
         } else {
+            roulette(&mut tr, rng);
             let mut t = a;
-            while let Some(event) = flight.next(rng, t, b, bounds.max) {
+            while tr > 0.0 {
+                let Some(event) = flight.next(rng, t, b, bounds.max) else {
+                    break;
+                };
                 t = event;
                 tr *= 1.0 - m.sigma_t(at(o, w, t)) / bounds.max;
+                roulette(&mut tr, rng);
             }
         }
         if tr < 1e-12 {
@@ -182,42 +211,49 @@ pub fn trace<R: Rng>(v: &Volume, o: Vec3, w: Vec3, rng: &mut R) -> PathSample {
     let (mut o, mut w) = (o, w);
     let mut beta = [1.0; 3];
     let mut order = 0u32;
+    let mut history = History::default();
     // p̄ of the direction the path arrived along, when it was sampled at a collision.
     let mut arrival_pdf = None;
     while let Some(x) = collide(v.medium, o, w, rng) {
         order += 1;
-        let g = group_of(v.group_first, order).min(MAX_GROUPS - 1);
-        let tr = transmittance(v.medium, x, v.sun_dir, rng);
         let p_sun = v.eval(dot(v.sun_dir, w));
-        // Strategy A's MIS weight against B (run at the previous collision).
         let mis = match arrival_pdf {
-            Some(p_a) if v.guided_nee => p_a / (p_a + v.mean(p_sun)),
+            Some(a) if v.sun_lobe.steps > 0 => {
+                history.push(Step {
+                    a,
+                    b: v.mean(p_sun),
+                });
+                let mut window = [Step::default(); MAX_STEPS];
+                let l = v.window(order);
+                history.last(l, &mut window);
+                mis_weight(&window[..l], 0, order, v.sun_lobe.threshold, |m| {
+                    v.survival(m)
+                })
+            }
             _ => 1.0,
         };
+        let tr = v.to_sun(x, &beta, v.mean(p_sun) * mis, rng);
+        let g = v.group(order);
         for k in 0..3 {
             out.groups[g][k] += beta[k] * v.albedo * p_sun[k] * tr * v.sun_irradiance * mis;
             beta[k] *= v.albedo;
         }
-        if beta.iter().all(|&b| b < 1e-3) {
-            // Roulette on light paths only: survive with probability 0.1 at 10× the weight.
-            if rng.random::<f64>() >= 0.1 {
+        let q = v.survival(order);
+        if q < 1.0 {
+            if !(rng.random::<f64>() < q) {
                 return out;
             }
-            beta = beta.map(|b| 10.0 * b);
+            beta = beta.map(|b| b / q);
         }
-        if v.guided_nee {
-            let g_next = group_of(v.group_first, order + 1).min(MAX_GROUPS - 1);
-            let c = v.guided_contribution(x, w, &beta, rng);
-            for k in 0..3 {
-                out.groups[g_next][k] += c[k];
-            }
+        if v.sun_lobe.steps > 0 {
+            v.sun_lobe_walk(x, w, order, &beta, &history, &mut out, rng);
         }
         let (w_new, pdf) = v.scatter(w, &mut beta, rng);
         arrival_pdf = Some(pdf);
         (o, w) = (x, w_new);
     }
     if order > 0 && v.sky > 0.0 {
-        let g = group_of(v.group_first, order).min(MAX_GROUPS - 1);
+        let g = v.group(order);
         for k in 0..3 {
             out.sky_groups[g][k] += beta[k] * v.sky;
         }
@@ -259,7 +295,7 @@ impl Volume<'_> {
         let phase = self.channel(rng);
         let (w_new, _) = phase.sample(rng.random(), rng.random(), w);
         let w_new = normalize(w_new);
-        if self.phases.len() == 1 && !self.guided_nee {
+        if self.phases.len() == 1 && self.sun_lobe.steps == 0 {
             return (w_new, f64::NAN);
         }
         let p = self.eval(dot(w_new, w));
@@ -272,20 +308,97 @@ impl Volume<'_> {
         (w_new, mean)
     }
 
-    /// Strategy B at the collision x reached along w (β after this collision's albedo): the
-    /// next order's sunlight through a direction sampled around the sun (module docs).
-    fn guided_contribution<R: Rng>(&self, x: Vec3, w: Vec3, beta: &Rgb, rng: &mut R) -> Rgb {
-        let phase = self.channel(rng);
-        let (w2, _) = phase.sample(rng.random(), rng.random(), self.sun_dir);
-        let w2 = normalize(w2);
-        let Some(x2) = collide(self.medium, x, w2, rng) else {
-            return [0.0; 3];
+    /// The shadow ray's transmittance from x toward the sun for a NEE of throughput β and
+    /// phase function × MIS weight `p_mis` (1/sr): with roulette below the level at which the
+    /// estimate would be `SHADOW_ROULETTE` of a fresh path's isotropic single scattering, so
+    /// that rays whose light could not matter stop early (unbiased).
+    fn to_sun<R: Rng>(&self, x: Vec3, beta: &Rgb, p_mis: f64, rng: &mut R) -> f64 {
+        let importance = (beta[0] + beta[1] + beta[2]) / 3.0 * p_mis * 4.0 * PI;
+        let floor = if importance > 0.0 {
+            SHADOW_ROULETTE / importance
+        } else {
+            0.0
         };
-        let tr = transmittance(self.medium, x2, self.sun_dir, rng);
-        let (p_a, p_b) = (self.eval(dot(w, w2)), self.eval(dot(self.sun_dir, w2)));
-        let denom = self.mean(p_a) + self.mean(p_b);
-        std::array::from_fn(|k| {
-            beta[k] * self.albedo * p_a[k] * p_b[k] * tr * self.sun_irradiance / denom
-        })
+        transmittance_roulette(self.medium, x, self.sun_dir, floor, rng)
+    }
+
+    /// The order group of scattering order n.
+    fn group(&self, n: u32) -> usize {
+        group_of(self.group_first, n).min(MAX_GROUPS - 1)
+    }
+
+    /// Directions of the MIS window for order n: the last K, never the camera's own.
+    fn window(&self, n: u32) -> usize {
+        self.sun_lobe.steps.min(n as usize - 1)
+    }
+
+    /// The probability of surviving roulette at the collision of order n: 0.1 per decade that
+    /// ϖⁿ falls below 10⁻³ × 10^(earlier survivals), i.e. 0.1^(E(n) − E(n − 1)) with
+    /// E(n) = max(0, ⌈n log₁₀(1/ϖ) − 3⌉); deterministic, so every strategy's density has it.
+    fn survival(&self, n: u32) -> f64 {
+        if self.albedo >= 1.0 {
+            return 1.0;
+        }
+        if !(self.albedo > 0.0) {
+            return 0.0;
+        }
+        let decades = -self.albedo.log10();
+        let e = |n: u32| (n as f64 * decades - 3.0).ceil().max(0.0);
+        0.1f64.powf(e(n) - e(n - 1))
+    }
+
+    /// The sun-lobe walk launched at the collision x of order m, reached along w (β after this
+    /// collision's albedo and roulette): the first direction around the sun, the next ones
+    /// around the previous while they stay in the lobe, at most K; the i-th collision scores
+    /// order m + i with its MIS weight (module `sun_lobe`).
+    #[allow(clippy::too_many_arguments)]
+    fn sun_lobe_walk<R: Rng>(
+        &self,
+        x: Vec3,
+        w: Vec3,
+        m: u32,
+        beta: &Rgb,
+        history: &History,
+        out: &mut PathSample,
+        rng: &mut R,
+    ) {
+        let mut window = [Step::default(); MAX_STEPS];
+        let mut walk = [Step::default(); MAX_STEPS];
+        let (mut pos, mut prev, mut throughput) = (x, w, *beta);
+        for i in 1..=self.sun_lobe.steps {
+            let around = if i == 1 { self.sun_dir } else { prev };
+            let (d, _) = self.channel(rng).sample(rng.random(), rng.random(), around);
+            let d = normalize(d);
+            let (p_a, p_b) = (self.eval(dot(prev, d)), self.eval(dot(self.sun_dir, d)));
+            let step = Step {
+                a: self.mean(p_a),
+                b: self.mean(p_b),
+            };
+            walk[i - 1] = step;
+            let density = if i == 1 { step.b } else { step.a };
+            for k in 0..3 {
+                throughput[k] *= p_a[k] / density;
+            }
+            let Some(x2) = collide(self.medium, pos, d, rng) else {
+                return;
+            };
+            let n = m + i as u32;
+            let l = self.window(n);
+            history.last(l - i, &mut window);
+            window[l - i..l].copy_from_slice(&walk[..i]);
+            let tau = self.sun_lobe.threshold;
+            let mis = mis_weight(&window[..l], l - i + 1, n, tau, |o| self.survival(o));
+            let tr = self.to_sun(x2, &throughput, step.b * mis, rng);
+            let g = self.group(n);
+            for k in 0..3 {
+                out.groups[g][k] +=
+                    throughput[k] * self.albedo * p_b[k] * tr * self.sun_irradiance * mis;
+                throughput[k] *= self.albedo;
+            }
+            if step.b < tau {
+                return;
+            }
+            (pos, prev) = (x2, d);
+        }
     }
 }

@@ -69,19 +69,28 @@ pub struct MajorantGrid {
 
 impl MajorantGrid {
     /// The grid of n[0] × n[1] × n[2] cells over [lo, hi], cell c's bounds `bound(c_lo, c_hi)`.
-    pub fn build(lo: Vec3, hi: Vec3, n: [usize; 3], bound: impl Fn(Vec3, Vec3) -> Bounds) -> Self {
+    pub fn build(
+        lo: Vec3,
+        hi: Vec3,
+        n: [usize; 3],
+        bound: impl Fn(Vec3, Vec3) -> Bounds + Sync,
+    ) -> Self {
+        use rayon::prelude::*;
         let cell: Vec3 = std::array::from_fn(|k| (hi[k] - lo[k]) / n[k] as f64);
-        let mut values = Vec::with_capacity(n[0] * n[1] * n[2]);
-        for z in 0..n[2] {
-            for y in 0..n[1] {
-                for x in 0..n[0] {
+        // Rows in parallel, collected in order: the same grid for any thread count.
+        let values: Vec<Bounds> = (0..n[1] * n[2])
+            .into_par_iter()
+            .flat_map_iter(|row| {
+                let (y, z) = (row % n[1], row / n[1]);
+                let bound = &bound;
+                (0..n[0]).map(move |x| {
                     let i = [x, y, z];
                     let c_lo: Vec3 = std::array::from_fn(|k| lo[k] + i[k] as f64 * cell[k]);
                     let c_hi: Vec3 = std::array::from_fn(|k| lo[k] + (i[k] + 1) as f64 * cell[k]);
-                    values.push(bound(c_lo, c_hi));
-                }
-            }
-        }
+                    bound(c_lo, c_hi)
+                })
+            })
+            .collect();
         Self {
             lo,
             cell,

@@ -68,8 +68,11 @@ pub struct Ellipsoid {
 ///
 /// and the density rises linearly over the boundary layer: min(max(s/edge, 0), 1); σ_t is the
 /// scene's extinction times the density. The majorant grid bounds s on each cell by the
-/// smallest ρ_i over the cell and |fbm| ≤ 1.2 (the clamp below), and from below by the largest
-/// ρ_i: the deep interior, where s ≥ edge everywhere, is homogeneous.
+/// smallest ρ_i over the cell and the largest fbm over it, and from below by the largest ρ_i
+/// and the smallest fbm: the deep interior, where s ≥ edge everywhere, is homogeneous. The
+/// fbm over a cell lies within L r of its value at the centre (r the half-diagonal, L the
+/// fbm's Lipschitz bound `fbm_slope`) and within the clamp ±1.2: the uncertain shell where
+/// the noise has to be evaluated is edge + 2 (L r A + r) thick instead of edge + 2.4 A.
 pub struct Cloud {
     blobs: Vec<Ellipsoid>,
     edge: f64,
@@ -83,7 +86,25 @@ pub struct Cloud {
 }
 
 /// Majorant cells per axis of the implicit cloud's bounding box.
-const CLOUD_GRID: usize = 48;
+const CLOUD_GRID: usize = 80;
+
+/// A bound on the slope of one octave of the `noise` crate's Perlin noise, |∇n| per unit of its
+/// input: the largest directional derivative found at 9·10⁶ random points of three seeds is
+/// 3.46 (tests/render.rs measures it again), and 4.5 leaves 30 % of margin.
+pub const PERLIN_SLOPE: f64 = 4.5;
+
+/// A bound on the slope of `fbm` per unit of its input: octave k adds persistence^(k+1) of a
+/// Perlin noise at lacunarity^k times the frequency, and the sum is divided by
+/// Σ_{k=1}^{octaves} persistence^k (the crate's normalisation); its input is scaled by its
+/// own frequency first.
+fn fbm_slope(fbm: &noise::Fbm<noise::Perlin>) -> f64 {
+    let (p, l) = (fbm.persistence, fbm.lacunarity);
+    let slope: f64 = (0..fbm.octaves)
+        .map(|k| p.powi(k as i32 + 1) * l.powi(k as i32))
+        .sum();
+    let norm: f64 = (1..=fbm.octaves).map(|k| p.powi(k as i32)).sum();
+    PERLIN_SLOPE * fbm.frequency * slope / norm
+}
 
 impl Cloud {
     /// The cloud of `blobs` with boundary layer `edge` (m), noise (amplitude m, frequency
@@ -106,16 +127,28 @@ impl Cloud {
                 hi[k] = hi[k].max(b.center[k] + grow * b.radii[k]);
             }
         }
+        let fbm = noise::Fbm::<noise::Perlin>::new(seed).set_octaves(octaves);
+        let slope = fbm_slope(&fbm) * frequency;
         let grid = MajorantGrid::build(lo, hi, [CLOUD_GRID; 3], |c_lo, c_hi| {
+            use noise::NoiseFn;
             let (mut deepest, mut shallowest) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
             for b in &blobs {
                 let (lo, hi) = Self::depth_range(b, c_lo, c_hi);
                 (deepest, shallowest) = (deepest.max(hi), shallowest.max(lo));
             }
+            let centre: Vec3 = std::array::from_fn(|k| 0.5 * (c_lo[k] + c_hi[k]) * frequency);
+            let half_diagonal = 0.5
+                * (0..3)
+                    .map(|k| (c_hi[k] - c_lo[k]).powi(2))
+                    .sum::<f64>()
+                    .sqrt();
+            let (n, spread) = (fbm.get(centre), slope * half_diagonal);
+            let n_lo = (n - spread).clamp(-1.2, 1.2);
+            let n_hi = (n + spread).clamp(-1.2, 1.2);
             let density = |s: f64| (s / edge).clamp(0.0, 1.0);
             Bounds {
-                min: sigma_t * density(shallowest - 1.2 * amplitude),
-                max: sigma_t * density(deepest + 1.2 * amplitude),
+                min: sigma_t * density(shallowest + amplitude * n_lo),
+                max: sigma_t * density(deepest + amplitude * n_hi),
             }
         });
         Self {
@@ -123,7 +156,7 @@ impl Cloud {
             edge,
             amplitude,
             frequency,
-            fbm: noise::Fbm::<noise::Perlin>::new(seed).set_octaves(octaves),
+            fbm,
             sigma_t,
             lo,
             hi,

@@ -8,3 +8,4 @@ pub mod medium;
 pub mod output;
 pub mod run;
 pub mod scene;
+pub mod sun_lobe;

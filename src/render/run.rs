@@ -5,6 +5,7 @@
 use super::geometry::{cross, normalize, Vec3};
 use super::integrator::{trace, Volume};
 use super::scene::{Camera, Scene};
+use super::sun_lobe::SunLobe;
 use crate::phase::Phase;
 use anyhow::Result;
 use rand::{Rng, SeedableRng};
@@ -121,7 +122,7 @@ pub fn render(scene: &Scene, progress: &(dyn Fn(f64) + Sync)) -> Result<Rendered
             sun_irradiance: 1.0,
             sky: if has_sky { 1.0 } else { 0.0 },
             group_first: &GROUP_FIRST,
-            guided_nee: scene.guided_nee,
+            sun_lobe: SunLobe::new(scene.sun_lobe_steps, phases),
         };
         loop {
             let pass_start = t0.elapsed().as_secs_f64();

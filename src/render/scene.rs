@@ -40,10 +40,10 @@ pub struct Scene {
     /// spp × passes (render.json gives the spp reached).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub time_budget_s: Option<f64>,
-    /// Two-vertex next-event estimation: an unbiased variance reduction for forward-peaked
-    /// phase functions (on by default).
-    #[serde(default = "yes")]
-    pub guided_nee: bool,
+    /// Steps of the sun-lobe walk launched at every collision (docs/render.md): an unbiased
+    /// variance reduction for forward-peaked phase functions; 0 is plain next-event estimation.
+    #[serde(default = "default_sun_lobe_steps")]
+    pub sun_lobe_steps: usize,
     /// Seed of every random stream.
     #[serde(default)]
     pub seed: u64,
@@ -53,8 +53,8 @@ fn one() -> f64 {
     1.0
 }
 
-fn yes() -> bool {
-    true
+fn default_sun_lobe_steps() -> usize {
+    4
 }
 
 /// The medium's shape.
@@ -226,6 +226,11 @@ impl Scene {
             "camera.width and camera.height must be 1…16384 pixels"
         );
         ensure!((1..=1 << 20).contains(&self.spp), "spp must be 1…1048576");
+        ensure!(
+            self.sun_lobe_steps <= super::sun_lobe::MAX_STEPS,
+            "sun_lobe_steps must be 0…{}",
+            super::sun_lobe::MAX_STEPS
+        );
         if let Some(b) = self.time_budget_s {
             ensure!(
                 b > 0.0 && b.is_finite(),
