@@ -671,3 +671,28 @@ fn the_sun_lobe_estimator_agrees_with_plain_nee_per_order_group_on_mie() {
     assert!(worst < 4.5, "worst |z| {worst}");
     assert!(mean_z2 < 2.0, "mean z² {mean_z2}");
 }
+
+/// The slope bound behind the implicit cloud's majorant cells holds: the directional derivatives
+/// of the `noise` crate's Perlin noise at random points of three seeds stay below
+/// `PERLIN_SLOPE` (finite differences over 10⁻⁵ of its input).
+#[test]
+fn perlin_noise_slope_is_below_the_majorant_bound() {
+    use nephele::render::medium::PERLIN_SLOPE;
+    use noise::{NoiseFn, Perlin};
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(9);
+    let h = 1e-5;
+    let mut largest = 0.0f64;
+    for seed in [1, 2, 7] {
+        let perlin = Perlin::new(seed);
+        for _ in 0..1_000_000 {
+            let x: [f64; 3] = std::array::from_fn(|_| 200.0 * rng.random::<f64>() - 100.0);
+            let u = nephele::render::geometry::normalize(std::array::from_fn(|_| {
+                2.0 * rng.random::<f64>() - 1.0
+            }));
+            let y: [f64; 3] = std::array::from_fn(|k| x[k] + h * u[k]);
+            largest = largest.max(((perlin.get(y) - perlin.get(x)) / h).abs());
+        }
+    }
+    println!("largest directional derivative {largest:.3} (bound {PERLIN_SLOPE})");
+    assert!(largest < PERLIN_SLOPE / 1.2, "{largest}");
+}

@@ -54,7 +54,7 @@ fn one() -> f64 {
 }
 
 fn default_sun_lobe_steps() -> usize {
-    4
+    16
 }
 
 /// The medium's shape.
