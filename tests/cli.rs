@@ -984,6 +984,7 @@ fn render_writes_its_outputs_and_refuses_bad_scenes() {
         (("spp", serde_json::json!(0)), "spp"),
         (("colour", serde_json::json!(1)), "colour"),
         (("time_budget_s", serde_json::json!(-3)), "time_budget_s"),
+        (("sun_lobe_steps", serde_json::json!(40)), "sun_lobe_steps"),
         (
             ("phase", serde_json::json!({"kind": "hg", "g": 1.5})),
             "phase.g",

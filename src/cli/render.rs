@@ -25,8 +25,9 @@ pub struct RenderArgs {
     /// while the next one fits.
     #[arg(long, value_name = "SECONDS")]
     pub time_budget: Option<f64>,
-    /// Steps of the sun-lobe walk (variance reduction for forward peaks), overriding the
-    /// scene's: 0 is plain next-event estimation, up to 8.
+    /// Most steps of the sun-lobe walks and directions of their MIS window (variance reduction
+    /// for forward peaks, docs/render.md), overriding the scene's (default 16): 0 is plain
+    /// next-event estimation, up to 32.
     #[arg(long, value_name = "K")]
     pub sun_lobe_steps: Option<usize>,
 }

@@ -20,11 +20,12 @@
 //! channel's throughput takes the weight β_k ← β_k p_k(cos) / p̄(cos) — unbiased wherever p̄ > 0,
 //! and never more than 3.
 //!
-//! Sun-lobe next-event estimation (`sun_lobe_steps` = K, see `sun_lobe`): every collision also
-//! launches a K-step walk with directions drawn from p around the sun, whose collisions score
-//! NEE for the next K orders, and each order's estimates are combined by the balance heuristic
-//! over the last K directions — the Mie forward peak's fireflies are divided out. The camera
-//! path itself continues as before (no weights compound).
+//! Sun-lobe next-event estimation (`SunLobe`, K steps; see `sun_lobe`): every collision also
+//! launches a walk whose first direction is drawn from p around the sun and which follows p
+//! while it stays in the sun's forward-peak lobe (at most K steps); its collisions score NEE
+//! for the next orders, and each order's estimates are combined by the balance heuristic over
+//! the last K directions, one strategy per entry into the lobe — the Mie forward peak's
+//! fireflies are divided out. The camera path itself continues as before (no weights compound).
 //!
 //! Roulette: a deterministic schedule by order, so that the strategies' densities can include
 //! it: once ϖⁿ falls below 10⁻³ the path survives with probability 0.1 per decade (its weight
