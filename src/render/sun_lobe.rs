@@ -35,8 +35,9 @@
 //! entered more than K directions back keep a spike divided by their count of valid entries. A
 //! diffuse path has almost never an earlier direction in the lobe, so mostly only e = L counts:
 //! the two-vertex MIS w_0 = A_L / (A_L + B_L). The walks stop as soon as they leave the lobe, so
-//! they take about 1.5 steps on average whatever K is. K = 1 is the two-vertex NEE of earlier
-//! versions; K = 0 is plain NEE.
+//! they take fewer than 2 steps on average whatever K is (the first direction lands in the lobe
+//! with probability ½ by construction, a later one stays there less often). K = 1 is the
+//! two-vertex NEE of earlier versions; K = 0 is plain NEE.
 
 use nephele_runtime::PhaseFunction;
 
