@@ -10,9 +10,8 @@
 use nephele::phase::Phase;
 use nephele::render::geometry::normalize;
 use nephele::render::integrator::{trace, Volume};
-use nephele::render::run::GROUP_FIRST;
+use nephele::render::run::{volume, GROUP_FIRST};
 use nephele::render::scene::Scene;
-use nephele::render::sun_lobe::SunLobe;
 use rand::SeedableRng;
 
 /// Mean, variance, and the variance share of the largest `fractions` of the squared deviations.
@@ -35,21 +34,18 @@ fn spread(values: &[f64], fractions: &[f64]) -> (f64, f64, Vec<f64>) {
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
     anyhow::ensure!(args.len() == 4, "usage: path_stats SCENE K PATHS");
-    let scene = Scene::load(std::path::Path::new(&args[1]))?;
-    let steps: usize = args[2].parse()?;
+    let mut scene = Scene::load(std::path::Path::new(&args[1]))?;
+    scene.sun_lobe_steps = args[2].parse()?;
+    scene.validate()?;
+    let steps = scene.sun_lobe_steps;
     let n: usize = args[3].parse()?;
     let medium = scene.build_medium()?;
     let models = Phase::build_channels(&scene.phase)?;
     Phase::with_all(&models, |phases| {
+        // Sunlight only: the sky's share would blur where the variance comes from.
         let volume = Volume {
-            medium: medium.as_ref(),
-            albedo: scene.albedo,
-            phases,
-            sun_dir: scene.sun.direction,
-            sun_irradiance: 1.0,
             sky: 0.0,
-            group_first: &GROUP_FIRST,
-            sun_lobe: SunLobe::new(steps, phases),
+            ..volume(&scene, medium.as_ref(), phases)
         };
         let cam = &scene.camera;
         let dir = normalize(std::array::from_fn(|k| cam.look_at[k] - cam.position[k]));

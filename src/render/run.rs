@@ -4,10 +4,12 @@
 
 use super::geometry::{cross, normalize, Vec3};
 use super::integrator::{trace, Volume};
+use super::medium::Medium;
 use super::scene::{Camera, Scene};
 use super::sun_lobe::SunLobe;
 use crate::phase::Phase;
 use anyhow::Result;
+use nephele_runtime::PhaseFunction;
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rayon::prelude::*;
@@ -97,7 +99,6 @@ pub fn render(scene: &Scene, progress: &(dyn Fn(f64) + Sync)) -> Result<Rendered
     let models = Phase::build_channels(&scene.phase)?;
     let cam = Pinhole::new(&scene.camera);
     let (w, h) = (cam.width, cam.height);
-    let has_sky = scene.sky.iter().any(|&s| s > 0.0);
     let (ng, stride) = (GROUP_FIRST.len(), stride());
     let mut sums = vec![0.0f64; w * h * stride];
     let mut rngs: Vec<Xoshiro256PlusPlus> = (0..w * h)
@@ -114,16 +115,7 @@ pub fn render(scene: &Scene, progress: &(dyn Fn(f64) + Sync)) -> Result<Rendered
     };
     let mut passes = 0u32;
     Phase::with_all(&models, |phases| {
-        let volume = Volume {
-            medium: medium.as_ref(),
-            albedo: scene.albedo,
-            phases,
-            sun_dir: scene.sun.direction,
-            sun_irradiance: 1.0,
-            sky: if has_sky { 1.0 } else { 0.0 },
-            group_first: &GROUP_FIRST,
-            sun_lobe: SunLobe::new(scene.sun_lobe_steps, phases),
-        };
+        let volume = volume(scene, medium.as_ref(), phases);
         loop {
             let pass_start = t0.elapsed().as_secs_f64();
             sums.par_chunks_mut(w * stride)
@@ -157,6 +149,26 @@ pub fn render(scene: &Scene, progress: &(dyn Fn(f64) + Sync)) -> Result<Rendered
     });
     let spp = scene.spp * passes;
     Ok(gather(scene, &cam, &sums, spp, t0.elapsed().as_secs_f64()))
+}
+
+/// The estimator's view of `scene` (medium and phase functions built): the sun's irradiance
+/// and the sky's radiance are 1 here and applied per channel when the images are gathered.
+pub fn volume<'a>(
+    scene: &Scene,
+    medium: &'a dyn Medium,
+    phases: &'a [&'a (dyn PhaseFunction<f64> + Sync)],
+) -> Volume<'a> {
+    let has_sky = scene.sky.iter().any(|&s| s > 0.0);
+    Volume {
+        medium,
+        albedo: scene.albedo,
+        phases,
+        sun_dir: scene.sun.direction,
+        sun_irradiance: 1.0,
+        sky: if has_sky { 1.0 } else { 0.0 },
+        group_first: &GROUP_FIRST,
+        sun_lobe: SunLobe::new(scene.sun_lobe_steps, phases),
+    }
 }
 
 /// Most passes of a time-budgeted render: 4096, and spp · passes below 2³².

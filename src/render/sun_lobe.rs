@@ -149,7 +149,7 @@ pub fn mis_weight(d: &[Step], strategy: usize, n: u32, tau: f64, q: impl Fn(u32)
     // The entry at e (1-based) is launched at order first + e − 2; its survival from the
     // window's start is Π_{m=first}^{first+e−2} q_m, the camera path's Π_{m=first}^{n−1} q_m.
     let first = n + 1 - l as u32;
-    let survival = vec_survival(l, first, &q);
+    let survival = survival_products(l, first, &q);
     // valid_e: the walk stays in the lobe from e to l − 1 (1-based): scanned from the end.
     let mut valid = [false; MAX_STEPS + 1];
     valid[l] = true;
@@ -178,7 +178,7 @@ pub fn mis_weight(d: &[Step], strategy: usize, n: u32, tau: f64, q: impl Fn(u32)
 
 /// survival[i] = Π_{m=first}^{first+i−1} q_m for i < l, and survival[l] = survival[l − 1] (the
 /// camera path needs the roulette of orders first … n − 1 only).
-fn vec_survival(l: usize, first: u32, q: &impl Fn(u32) -> f64) -> [f64; MAX_STEPS + 1] {
+fn survival_products(l: usize, first: u32, q: &impl Fn(u32) -> f64) -> [f64; MAX_STEPS + 1] {
     let mut s = [1.0; MAX_STEPS + 1];
     for i in 1..l {
         s[i] = s[i - 1] * q(first + i as u32 - 1);
