@@ -3,6 +3,7 @@
 //! every model fitted to them — then slab tables of 10 µm droplets and their compression, into
 //! outputs/.
 
+mod compare;
 mod compress;
 mod fit;
 mod mie;
@@ -49,8 +50,10 @@ enum Command {
     Compress(compress::CompressArgs),
     /// Evaluate compressed transport tables (transport.ntt) at one point: T per order group, as JSON.
     Transport(transport::TransportArgs),
-    /// Render a scene (slab or cloud) with the ground-truth path tracer: image and per-order AOVs.
+    /// Render a scene (slab, cloud, voxels) with the path tracer or a fast method (collector, single, octaves): image and per-order AOVs.
     Render(render::RenderArgs),
+    /// Compare renders with a path-traced reference per order group, beside its noise (report.json, figures).
+    Compare(compare::CompareArgs),
     /// Merge the shards of a slab run (`nephele slab --shard K/N`) into its tables.
     Merge(slab::MergeArgs),
     /// Tabulate and sample a phase model of nephele-runtime (or a Mie table); renderer LUTs.
@@ -100,6 +103,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Compress(args)) => compress::run(args),
         Some(Command::Transport(args)) => transport::run(args),
         Some(Command::Render(args)) => render::run(args),
+        Some(Command::Compare(args)) => compare::run(args),
         None => pipeline::run(cli.full),
     }
 }

@@ -1,11 +1,13 @@
-//! `nephele render`: renders a scene with the ground-truth path tracer.
+//! `nephele render`: renders a scene with the ground-truth path tracer or a fast method.
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
+use nephele::render::fast::{render_fast, FastOptions, Method, Octaves};
 use nephele::render::output::write_outputs;
-use nephele::render::run::render;
+use nephele::render::run::{render, Rendered};
 use nephele::render::scene::Scene;
+use nephele_runtime::transport::{SearchOptions, TransportTables};
 use std::path::PathBuf;
 
 /// Options of `nephele render`.
@@ -15,21 +17,150 @@ pub struct RenderArgs {
     #[arg(long, value_name = "FILE")]
     pub scene: PathBuf,
     /// Output directory: beauty.png, beauty.exr, beauty.npy, groups.npy, unscattered.npy,
-    /// transmittance.npy, opacity.npy, render.json. [default: outputs/render]
+    /// transmittance.npy, opacity.npy, render.json; halves.npy (path tracer) or regions.npy
+    /// (fast methods). [default: outputs/render]
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
-    /// Samples per pixel, overriding the scene's (per pass with a time budget).
+    /// How to render: the Monte Carlo path tracer (the reference), the collector renderer
+    /// (orders ≥ 2 from the transport tables, docs/collector.md), order 1 only, or the
+    /// multi-octave approximation of real-time engines.
+    #[arg(long, value_enum, default_value = "path-tracer")]
+    pub method: Method,
+    /// Path tracer: samples per pixel, overriding the scene's (per pass with a time budget).
     #[arg(long)]
     pub spp: Option<u32>,
-    /// Wall-clock budget in seconds, overriding the scene's: passes of spp samples per pixel
-    /// while the next one fits.
+    /// Path tracer: wall-clock budget in seconds, overriding the scene's: passes of spp
+    /// samples per pixel while the next one fits.
     #[arg(long, value_name = "SECONDS")]
     pub time_budget: Option<f64>,
-    /// Most steps of the sun-lobe walks and directions of their MIS window (variance reduction
-    /// for forward peaks, docs/render.md), overriding the scene's (default 16): 0 is plain
-    /// next-event estimation, up to 32.
+    /// Path tracer: most steps of the sun-lobe walks and directions of their MIS window
+    /// (variance reduction for forward peaks, docs/render.md), overriding the scene's (default
+    /// 16): 0 is plain next-event estimation, up to 32.
     #[arg(long, value_name = "K")]
     pub sun_lobe_steps: Option<usize>,
+    /// Image width and height in pixels, overriding the scene's camera.
+    #[arg(long, value_names = ["W", "H"], num_args = 2)]
+    pub size: Option<Vec<u32>>,
+    #[command(flatten)]
+    pub fast: FastArgs,
+}
+
+/// Options of the fast methods (collector, single, octaves).
+#[derive(Args, Debug)]
+pub struct FastArgs {
+    /// Compressed transport tables (.ntt from `nephele compress`) [default: the embedded Mie
+    /// 10 µm tables].
+    #[arg(long, value_name = "FILE")]
+    pub tables: Option<PathBuf>,
+    /// Render even where the scene's phase function or albedo differs from the tables' (a
+    /// warning instead of an error).
+    #[arg(long)]
+    pub allow_table_mismatch: bool,
+    /// Light-space map texels per side (a power of two).
+    #[arg(long, default_value_t = 256, value_name = "N")]
+    pub map_resolution: usize,
+    /// Depth planes of the sun's optical-depth map.
+    #[arg(long, default_value_t = 256, value_name = "N")]
+    pub planes: usize,
+    /// March sub-step in metres [default: half a mean free path at density 1].
+    #[arg(long, value_name = "M")]
+    pub march_step: Option<f64>,
+    /// ρ₀: the lit surface is where the density crosses this fraction of the scene's σ_t.
+    #[arg(long, default_value_t = 0.5, value_name = "RHO")]
+    pub surface_density: f64,
+    /// Rays per pixel: an n × n grid over the pixel.
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    pub rays: u32,
+    /// Collector search: most table reads per group.
+    #[arg(long, default_value_t = 8, value_name = "N")]
+    pub iterations: u32,
+    /// Collector search: converged when c moves less than this many σ (and σ changes by less).
+    #[arg(long, default_value_t = 0.1, value_name = "EPS")]
+    pub tolerance: f32,
+    /// Collector search: no clamp of the steps to σ (an ablation).
+    #[arg(long)]
+    pub no_step_clamp: bool,
+    /// Collector search: the surface unfiltered, at its finest level (an ablation).
+    #[arg(long)]
+    pub no_filter: bool,
+    /// Octaves: N, a, b, c of L ≈ Σ_{i<N} bⁱ σ_s p(θ; cⁱ g) E Tr_sun(aⁱ σ_t).
+    #[arg(long, value_names = ["N", "A", "B", "C"], num_args = 4)]
+    pub octaves: Option<Vec<f64>>,
+}
+
+impl FastArgs {
+    /// The fast renderers' options for `method`.
+    pub fn options(&self, method: Method) -> Result<FastOptions> {
+        let octaves = match &self.octaves {
+            Some(v) => {
+                anyhow::ensure!(
+                    v[0].fract() == 0.0 && v[0] >= 1.0,
+                    "--octaves: N must be a whole number ≥ 1"
+                );
+                Octaves {
+                    n: v[0] as usize,
+                    a: v[1],
+                    b: v[2],
+                    c: v[3],
+                }
+            }
+            None => Octaves::default(),
+        };
+        let o = FastOptions {
+            method,
+            map_resolution: self.map_resolution,
+            planes: self.planes,
+            step: self.march_step,
+            surface_density: self.surface_density,
+            rays: self.rays,
+            search: SearchOptions {
+                max_reads: self.iterations,
+                tolerance: self.tolerance,
+                step_clamp: !self.no_step_clamp,
+                filter: !self.no_filter,
+            },
+            octaves,
+            allow_mismatch: self.allow_table_mismatch,
+        };
+        o.validate()?;
+        Ok(o)
+    }
+
+    /// The tables' bytes: the file's, or the embedded ones.
+    pub fn table_bytes(&self) -> Result<std::borrow::Cow<'static, [u8]>> {
+        Ok(match &self.tables {
+            Some(p) => std::fs::read(p)
+                .with_context(|| format!("cannot read tables '{}'", p.display()))?
+                .into(),
+            None => nephele_runtime::embedded::MIE_10UM.into(),
+        })
+    }
+}
+
+/// Renders `scene` with `method`, a progress bar on stderr.
+pub fn render_with(scene: &Scene, method: Method, fast: &FastArgs) -> Result<Rendered> {
+    let bar = ProgressBar::new(1000).with_style(
+        ProgressStyle::with_template("render [{bar:30}] {percent:>3}% ({elapsed}, eta {eta})")
+            .expect("static template"),
+    );
+    let progress = |done: f64| bar.set_position((done * 1000.0) as u64);
+    let r = if method == Method::PathTracer {
+        render(scene, &progress)?
+    } else {
+        let opts = fast.options(method)?;
+        let bytes = fast.table_bytes()?;
+        let tables = TransportTables::from_bytes(&bytes).map_err(|e| {
+            anyhow::anyhow!(
+                "transport tables {}: {e}",
+                fast.tables
+                    .as_ref()
+                    .map_or("(embedded)".into(), |p| format!("'{}'", p.display()))
+            )
+        })?;
+        render_fast(scene, &tables, &opts, &progress)?
+    };
+    bar.finish_and_clear();
+    Ok(r)
 }
 
 /// Runs `nephele render`.
@@ -44,26 +175,61 @@ pub fn run(args: RenderArgs) -> Result<()> {
     if let Some(k) = args.sun_lobe_steps {
         scene.sun_lobe_steps = k;
     }
+    if let Some(s) = &args.size {
+        scene.camera.width = s[0];
+        scene.camera.height = s[1];
+    }
     scene.validate()?;
     let out = args.out.unwrap_or_else(|| PathBuf::from("outputs/render"));
-    let bar = ProgressBar::new(1000).with_style(
-        ProgressStyle::with_template("render [{bar:30}] {percent:>3}% ({elapsed}, eta {eta})")
-            .expect("static template"),
-    );
-    let r = render(&scene, &|done| bar.set_position((done * 1000.0) as u64))?;
-    bar.finish_and_clear();
+    let r = render_with(&scene, args.method, &args.fast)?;
     write_outputs(&out, &scene, &r)?;
-    println!(
-        "{}×{} pixels, {} spp: {} camera paths in {:.1} s ({:.0} paths/s); wrote {}/beauty.png, \
-         beauty.exr, beauty.npy, groups.npy, unscattered.npy, transmittance.npy, opacity.npy, \
-         render.json",
-        r.width,
-        r.height,
-        r.spp,
-        r.paths,
-        r.seconds,
-        r.paths as f64 / r.seconds.max(1e-9),
-        out.display()
-    );
+    if args.method == Method::PathTracer {
+        println!(
+            "{}×{} pixels, {} spp: {} camera paths in {:.1} s ({:.0} paths/s); wrote {}/beauty.png, \
+             beauty.exr, beauty.npy, groups.npy, halves.npy, unscattered.npy, transmittance.npy, \
+             opacity.npy, render.json",
+            r.width,
+            r.height,
+            r.spp,
+            r.paths,
+            r.seconds,
+            r.paths as f64 / r.seconds.max(1e-9),
+            out.display()
+        );
+    } else {
+        let stages = &r.details["seconds_per_stage"];
+        println!(
+            "{}×{} pixels, {}: {:.3} s a frame (maps {:.3} s, sky {:.3} s, pixels {:.3} s); wrote \
+             {}/beauty.png, beauty.exr, beauty.npy, groups.npy, regions.npy, unscattered.npy, \
+             transmittance.npy, opacity.npy, render.json",
+            r.width,
+            r.height,
+            r.method,
+            r.seconds,
+            stages["light_maps"].as_f64().unwrap_or(0.0),
+            stages["sky_table"].as_f64().unwrap_or(0.0),
+            stages["pixels"].as_f64().unwrap_or(0.0),
+            out.display()
+        );
+        if let Some(groups) = r.details["groups"].as_array() {
+            for g in groups {
+                let n = g["searches"].as_f64().unwrap_or(0.0).max(1.0);
+                if g["searches"].as_u64().unwrap_or(0) == 0 || r.method != "collector" {
+                    continue;
+                }
+                println!(
+                    "  orders {:>2}+: {:.2} reads per search, {:.1} % converged, clamped t {:.1} % μ_L {:.1} % d {:.1} %, no light {:.1} % (dark {:.2} %)",
+                    g["first_order"],
+                    g["reads"].as_f64().unwrap_or(0.0) / (n - g["empty"].as_f64().unwrap_or(0.0)).max(1.0),
+                    100.0 * g["converged"].as_f64().unwrap_or(0.0) / n,
+                    100.0 * g["clamped_thickness"].as_f64().unwrap_or(0.0) / n,
+                    100.0 * g["clamped_mu_l"].as_f64().unwrap_or(0.0) / n,
+                    100.0 * g["clamped_depth"].as_f64().unwrap_or(0.0) / n,
+                    100.0 * g["empty"].as_f64().unwrap_or(0.0) / n,
+                    100.0 * g["dark"].as_f64().unwrap_or(0.0) / n,
+                );
+            }
+        }
+    }
     Ok(())
 }

@@ -406,3 +406,70 @@ fn draw_heat_map<DB: DrawingBackend>(
     }
     Ok(())
 }
+
+/// An 8-bit RGB image for [`image_grid`].
+pub struct Tile {
+    rgb: Vec<u8>,
+    w: usize,
+    h: usize,
+}
+
+impl Tile {
+    /// `rgb` of w × h pixels, row 0 at the top.
+    pub fn new(rgb: Vec<u8>, w: usize, h: usize) -> Self {
+        Self { rgb, w, h }
+    }
+}
+
+/// Images on a labelled grid (column titles on top, row titles on the left; a missing tile is
+/// left blank), written as a PNG at `path`.
+pub fn image_grid(
+    path: &Path,
+    columns: &[String],
+    rows: &[(String, Vec<Option<Tile>>)],
+) -> Result<()> {
+    register_font();
+    let err = |e: &dyn std::fmt::Display| anyhow!("figure '{}': {e}", path.display());
+    let (tw, th) = rows
+        .iter()
+        .flat_map(|(_, t)| t.iter().flatten())
+        .map(|t| (t.w, t.h))
+        .next()
+        .unwrap_or((1, 1));
+    let (left, top, gap) = (150usize, 28usize, 4usize);
+    let ncols = columns
+        .len()
+        .max(rows.iter().map(|r| r.1.len()).max().unwrap_or(0));
+    let width = left + ncols * (tw + gap);
+    let height = top + rows.len() * (th + gap);
+    let root = BitMapBackend::new(path, (width as u32, height as u32)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| err(&e))?;
+    let style = ("sans-serif", 15).into_font().color(&BLACK);
+    for (c, title) in columns.iter().enumerate() {
+        let x = (left + c * (tw + gap)) as i32;
+        root.draw(&Text::new(title.clone(), (x + 2, 6), style.clone()))
+            .map_err(|e| err(&e))?;
+    }
+    for (r, (label, tiles)) in rows.iter().enumerate() {
+        let y = (top + r * (th + gap)) as i32;
+        root.draw(&Text::new(
+            label.clone(),
+            (4, y + th as i32 / 2 - 8),
+            style.clone(),
+        ))
+        .map_err(|e| err(&e))?;
+        for (c, tile) in tiles.iter().enumerate() {
+            let Some(t) = tile else { continue };
+            let x0 = (left + c * (tw + gap)) as i32;
+            for j in 0..t.h {
+                for i in 0..t.w {
+                    let p = &t.rgb[(j * t.w + i) * 3..(j * t.w + i) * 3 + 3];
+                    root.draw_pixel((x0 + i as i32, y + j as i32), &RGBColor(p[0], p[1], p[2]))
+                        .map_err(|e| err(&e))?;
+                }
+            }
+        }
+    }
+    root.present().map_err(|e| err(&e))?;
+    Ok(())
+}

@@ -83,6 +83,11 @@ impl Affine {
         Self::new(m, origin).expect("a box of positive size")
     }
 
+    /// M p + b.
+    pub fn apply(&self, p: Vec3) -> Vec3 {
+        std::array::from_fn(|r| dot(self.m[r], p) + self.t[r])
+    }
+
     /// M⁻¹ (p − b).
     pub fn local_point(&self, p: Vec3) -> Vec3 {
         self.local_dir(std::array::from_fn(|k| p[k] - self.t[k]))

@@ -17,6 +17,10 @@ pub trait Medium: Sync {
     /// Bounds σ_c ≤ σ_t ≤ σ̄ (1/m) over the medium's extent; where they meet, shadow rays
     /// cost nothing and add no noise.
     fn majorants(&self) -> Majorants<'_>;
+
+    /// A box (lowest and highest corners, m) outside which σ_t = 0, or None if the medium is
+    /// unbounded.
+    fn bounds(&self) -> Option<(Vec3, Vec3)>;
 }
 
 /// A homogeneous slab z ∈ [0, h] (m), unbounded in x and y: the canonical slab (docs/conventions.md) with
@@ -47,6 +51,10 @@ impl Medium for Slab {
             min: self.sigma_t,
             max: self.sigma_t,
         })
+    }
+
+    fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        None
     }
 }
 
@@ -228,6 +236,10 @@ impl Medium for Cloud {
     fn majorants(&self) -> Majorants<'_> {
         Majorants::Grid(&self.grid)
     }
+
+    fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        Some((self.lo, self.hi))
+    }
 }
 
 /// A voxel grid of densities over the unit cube [0, 1]³ of its own coordinates, mapped to the
@@ -356,5 +368,18 @@ impl Medium for Voxels {
     fn majorants(&self) -> Majorants<'_> {
         // Trilinear interpolation never leaves the range of the voxels it reads.
         Majorants::Grid(&self.grid)
+    }
+
+    fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for c in 0..8 {
+            let u: Vec3 = std::array::from_fn(|k| f64::from((c >> k) & 1));
+            let p = self.to_world.apply(u);
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        Some((lo, hi))
     }
 }

@@ -10,11 +10,11 @@ use npyz::WriterBuilder;
 use std::io::Write;
 use std::path::Path;
 
-/// A float32 .npy of `shape`.
-fn npy_bytes(shape: &[u64], data: &[f32]) -> Result<Vec<u8>> {
+/// A .npy of `shape` (float32, or uint8 for the regions).
+fn npy_bytes<T: npyz::AutoSerialize + Copy>(shape: &[u64], data: &[T]) -> Result<Vec<u8>> {
     let mut bytes = Vec::new();
     {
-        let mut w = npyz::WriteOptions::<f32>::new()
+        let mut w = npyz::WriteOptions::<T>::new()
             .default_dtype()
             .shape(shape)
             .writer(&mut bytes)
@@ -29,6 +29,12 @@ fn npy_bytes(shape: &[u64], data: &[f32]) -> Result<Vec<u8>> {
 /// 0.75 before the curve 1 − e^{−x} (soft highlights; rare bright samples of a noisy image do
 /// not set the exposure), then the sRGB transfer function.
 pub fn tone_map(beauty: &[f32]) -> Vec<u8> {
+    tone_map_with(beauty, exposure(beauty))
+}
+
+/// The exposure k of [`tone_map`]: 1 − e^{−k p90} = 0.75, p90 the 90th percentile of the
+/// luminance.
+pub fn exposure(beauty: &[f32]) -> f32 {
     let mut lum: Vec<f32> = beauty
         .chunks_exact(3)
         .map(|p| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2])
@@ -39,8 +45,11 @@ pub fn tone_map(beauty: &[f32]) -> Vec<u8> {
         .copied()
         .unwrap_or(1.0)
         .max(1e-12);
-    // 1 − e^{−k p90} = 0.75.
-    let k = (4.0f32).ln() / p90;
+    (4.0f32).ln() / p90
+}
+
+/// Linear radiance to 8-bit sRGB with exposure `k`: 1 − e^{−k x}, then the sRGB curve.
+pub fn tone_map_with(beauty: &[f32], k: f32) -> Vec<u8> {
     beauty
         .iter()
         .map(|&v| {
@@ -71,6 +80,13 @@ pub fn write_outputs(out: &Path, scene: &Scene, r: &Rendered) -> Result<()> {
     }
     let opacity: Vec<f32> = r.transmittance.iter().map(|t| 1.0 - t).collect();
     files.write_bytes(&out.join("opacity.npy"), &npy_bytes(&[h, w], &opacity)?)?;
+    if !r.halves.is_empty() {
+        let shape = [2, ng, h, w, 3];
+        files.write_bytes(&out.join("halves.npy"), &npy_bytes(&shape, &r.halves)?)?;
+    }
+    if !r.regions.is_empty() {
+        files.write_bytes(&out.join("regions.npy"), &npy_bytes(&[h, w], &r.regions)?)?;
+    }
     let mut png = Vec::new();
     image::ImageEncoder::write_image(
         image::codecs::png::PngEncoder::new(&mut png),
@@ -95,7 +111,24 @@ pub fn write_outputs(out: &Path, scene: &Scene, r: &Rendered) -> Result<()> {
             .to_file(p)
             .map_err(|e| anyhow::anyhow!("OpenEXR: {e}"))
     })?;
+    let mut files_doc = serde_json::json!({
+            "beauty.npy": "[H, W, 3] the sum of groups.npy over groups and unscattered.npy",
+            "groups.npy": "[group, H, W, 3] radiance scattered n times, n in the group (first orders in group_first_orders; sun and sky)",
+            "unscattered.npy": "[H, W, 3] the sky seen through the medium",
+            "transmittance.npy": "[H, W] transmittance of the camera ray through the medium",
+            "opacity.npy": "[H, W] 1 - transmittance",
+            "beauty.exr": "[H, W] RGB f32, linear (OpenEXR)",
+            "beauty.png": "tone-mapped (90th percentile of luminance at 0.75 of 1 - exp(-x)), sRGB",
+    });
+    if !r.halves.is_empty() {
+        files_doc["halves.npy"] = "[2, group, H, W, 3] groups.npy from the even and from the odd samples of each pixel: (A - B)^2 / 4 estimates the variance of a pixel's mean".into();
+    }
+    if !r.regions.is_empty() {
+        files_doc["regions.npy"] = "[H, W] uint8: 0 opacity <= 0.5, 1 lit face (sun optical depth < 2 at the visible surface point), 2 shadowed face, 3 silhouette (0.5 < opacity < 0.99)".into();
+    }
     let sidecar = serde_json::json!({
+        "method": r.method,
+        "details": r.details,
         "scene": scene,
         "width": w,
         "height": h,
@@ -106,15 +139,7 @@ pub fn write_outputs(out: &Path, scene: &Scene, r: &Rendered) -> Result<()> {
         "threads": rayon::current_num_threads(),
         "group_first_orders": GROUP_FIRST,
         "units": "linear radiance, the sun's irradiance and the sky's radiance as given in the scene (RGB); row 0 at the top",
-        "files": {
-            "beauty.npy": "[H, W, 3] the sum of groups.npy over groups and unscattered.npy",
-            "groups.npy": "[group, H, W, 3] radiance scattered n times, n in the group (first orders in group_first_orders; sun and sky)",
-            "unscattered.npy": "[H, W, 3] the sky seen through the medium",
-            "transmittance.npy": "[H, W] transmittance of the camera ray through the medium",
-            "opacity.npy": "[H, W] 1 - transmittance",
-            "beauty.exr": "[H, W] RGB f32, linear (OpenEXR)",
-            "beauty.png": "tone-mapped (90th percentile of luminance at 0.75 of 1 - exp(-x)), sRGB",
-        },
+        "files": files_doc,
         "version": crate::VERSION,
         "git_commit": option_env!("NEPHELE_GIT_COMMIT"),
     });

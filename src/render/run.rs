@@ -39,6 +39,39 @@ pub struct Rendered {
     pub paths: u64,
     /// Samples per pixel (the scene's times the passes a time budget allowed).
     pub spp: u32,
+    /// The method's name (render.json).
+    pub method: String,
+    /// The path tracer's split-sample halves: the groups' radiance from the even and from the
+    /// odd samples of each pixel, [half, group, row, column, RGB] (empty for other methods):
+    /// (A − B)²/4 estimates the variance of a pixel's mean.
+    pub halves: Vec<f32>,
+    /// The fast renderers' region of each pixel (`fast::region`), [row, column] (empty for
+    /// the path tracer).
+    pub regions: Vec<u8>,
+    /// Method-specific facts for render.json.
+    pub details: serde_json::Value,
+}
+
+impl Rendered {
+    /// A black, empty image of w × h pixels.
+    pub fn empty(w: usize, h: usize) -> Self {
+        let ng = GROUP_FIRST.len();
+        Self {
+            width: w,
+            height: h,
+            groups: vec![0.0; ng * h * w * 3],
+            unscattered: vec![0.0; h * w * 3],
+            transmittance: vec![0.0; h * w],
+            beauty: vec![0.0; h * w * 3],
+            seconds: 0.0,
+            paths: 0,
+            spp: 0,
+            method: String::new(),
+            halves: Vec::new(),
+            regions: Vec::new(),
+            details: serde_json::Value::Null,
+        }
+    }
 }
 
 /// The seed of pixel `i`'s stream (SplitMix64).
@@ -47,19 +80,23 @@ fn pixel_seed(seed: u64, i: u64) -> u64 {
 }
 
 /// The camera's primary rays: a pinhole at `position`, looking along `fwd`.
-struct Pinhole {
-    position: Vec3,
+pub struct Pinhole {
+    /// The eye (m).
+    pub position: Vec3,
     fwd: Vec3,
     right: Vec3,
     up: Vec3,
     /// tan(fov_y / 2).
     tan: f64,
-    width: usize,
-    height: usize,
+    /// Image width and height (pixels).
+    pub width: usize,
+    /// See `width`.
+    pub height: usize,
 }
 
 impl Pinhole {
-    fn new(cam: &Camera) -> Self {
+    /// The camera's rays.
+    pub fn new(cam: &Camera) -> Self {
         let fwd = normalize(std::array::from_fn(|k| cam.look_at[k] - cam.position[k]));
         let right = normalize(cross(fwd, cam.up));
         Self {
@@ -74,7 +111,7 @@ impl Pinhole {
     }
 
     /// The unit direction through (i + u, j + v) in pixel coordinates (row 0 at the top).
-    fn direction(&self, i: usize, j: usize, u: f64, v: f64) -> Vec3 {
+    pub fn direction(&self, i: usize, j: usize, u: f64, v: f64) -> Vec3 {
         let (w, h) = (self.width as f64, self.height as f64);
         let x = (2.0 * (i as f64 + u) / w - 1.0) * self.tan * w / h;
         let y = (1.0 - 2.0 * (j as f64 + v) / h) * self.tan;
@@ -84,8 +121,9 @@ impl Pinhole {
     }
 }
 
-/// Per-pixel sums: [sun group g channel c] at g·3 + c, [sky group g channel c] after those,
-/// then the transmittance.
+/// Per-pixel sums of one half of the samples (the even or the odd ones): [sun group g
+/// channel c] at g·3 + c, [sky group g channel c] after those, then the transmittance; a
+/// pixel holds the two halves one after the other.
 fn stride() -> usize {
     2 * GROUP_FIRST.len() * 3 + 1
 }
@@ -100,7 +138,7 @@ pub fn render(scene: &Scene, progress: &(dyn Fn(f64) + Sync)) -> Result<Rendered
     let cam = Pinhole::new(&scene.camera);
     let (w, h) = (cam.width, cam.height);
     let (ng, stride) = (GROUP_FIRST.len(), stride());
-    let mut sums = vec![0.0f64; w * h * stride];
+    let mut sums = vec![0.0f64; w * h * 2 * stride];
     let mut rngs: Vec<Xoshiro256PlusPlus> = (0..w * h)
         .map(|px| Xoshiro256PlusPlus::seed_from_u64(pixel_seed(scene.seed, px as u64)))
         .collect();
@@ -118,12 +156,15 @@ pub fn render(scene: &Scene, progress: &(dyn Fn(f64) + Sync)) -> Result<Rendered
         let volume = volume(scene, medium.as_ref(), phases);
         loop {
             let pass_start = t0.elapsed().as_secs_f64();
-            sums.par_chunks_mut(w * stride)
+            let first = passes as u64 * scene.spp as u64;
+            sums.par_chunks_mut(w * 2 * stride)
                 .zip(rngs.par_chunks_mut(w))
                 .enumerate()
                 .for_each(|(j, (row, row_rngs))| {
-                    for (i, (px, rng)) in row.chunks_mut(stride).zip(row_rngs).enumerate() {
-                        for _ in 0..scene.spp {
+                    for (i, (both, rng)) in row.chunks_mut(2 * stride).zip(row_rngs).enumerate() {
+                        for k in 0..scene.spp as u64 {
+                            let half = ((first + k) & 1) as usize;
+                            let px = &mut both[half * stride..(half + 1) * stride];
                             let dir = cam.direction(i, j, rng.random(), rng.random());
                             let p = trace(&volume, cam.position, dir, rng);
                             for g in 0..ng {
@@ -176,24 +217,31 @@ fn max_passes(spp: u32) -> u32 {
     (u32::MAX / spp.max(1)).min(4096)
 }
 
-/// The images from the per-pixel sums of `spp` samples, scaled by the sun's irradiance and
-/// the sky's radiance.
+/// The images from the per-pixel sums of `spp` samples (two halves each), scaled by the sun's
+/// irradiance and the sky's radiance.
 fn gather(scene: &Scene, cam: &Pinhole, sums: &[f64], spp: u32, seconds: f64) -> Rendered {
     let (w, h, ng, stride) = (cam.width, cam.height, GROUP_FIRST.len(), stride());
     let n = spp as f64;
+    let counts = [spp.div_ceil(2) as f64, (spp / 2) as f64];
     let (sun, sky) = (scene.sun.irradiance, scene.sky);
-    let mut out = Rendered {
-        width: w,
-        height: h,
-        groups: vec![0.0; ng * h * w * 3],
-        unscattered: vec![0.0; h * w * 3],
-        transmittance: vec![0.0; h * w],
-        beauty: vec![0.0; h * w * 3],
-        seconds,
-        paths: (w * h) as u64 * spp as u64,
-        spp,
-    };
-    for (px, s) in sums.chunks(stride).enumerate() {
+    let mut out = Rendered::empty(w, h);
+    out.seconds = seconds;
+    out.paths = (w * h) as u64 * spp as u64;
+    out.spp = spp;
+    out.method = "path_tracer".into();
+    out.halves = vec![0.0; 2 * ng * h * w * 3];
+    for (px, both) in sums.chunks(2 * stride).enumerate() {
+        let (a, b) = both.split_at(stride);
+        for (half, part) in [a, b].into_iter().enumerate() {
+            for g in 0..ng {
+                for c in 0..3 {
+                    let v = (part[g * 3 + c] * sun[c] + part[(ng + g) * 3 + c] * sky[c])
+                        / counts[half].max(1.0);
+                    out.halves[((half * ng + g) * h * w + px) * 3 + c] = v as f32;
+                }
+            }
+        }
+        let s: Vec<f64> = (0..stride).map(|k| a[k] + b[k]).collect();
         let tr = s[stride - 1] / n;
         out.transmittance[px] = tr as f32;
         for c in 0..3 {

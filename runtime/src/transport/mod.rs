@@ -3,7 +3,8 @@
 //! toward the eye, μ_V > 0 going up, ψ_V from the sun's horizontal travel; [`SlabPoint`]).
 //!
 //! What a renderer uses: [`TransportTables`] (load a `.ntt`, evaluate T, c and σ per order
-//! group: [`Transport`]) and order 1 in closed form ([`single_scattering`]). The forms' insides
+//! group: [`Transport`]), order 1 in closed form ([`single_scattering`]) and the collector
+//! search on a cloud's lit surface ([`find_collector`], over the renderer's [`LitSurface`]). The forms' insides
 //! — features, parameter grids, packing — are for the toolchain that fits and writes the
 //! tables: the module `nephele_runtime::fitting`, behind the `fitting` feature.
 
@@ -20,7 +21,12 @@ macro_rules! form_module {
 
 form_module!(collector, log_additive, single, tables);
 mod geometry;
+mod search;
 
 pub use geometry::SlabPoint;
+pub use search::{
+    find_collector, local_slab, Clamps, Collector, FilteredSurface, LitSurface, LocalSlab,
+    SearchOptions,
+};
 pub use single::{scattering_cosine, single_scattering, PhaseValue};
 pub use tables::{Domain, Transport, TransportTables};

@@ -325,6 +325,12 @@ impl<'a> TransportTables<'a> {
         self.collector.is_some()
     }
 
+    /// The phase function the tables were made with, p(μ) (sr⁻¹) at μ = cos θ: what a
+    /// renderer checks its own against before it uses the tables.
+    pub fn phase(&self, mu: f32) -> f32 {
+        self.phase_at(Cosine::from_mu(mu.clamp(-1.0, 1.0)))
+    }
+
     /// Order 1 (single scattering of the sun beam, sr⁻¹) at `at`, albedo 1.
     pub fn order1(&self, at: &SlabPoint<f32>) -> f32 {
         single_scattering(&StoredPhase(self), 1.0, at)

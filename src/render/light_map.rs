@@ -1,0 +1,450 @@
+//! Light-space maps of a medium for the fast renderers (docs/collector.md): an orthographic
+//! view along the sun over the medium's bounds, one light column per texel, built once per
+//! frame.
+//!
+//! Per texel: coverage A (1 where the column crosses the lit surface, the iso-surface
+//! σ_t = ρ₀ σ_t,scene), the front and back depths Z_min, Z_max of that surface along the beam
+//! (m), the optical length τ of the chord between them (mfp) and the outward normal N of the
+//! front, from the neighbouring texels' depths ([`with_normals`]). Depths are geometric, because the
+//! collector search places points in the world; the chord's optical length rides beside them,
+//! so that the slab of a heterogeneous column (a voxel cloud, the fBm boundary layer) has the
+//! optical thickness the light actually crosses: κ̄ = τ/(Z_max − Z_min) converts the tables'
+//! mean free paths into metres. The channels are premultiplied by A and mip-mapped (2 × 2 box
+//! filter), so that the surface filtered at scale σ is ⟨A X⟩_ℓ / ⟨A⟩_ℓ at level
+//! ℓ = log₂(σ / texel), trilinear between levels (Bouthors et al. 2008, §7).
+//!
+//! Beside them, a deep optical-depth map: per texel the optical depth from the sun τ_sun(s) at
+//! `planes` + 1 depths s along the beam, linear between them, for the sun's transmittance at
+//! any point (order 1 and the octave baseline).
+
+use super::geometry::{cross, dot, normalize, Vec3};
+use super::march::substeps;
+use super::medium::Medium;
+use nephele_runtime::transport::{FilteredSurface, LitSurface};
+use rayon::prelude::*;
+use std::ops::ControlFlow;
+
+/// Channels per texel: A, A·Z_min, A·Z_max, A·τ, A·N (3).
+const CHANNELS: usize = 7;
+
+/// Orthographic light space: u, v across the beam, s along it (m, 0 on the sun's side of the
+/// bounds).
+#[derive(Clone, Copy, Debug)]
+pub struct LightFrame {
+    origin: Vec3,
+    e1: Vec3,
+    e2: Vec3,
+    /// Unit vector toward the sun.
+    sun: Vec3,
+    u0: f64,
+    v0: f64,
+    /// Texel size at level 0 (m).
+    texel: f64,
+    /// Texels per side at level 0.
+    n: usize,
+    /// s of the origin.
+    s_origin: f64,
+    /// The range of s over the bounds (m).
+    depth: f64,
+}
+
+impl LightFrame {
+    /// The frame of an `n` × `n` map covering the box [lo, hi] seen from `sun` (unit).
+    fn new(lo: Vec3, hi: Vec3, sun: Vec3, n: usize) -> Self {
+        let origin: Vec3 = std::array::from_fn(|k| 0.5 * (lo[k] + hi[k]));
+        let helper = if sun[2].abs() < 0.9 {
+            [0.0, 0.0, 1.0]
+        } else {
+            [1.0, 0.0, 0.0]
+        };
+        let e1 = normalize(cross(helper, sun));
+        let e2 = cross(sun, e1);
+        let (mut ur, mut vr, mut sr) = ([f64::MAX, f64::MIN], [f64::MAX, f64::MIN], [0f64; 2]);
+        sr[0] = f64::MAX;
+        sr[1] = f64::MIN;
+        for c in 0..8 {
+            let p: Vec3 = std::array::from_fn(|k| if c >> k & 1 == 1 { hi[k] } else { lo[k] });
+            let r: Vec3 = std::array::from_fn(|k| p[k] - origin[k]);
+            for (range, x) in [
+                (&mut ur, dot(r, e1)),
+                (&mut vr, dot(r, e2)),
+                (&mut sr, dot(r, sun)),
+            ] {
+                range[0] = range[0].min(x);
+                range[1] = range[1].max(x);
+            }
+        }
+        let size = (ur[1] - ur[0]).max(vr[1] - vr[0]);
+        let texel = size / n as f64;
+        Self {
+            origin,
+            e1,
+            e2,
+            sun,
+            u0: 0.5 * (ur[0] + ur[1]) - 0.5 * size,
+            v0: 0.5 * (vr[0] + vr[1]) - 0.5 * size,
+            texel,
+            n,
+            s_origin: sr[1],
+            depth: sr[1] - sr[0],
+        }
+    }
+
+    /// (u, v, s) of a world point.
+    fn to_light(&self, p: Vec3) -> (f64, f64, f64) {
+        let r: Vec3 = std::array::from_fn(|k| p[k] - self.origin[k]);
+        (
+            dot(r, self.e1),
+            dot(r, self.e2),
+            self.s_origin - dot(r, self.sun),
+        )
+    }
+
+    /// The world point at (u, v, s).
+    fn to_world(&self, u: f64, v: f64, s: f64) -> Vec3 {
+        let a = self.s_origin - s;
+        std::array::from_fn(|k| self.origin[k] + u * self.e1[k] + v * self.e2[k] + a * self.sun[k])
+    }
+
+    /// The centre of texel (i, j) of level 0.
+    fn texel_centre(&self, i: usize, j: usize) -> (f64, f64) {
+        (
+            self.u0 + (i as f64 + 0.5) * self.texel,
+            self.v0 + (j as f64 + 0.5) * self.texel,
+        )
+    }
+}
+
+/// The maps of one frame.
+pub struct LightMaps {
+    frame: LightFrame,
+    /// Mip levels, finest first: (texels per side, [row][column][channel]).
+    levels: Vec<(usize, Vec<f32>)>,
+    /// Optical depth from the sun at `planes` + 1 depths, [row][column][plane].
+    shadow: Vec<f32>,
+    planes: usize,
+}
+
+/// What one light column holds.
+struct Column {
+    texel: [f32; CHANNELS],
+    shadow: Vec<f32>,
+}
+
+/// Settings of the maps.
+#[derive(Clone, Copy, Debug)]
+pub struct MapOptions {
+    /// Texels per side (a power of two).
+    pub resolution: usize,
+    /// Depth planes of the optical-depth map.
+    pub planes: usize,
+    /// Sub-step of the marches through the medium's non-homogeneous parts (m).
+    pub step: f64,
+    /// σ_t of the lit surface (1/m): ρ₀ times the scene's σ_t.
+    pub threshold: f64,
+}
+
+impl LightMaps {
+    /// Casts one light column per texel through `medium` within the box [lo, hi] (rows in
+    /// parallel, the same bits for any thread count).
+    pub fn build(medium: &dyn Medium, (lo, hi): (Vec3, Vec3), sun: Vec3, o: &MapOptions) -> Self {
+        let frame = LightFrame::new(lo, hi, sun, o.resolution);
+        let n = o.resolution;
+        let columns: Vec<Column> = (0..n * n)
+            .into_par_iter()
+            .map(|idx| column(medium, &frame, idx % n, idx / n, o))
+            .collect();
+        let mut level0 = Vec::with_capacity(n * n * CHANNELS);
+        let mut shadow = Vec::with_capacity(n * n * (o.planes + 1));
+        for c in columns {
+            level0.extend_from_slice(&c.texel);
+            shadow.extend_from_slice(&c.shadow);
+        }
+        with_normals(&frame, &mut level0);
+        let mut levels = vec![(n, level0)];
+        while levels.last().map_or(0, |l| l.0) > 1 {
+            let (m, prev) = levels.last().expect("a level");
+            let half = m / 2;
+            let mut next = vec![0f32; half * half * CHANNELS];
+            for j in 0..half {
+                for i in 0..half {
+                    for ch in 0..CHANNELS {
+                        let at = |a: usize, b: usize| {
+                            prev[((2 * j + b) * m + 2 * i + a) * CHANNELS + ch]
+                        };
+                        next[(j * half + i) * CHANNELS + ch] =
+                            0.25 * (at(0, 0) + at(1, 0) + at(0, 1) + at(1, 1));
+                    }
+                }
+            }
+            levels.push((half, next));
+        }
+        Self {
+            frame,
+            levels,
+            shadow,
+            planes: o.planes,
+        }
+    }
+
+    /// The optical depth from the sun to `p` (mfp): bilinear across texels, linear in depth;
+    /// 0 outside the map.
+    pub fn sun_optical_depth(&self, p: Vec3) -> f64 {
+        let f = &self.frame;
+        let (u, v, s) = f.to_light(p);
+        let z = (s / f.depth * self.planes as f64).clamp(0.0, self.planes as f64);
+        let k = (z as usize).min(self.planes.saturating_sub(1));
+        let wz = z - k as f64;
+        let stride = self.planes + 1;
+        let mut tau = 0.0;
+        bilinear(
+            f.n,
+            (u - f.u0) / f.texel - 0.5,
+            (v - f.v0) / f.texel - 0.5,
+            |i, w| {
+                let c = &self.shadow[i * stride..(i + 1) * stride];
+                let at = |m: usize| c[m.min(self.planes)] as f64;
+                tau += w * ((1.0 - wz) * at(k) + wz * at(k + 1));
+            },
+        );
+        tau
+    }
+
+    /// Level-0 texel size (m).
+    pub fn texel(&self) -> f64 {
+        self.frame.texel
+    }
+
+    /// The premultiplied channels at (u, v) and real level ℓ, trilinear.
+    fn sample(&self, u: f64, v: f64, level: f64) -> [f64; CHANNELS] {
+        let top = self.levels.len() - 1;
+        let l = level.clamp(0.0, top as f64);
+        let k = (l as usize).min(top);
+        let w = l - k as f64;
+        let mut out = [0.0; CHANNELS];
+        for (lev, weight) in [(k, 1.0 - w), ((k + 1).min(top), w)] {
+            if weight <= 0.0 {
+                continue;
+            }
+            let (m, data) = &self.levels[lev];
+            let size = self.frame.texel * (self.frame.n / m) as f64;
+            let x = (u - self.frame.u0) / size - 0.5;
+            let y = (v - self.frame.v0) / size - 0.5;
+            bilinear(*m, x, y, |i, b| {
+                for ch in 0..CHANNELS {
+                    out[ch] += weight * b * data[i * CHANNELS + ch] as f64;
+                }
+            });
+        }
+        out
+    }
+}
+
+/// The outward normal of each covered texel from the front depths around it: the lit surface
+/// is the height field P(u, v) = (u, v, Z_min(u, v)) seen from the sun, whose normal is
+/// N ∝ ω_L + ∂Z/∂u e₁ + ∂Z/∂v e₂ (central differences where both neighbours are covered,
+/// one-sided where one is, 0 where none: a silhouette texel tilts toward the covered side).
+/// Depths, not ∇σ_t: the density is clamped to [0, 1] over a boundary layer that may be
+/// thinner than a texel, where its differences say nothing of the surface's slope.
+fn with_normals(f: &LightFrame, level0: &mut [f32]) {
+    let n = f.n;
+    let z = |i: i64, j: i64| -> Option<f64> {
+        if i < 0 || j < 0 || i >= n as i64 || j >= n as i64 {
+            return None;
+        }
+        let t = &level0[(j as usize * n + i as usize) * CHANNELS..];
+        (t[0] > 0.0).then_some(t[1] as f64)
+    };
+    let slope = |a: Option<f64>, c: f64, b: Option<f64>| match (a, b) {
+        (Some(a), Some(b)) => (b - a) / (2.0 * f.texel),
+        (Some(a), None) => (c - a) / f.texel,
+        (None, Some(b)) => (b - c) / f.texel,
+        (None, None) => 0.0,
+    };
+    let mut normals = vec![[0f32; 3]; n * n];
+    for j in 0..n as i64 {
+        for i in 0..n as i64 {
+            let Some(c) = z(i, j) else { continue };
+            let zu = slope(z(i - 1, j), c, z(i + 1, j));
+            let zv = slope(z(i, j - 1), c, z(i, j + 1));
+            let v: Vec3 = std::array::from_fn(|k| f.sun[k] + zu * f.e1[k] + zv * f.e2[k]);
+            normals[j as usize * n + i as usize] = normalize(v).map(|x| x as f32);
+        }
+    }
+    for (t, nrm) in level0.chunks_mut(CHANNELS).zip(normals) {
+        if t[0] > 0.0 {
+            t[4..7].copy_from_slice(&nrm);
+        }
+    }
+}
+
+/// Calls `f(texel index, weight)` for the texels of an m × m map around the continuous texel
+/// coordinates (x, y) (texel centres at integers): bilinear, zero outside the map.
+fn bilinear(m: usize, x: f64, y: f64, mut f: impl FnMut(usize, f64)) {
+    let (fx, fy) = (x.floor(), y.floor());
+    let (wx, wy) = (x - fx, y - fy);
+    for (dj, wj) in [(0, 1.0 - wy), (1, wy)] {
+        for (di, wi) in [(0, 1.0 - wx), (1, wx)] {
+            let (i, j) = (fx as i64 + di, fy as i64 + dj);
+            if i < 0 || j < 0 || i >= m as i64 || j >= m as i64 || wi * wj <= 0.0 {
+                continue;
+            }
+            f(j as usize * m + i as usize, wi * wj);
+        }
+    }
+}
+
+/// The light column through texel (i, j): marched from the sun's side with the medium's
+/// majorants (empty cells skipped, homogeneous ones in closed form).
+fn column(medium: &dyn Medium, f: &LightFrame, i: usize, j: usize, o: &MapOptions) -> Column {
+    let (u, v) = f.texel_centre(i, j);
+    let start = f.to_world(u, v, 0.0);
+    let w = f.sun.map(|x| -x);
+    let mut shadow = vec![0f32; o.planes + 1];
+    let ds = f.depth / o.planes as f64;
+    let (mut tau, mut next_plane) = (0.0f64, 1usize);
+    let (mut entry, mut exit): (Option<(f64, f64)>, Option<(f64, f64)>) = (None, None);
+    let mut prev: Option<(f64, f64)> = None;
+    if let Some(range) = medium.clip(start, w) {
+        let range = (range.0, range.1.min(f.depth));
+        let _: Option<()> = substeps(medium, start, w, range, o.step, |a, b, sigma| {
+            // Where the surface is crossed: between the previous midpoint and this one.
+            let mid = 0.5 * (a + b);
+            let inside = sigma >= o.threshold;
+            let crossing = |(pm, ps): (f64, f64)| {
+                if (ps - sigma).abs() > 0.0 {
+                    pm + (mid - pm) * ((o.threshold - ps) / (sigma - ps)).clamp(0.0, 1.0)
+                } else {
+                    a
+                }
+            };
+            if inside && entry.is_none() {
+                let s = prev.filter(|p| p.1 < o.threshold).map_or(a, crossing);
+                entry = Some((s, tau + sigma * (s - a).max(0.0)));
+            }
+            if inside {
+                exit = Some((b, tau + sigma * (b - a)));
+            } else if let (Some(_), Some(pp)) = (exit, prev) {
+                if pp.1 >= o.threshold {
+                    let s = crossing(pp);
+                    exit = Some((s, tau + sigma * (s - a).max(0.0)));
+                }
+            }
+            while next_plane <= o.planes && next_plane as f64 * ds <= b {
+                let s = next_plane as f64 * ds;
+                shadow[next_plane] = (tau + sigma * (s - a).max(0.0)) as f32;
+                next_plane += 1;
+            }
+            tau += sigma * (b - a);
+            prev = Some((mid, sigma));
+            ControlFlow::Continue(())
+        });
+    }
+    for s in &mut shadow[next_plane.min(o.planes + 1)..] {
+        *s = tau as f32;
+    }
+    let mut texel = [0f32; CHANNELS];
+    if let (Some((s0, t0)), Some((s1, t1))) = (entry, exit) {
+        // The normal comes from the neighbours' depths (`with_normals`).
+        texel[..4].copy_from_slice(&[1.0, s0 as f32, s1.max(s0) as f32, (t1 - t0).max(0.0) as f32]);
+    }
+    Column { texel, shadow }
+}
+
+impl LitSurface for LightMaps {
+    fn filtered(&self, at: [f32; 3], sigma: f32) -> Option<FilteredSurface> {
+        let f = &self.frame;
+        let (u, v, _) = f.to_light(at.map(f64::from));
+        let level = (sigma as f64 / f.texel).max(1.0).log2();
+        let x = self.sample(u, v, level);
+        if x[0] < 1e-4 {
+            return None;
+        }
+        let (z0, z1, tau) = (x[1] / x[0], x[2] / x[0], x[3] / x[0]);
+        let nl = (x[4] * x[4] + x[5] * x[5] + x[6] * x[6]).sqrt();
+        let normal = if nl > 1e-9 {
+            [x[4] / nl, x[5] / nl, x[6] / nl]
+        } else {
+            f.sun
+        };
+        Some(FilteredSurface {
+            entry: f.to_world(u, v, z0).map(|x| x as f32),
+            normal: normal.map(|x| x as f32),
+            length: (z1 - z0).max(0.0) as f32,
+            optical_length: tau as f32,
+        })
+    }
+
+    fn initial_scale(&self) -> f32 {
+        (self.frame.texel * self.frame.n as f64) as f32
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::medium::{Cloud, Ellipsoid};
+
+    /// A homogeneous ball seen from the sun: coverage inside its disc, the chord 2√(r² − q²),
+    /// the normal radial, the optical depth σ_t × the path inside.
+    #[test]
+    fn a_ball_maps_to_its_chords() {
+        let r = 300.0;
+        let ball = Cloud::new(
+            vec![Ellipsoid {
+                center: [0.0, 0.0, 500.0],
+                radii: [r; 3],
+            }],
+            2.0,
+            (0.0, 0.01, 1),
+            0.05,
+            1,
+        );
+        let sun = normalize([0.3, -0.4, 0.8]);
+        let o = MapOptions {
+            resolution: 64,
+            planes: 128,
+            step: 1.0,
+            threshold: 0.025,
+        };
+        let maps = LightMaps::build(&ball, ball_bounds(&ball), sun, &o);
+        let c = [0.0, 0.0, 500.0];
+        for q in [0.0, 100.0, 200.0, 280.0] {
+            let side = normalize(cross(sun, [0.0, 0.0, 1.0]));
+            let at: Vec3 = std::array::from_fn(|k| c[k] + q * side[k]);
+            let s = maps
+                .filtered(at.map(|x| x as f32), 0.0)
+                .expect("inside the disc");
+            // The iso-surface σ_t = σ/2 lies 1 m inside the radius (edge 2 m).
+            let chord = 2.0 * ((r - 1.0f64).powi(2) - q * q).sqrt();
+            assert!(
+                (s.length as f64 - chord).abs() < 0.03 * chord + 2.0 * maps.texel(),
+                "q {q}: {} vs {chord}",
+                s.length
+            );
+            let opt = s.optical_length as f64 / 0.05;
+            assert!(
+                (opt - chord).abs() < 0.03 * chord + 2.0 * maps.texel(),
+                "τ {q}"
+            );
+            let radial = normalize(std::array::from_fn(|k| s.entry[k] as f64 - c[k]));
+            let n = s.normal.map(f64::from);
+            assert!(
+                dot(radial, n) > 0.98,
+                "normal at q {q}: {n:?} vs {radial:?}"
+            );
+            // The sun's optical depth just past the entry and at the centre.
+            let centre_tau = maps.sun_optical_depth(c);
+            assert!(
+                (centre_tau - 0.05 * (r - 1.0)).abs() < 0.5,
+                "τ_sun(centre) {centre_tau}"
+            );
+        }
+        let far: Vec3 = [5000.0, 5000.0, 500.0];
+        assert_eq!(maps.sun_optical_depth(far), 0.0);
+    }
+
+    fn ball_bounds(b: &Cloud) -> (Vec3, Vec3) {
+        b.bounds().expect("a bounded cloud")
+    }
+}
