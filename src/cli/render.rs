@@ -83,6 +83,10 @@ pub struct FastArgs {
     /// Collector search: the surface unfiltered, at its finest level (an ablation).
     #[arg(long)]
     pub no_filter: bool,
+    /// An ablation: multiply the local slabs' optical thickness by this factor (1: the
+    /// method as published).
+    #[arg(long, default_value_t = 1.0, value_name = "F")]
+    pub thickness_scale: f64,
     /// Octaves: N, a, b, c of L ≈ Σ_{i<N} bⁱ σ_s p(θ; cⁱ g) E Tr_sun(aⁱ σ_t).
     #[arg(long, value_names = ["N", "A", "B", "C"], num_args = 4)]
     pub octaves: Option<Vec<f64>>,
@@ -121,6 +125,7 @@ impl FastArgs {
             },
             octaves,
             allow_mismatch: self.allow_table_mismatch,
+            thickness_scale: self.thickness_scale,
         };
         o.validate()?;
         Ok(o)

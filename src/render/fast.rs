@@ -107,6 +107,8 @@ pub struct FastOptions {
     pub octaves: Octaves,
     /// Use the tables even where the scene's phase function or albedo differs (a warning).
     pub allow_mismatch: bool,
+    /// An ablation: the local slabs' thickness times this factor (1: the method as is).
+    pub thickness_scale: f64,
 }
 
 impl Default for FastOptions {
@@ -121,6 +123,7 @@ impl Default for FastOptions {
             search: SearchOptions::default(),
             octaves: Octaves::default(),
             allow_mismatch: false,
+            thickness_scale: 1.0,
         }
     }
 }
@@ -181,6 +184,9 @@ pub enum SunSide {
     },
     /// Light-space maps of a bounded medium.
     Maps(Box<LightMaps>),
+    /// Another side whose chords (geometric and optical alike, so κ̄ and the depths stay)
+    /// are scaled: the thickness ablation.
+    Scaled(Box<SunSide>, f32),
 }
 
 impl SunSide {
@@ -189,6 +195,7 @@ impl SunSide {
         match self {
             SunSide::Plane { h, sigma_t, sun } => sigma_t * (h - p[2]).clamp(0.0, *h) / sun[2],
             SunSide::Maps(m) => m.sun_optical_depth(p),
+            SunSide::Scaled(side, _) => side.optical_depth(p),
         }
     }
 }
@@ -207,6 +214,11 @@ impl LitSurface for SunSide {
                 })
             }
             SunSide::Maps(m) => m.filtered(at, sigma),
+            SunSide::Scaled(side, k) => side.filtered(at, sigma).map(|mut s| {
+                s.length *= k;
+                s.optical_length *= k;
+                s
+            }),
         }
     }
 
@@ -214,6 +226,7 @@ impl LitSurface for SunSide {
         match self {
             SunSide::Plane { h, .. } => 10.0 * *h as f32,
             SunSide::Maps(m) => m.initial_scale(),
+            SunSide::Scaled(side, _) => side.initial_scale(),
         }
     }
 }
@@ -348,6 +361,42 @@ pub fn render_fast(
     Ok(r)
 }
 
+/// The sun side of `scene` (default maps) and, for every `stride`-th pixel of its camera whose
+/// ray meets the cloud, the surface point p and the view ω_V (f32, as the collector search takes
+/// them): what a benchmark of the search runs on.
+pub fn surface_points(
+    scene: &Scene,
+    stride: usize,
+) -> Result<(SunSide, Vec<([f32; 3], [f32; 3])>)> {
+    let medium = scene.build_medium()?;
+    let opts = FastOptions::default();
+    let step = 0.5 / scene.sigma_t;
+    let threshold = opts.surface_density * scene.sigma_t;
+    let side = sun_side(scene, medium.as_ref(), &opts, step, threshold)?;
+    let cam = Pinhole::new(&scene.camera);
+    let tables = nephele_runtime::embedded::mie_10um();
+    let frame = Frame {
+        scene,
+        medium: medium.as_ref(),
+        side,
+        tables: &tables,
+        sky: None,
+        opts,
+        step,
+        threshold,
+        phases: Vec::new(),
+        g: 0.0,
+    };
+    let mut points = Vec::new();
+    for px in (0..cam.width * cam.height).step_by(stride.max(1)) {
+        let w = cam.direction(px % cam.width, px / cam.width, 0.5, 0.5);
+        if let Some(p) = frame.march(cam.position, w).surface {
+            points.push((p.map(|x| x as f32), w.map(|x| -x as f32)));
+        }
+    }
+    Ok((frame.side, points))
+}
+
 /// The tables are for one phase function and ϖ = 1: the scene's must match (p within 5 % at
 /// every degree, the forward peak included) unless the caller allows a mismatch.
 fn check_tables(
@@ -435,10 +484,15 @@ fn sun_side(
             sun[2] > 1e-3,
             "the sun must be above the slab's lit face (sun.direction z > 0)"
         );
-        return Ok(SunSide::Plane {
+        let side = SunSide::Plane {
             h: thickness,
             sigma_t: scene.sigma_t,
             sun,
+        };
+        return Ok(if opts.thickness_scale == 1.0 {
+            side
+        } else {
+            SunSide::Scaled(Box::new(side), opts.thickness_scale as f32)
         });
     }
     let Some(bounds) = medium.bounds() else {
@@ -450,9 +504,12 @@ fn sun_side(
         step,
         threshold,
     };
-    Ok(SunSide::Maps(Box::new(LightMaps::build(
-        medium, bounds, sun, &o,
-    ))))
+    let side = SunSide::Maps(Box::new(LightMaps::build(medium, bounds, sun, &o)));
+    Ok(if opts.thickness_scale == 1.0 {
+        side
+    } else {
+        SunSide::Scaled(Box::new(side), opts.thickness_scale as f32)
+    })
 }
 
 impl Frame<'_> {
