@@ -128,8 +128,8 @@ def write_tables(study, path):
              "octaves": "octaves (defaults)",
              "octaves_fitted": "octaves (fitted)", "single": "single"}
     lines = []
-    lines.append("| scene | method | order 1 bias | orders ≥ 2 bias | orders ≥ 2 rel. RMSE (ref. noise) | beauty rel. RMSE | FLIP | PSNR dB | s/frame | reads/search |")
-    lines.append("|---|---|---|---|---|---|---|---|---|---|")
+    lines.append("| scene | method | order 1 bias | orders ≥ 2 bias | orders ≥ 2 rel. RMSE (ref. noise) | beauty rel. RMSE | FLIP | PSNR dB | s/frame | path tracer s to the same beauty RMSE | reads/search |")
+    lines.append("|---|---|---|---|---|---|---|---|---|---|---|")
     for scene, s in study["scenes"].items():
         rep = s["report"]
         for c, key in zip(rep["candidates"], names):
@@ -139,11 +139,16 @@ def write_tables(study, path):
                 gs = s["details"][key]["groups"]
                 n = sum(g["searches"] - g["empty"] for g in gs)
                 reads = f"{sum(g['reads'] for g in gs) / max(n, 1):.2f}"
+            # The path tracer's pixel noise falls as 1/sqrt(time): it reaches the candidate's
+            # corrected beauty RMSE E after t_ref (N/E)^2.
+            same = "—"
+            if b and b["rel_rmse_corrected"] > 0:
+                same = f"{rep['reference_seconds'] * (b['reference_noise'] / b['rel_rmse_corrected']) ** 2:.1f}"
             lines.append(
                 f"| {scene} ({rep['reference_spp']} spp) | {names[key]} | {pct(o1 and o1['bias'])} % | "
                 f"{pct(ms and ms['bias'])} % | {pct(ms and ms['rel_rmse_corrected'], False)} % "
                 f"({pct(ms and ms['reference_noise'], False)} %) | {pct(b and b['rel_rmse_corrected'], False)} % | "
-                f"{c['flip_mean']:.3f} | {c['psnr_db']:.1f} | {c['seconds']:.2f} | {reads} |")
+                f"{c['flip_mean']:.3f} | {c['psnr_db']:.1f} | {c['seconds']:.2f} | {same} | {reads} |")
     lines.append("")
     lines.append("Per group, collector, bias % (corrected relative RMSE %):")
     lines.append("")

@@ -914,6 +914,7 @@ fn render_writes_its_outputs_and_refuses_bad_scenes() {
             "beauty.npy",
             "beauty.png",
             "groups.npy",
+            "halves.npy",
             "opacity.npy",
             "render.json",
             "transmittance.npy",

@@ -21,8 +21,10 @@ use clap::{Parser, Subcommand};
 ///
 /// Without a subcommand, `nephele` runs the main job on built-in configs (~4 min on 2 cores):
 /// Mie tables and phase-model fits (→ outputs/mie, outputs/fit), quick slab tables of 10 µm
-/// droplets (→ outputs/slab-quick), their compression (→ outputs/transport/quick) and the
-/// path-traced default cloud (→ outputs/render/cloud), all relative to the current directory.
+/// droplets (→ outputs/slab-quick), their compression (→ outputs/transport/quick), the
+/// path-traced default cloud (→ outputs/render/cloud) and the same cloud by the collector
+/// renderer, compared (→ outputs/render/cloud-collector, outputs/compare/cloud), all relative
+/// to the current directory.
 #[derive(Parser, Debug)]
 #[command(version, about)]
 pub struct Cli {

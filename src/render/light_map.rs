@@ -14,8 +14,9 @@
 //! ℓ = log₂(σ / texel), trilinear between levels (Bouthors et al. 2008, §7).
 //!
 //! Beside them, a deep optical-depth map: per texel the optical depth from the sun τ_sun(s) at
-//! `planes` + 1 depths s along the beam, linear between them, for the sun's transmittance at
-//! any point (order 1 and the octave baseline).
+//! `planes` + 1 depths s along the beam, from where its column first meets the medium and
+//! crowded there (quadratic spacing: order 1 comes from the first mean free paths), linear
+//! between them, for the sun's transmittance at any point (order 1 and the octave baseline).
 
 use super::geometry::{cross, dot, normalize, Vec3};
 use super::march::substeps;
@@ -120,7 +121,9 @@ pub struct LightMaps {
     frame: LightFrame,
     /// Mip levels, finest first: (texels per side, [row][column][channel]).
     levels: Vec<(usize, Vec<f32>)>,
-    /// Optical depth from the sun at `planes` + 1 depths, [row][column][plane].
+    /// Per texel: the depth s₀ where its column first meets the medium, then the optical depth
+    /// from the sun at the `planes` + 1 depths s₀ + (s_max − s₀)(k/planes)², [row][column][1 +
+    /// plane].
     shadow: Vec<f32>,
     planes: usize,
 }
@@ -155,7 +158,7 @@ impl LightMaps {
             .map(|idx| column(medium, &frame, idx % n, idx / n, o))
             .collect();
         let mut level0 = Vec::with_capacity(n * n * CHANNELS);
-        let mut shadow = Vec::with_capacity(n * n * (o.planes + 1));
+        let mut shadow = Vec::with_capacity(n * n * (o.planes + 2));
         for c in columns {
             level0.extend_from_slice(&c.texel);
             shadow.extend_from_slice(&c.shadow);
@@ -187,26 +190,42 @@ impl LightMaps {
         }
     }
 
-    /// The optical depth from the sun to `p` (mfp): bilinear across texels, linear in depth;
-    /// 0 outside the map.
+    /// The optical depth from the sun to `p` (mfp): bilinear across texels, linear in depth
+    /// between each texel's own planes; 0 outside the map. The texels' profiles are aligned on
+    /// where their columns meet the medium before they are blended (each is read at its own
+    /// s₀ plus p's depth below the blended s₀): a tilted surface then interpolates exactly,
+    /// where blending τ at one depth would mix a column still above the surface with one
+    /// already deep inside it.
     pub fn sun_optical_depth(&self, p: Vec3) -> f64 {
         let f = &self.frame;
         let (u, v, s) = f.to_light(p);
-        let z = (s / f.depth * self.planes as f64).clamp(0.0, self.planes as f64);
-        let k = (z as usize).min(self.planes.saturating_sub(1));
-        let wz = z - k as f64;
-        let stride = self.planes + 1;
+        let stride = self.planes + 2;
+        let (x, y) = ((u - f.u0) / f.texel - 0.5, (v - f.v0) / f.texel - 0.5);
+        let column = |i: usize| &self.shadow[i * stride..(i + 1) * stride];
+        let (mut first, mut weight) = (0.0, 0.0);
+        bilinear(f.n, x, y, |i, w| {
+            let c = column(i);
+            if (c[0] as f64) < f.depth {
+                first += w * c[0] as f64;
+                weight += w;
+            }
+        });
+        if weight <= 0.0 {
+            return 0.0;
+        }
+        let below = s - first / weight;
         let mut tau = 0.0;
-        bilinear(
-            f.n,
-            (u - f.u0) / f.texel - 0.5,
-            (v - f.v0) / f.texel - 0.5,
-            |i, w| {
-                let c = &self.shadow[i * stride..(i + 1) * stride];
-                let at = |m: usize| c[m.min(self.planes)] as f64;
-                tau += w * ((1.0 - wz) * at(k) + wz * at(k + 1));
-            },
-        );
+        bilinear(f.n, x, y, |i, w| {
+            let c = column(i);
+            let s0 = c[0] as f64;
+            if s0 >= f.depth || below <= 0.0 {
+                return;
+            }
+            let z = plane_index(s0 + below, s0, f.depth, self.planes);
+            let k = (z as usize).min(self.planes - 1);
+            let wz = (z - k as f64).min(1.0);
+            tau += w * ((1.0 - wz) * c[1 + k] as f64 + wz * c[2 + k] as f64);
+        });
         tau
     }
 
@@ -294,14 +313,27 @@ fn bilinear(m: usize, x: f64, y: f64, mut f: impl FnMut(usize, f64)) {
     }
 }
 
+/// The real plane index of depth s in a column whose medium starts at `first`: planes at
+/// first + (depth − first)(k/planes)², crowded where the sun's optical depth changes fastest
+/// (near the lit surface, where order 1 comes from).
+fn plane_index(s: f64, first: f64, depth: f64, planes: usize) -> f64 {
+    ((s - first) / (depth - first).max(1e-9))
+        .clamp(0.0, 1.0)
+        .sqrt()
+        * planes as f64
+}
+
 /// The light column through texel (i, j): marched from the sun's side with the medium's
 /// majorants (empty cells skipped, homogeneous ones in closed form).
 fn column(medium: &dyn Medium, f: &LightFrame, i: usize, j: usize, o: &MapOptions) -> Column {
     let (u, v) = f.texel_centre(i, j);
     let start = f.to_world(u, v, 0.0);
     let w = f.sun.map(|x| -x);
-    let mut shadow = vec![0f32; o.planes + 1];
-    let ds = f.depth / o.planes as f64;
+    let mut shadow = vec![0f32; o.planes + 2];
+    shadow[0] = f.depth as f32;
+    let mut first: Option<f64> = None;
+    let plane_at =
+        |first: f64, k: usize| first + (f.depth - first) * (k as f64 / o.planes as f64).powi(2);
     let (mut tau, mut next_plane) = (0.0f64, 1usize);
     let (mut entry, mut exit): (Option<(f64, f64)>, Option<(f64, f64)>) = (None, None);
     let mut prev: Option<(f64, f64)> = None;
@@ -330,9 +362,10 @@ fn column(medium: &dyn Medium, f: &LightFrame, i: usize, j: usize, o: &MapOption
                     exit = Some((s, tau + sigma * (s - a).max(0.0)));
                 }
             }
-            while next_plane <= o.planes && next_plane as f64 * ds <= b {
-                let s = next_plane as f64 * ds;
-                shadow[next_plane] = (tau + sigma * (s - a).max(0.0)) as f32;
+            let s0 = *first.get_or_insert(a);
+            while next_plane <= o.planes && plane_at(s0, next_plane) <= b {
+                let s = plane_at(s0, next_plane);
+                shadow[1 + next_plane] = (tau + sigma * (s - a).max(0.0)) as f32;
                 next_plane += 1;
             }
             tau += sigma * (b - a);
@@ -340,7 +373,10 @@ fn column(medium: &dyn Medium, f: &LightFrame, i: usize, j: usize, o: &MapOption
             ControlFlow::Continue(())
         });
     }
-    for s in &mut shadow[next_plane.min(o.planes + 1)..] {
+    if let Some(s0) = first {
+        shadow[0] = s0 as f32;
+    }
+    for s in &mut shadow[(1 + next_plane).min(o.planes + 2)..] {
         *s = tau as f32;
     }
     let mut texel = [0f32; CHANNELS];

@@ -1,0 +1,44 @@
+#!/usr/bin/env python3
+"""The README's headline picture from a `nephele compare` directory: the reference and its
+candidates side by side (tone-mapped with the reference's exposure), each titled with its
+method, seconds a frame, mean FLIP and the relative RMSE of the beauty image (corrected for
+the reference's noise).
+
+Usage: scripts/figure_collector.py COMPARE_DIR OUT.png
+"""
+import json
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+from matplotlib import image as mpimg
+
+
+def main():
+    if len(sys.argv) != 3:
+        sys.exit(__doc__)
+    d, out = sys.argv[1], sys.argv[2]
+    rep = json.load(open(os.path.join(d, "report.json")))
+    images = [(mpimg.imread(os.path.join(d, "reference.png")),
+               f"path tracer\n{rep['reference_spp']} spp, {rep['reference_seconds']:.0f} s")]
+    for k, c in enumerate(rep["candidates"]):
+        beauty = next(q for q in c["quantities"] if q["quantity"] == "beauty")["regions"]["opaque"]
+        flip = c.get("flip_mean")
+        name = os.path.basename(os.path.normpath(c["dir"])).replace("_", " ")
+        images.append((mpimg.imread(os.path.join(d, f"candidate{k}.png")),
+                       f"{name}\n{c['seconds']:.2f} s, FLIP {flip:.3f}, "
+                       f"RMSE {100 * beauty['rel_rmse_corrected']:.0f} %"))
+    fig, axes = plt.subplots(1, len(images), figsize=(3.3 * len(images), 2.9), dpi=150)
+    for ax, (img, title) in zip(axes, images):
+        ax.imshow(img)
+        ax.set_title(title, fontsize=9)
+        ax.axis("off")
+    fig.tight_layout()
+    fig.savefig(out)
+
+
+if __name__ == "__main__":
+    main()
