@@ -18,8 +18,8 @@ fn bench(c: &mut Criterion) {
     let mut group = c.benchmark_group("collector_search");
     for g in 0..tables.groups() {
         let (mut reads, mut found) = (0u64, 0u64);
-        for &(p, v) in &points {
-            if let Some(f) = find_collector(&tables, g, &side, p, v, sun, &opts) {
+        for v in &points {
+            if let Some(f) = find_collector(&tables, g, &side, v, sun, &opts) {
                 reads += f.reads as u64;
                 found += 1;
             }
@@ -35,8 +35,8 @@ fn bench(c: &mut Criterion) {
             |b| {
                 b.iter(|| {
                     let mut t = 0.0f32;
-                    for &(p, v) in &points {
-                        if let Some(f) = find_collector(&tables, g, &side, p, v, sun, &opts) {
+                    for v in &points {
+                        if let Some(f) = find_collector(&tables, g, &side, v, sun, &opts) {
                             t += f.transport.t;
                         }
                     }

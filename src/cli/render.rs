@@ -223,13 +223,14 @@ pub fn run(args: RenderArgs) -> Result<()> {
                     continue;
                 }
                 println!(
-                    "  orders {:>2}+: {:.2} reads per search, {:.1} % converged, clamped t {:.1} % μ_L {:.1} % d {:.1} %, no light {:.1} % (dark {:.2} %)",
+                    "  orders {:>2}+: {:.2} reads per search, {:.1} % converged, clamped t {:.1} % μ_L {:.1} % d {:.1} %, d held by the view {:.1} %, no light {:.1} % (dark {:.2} %)",
                     g["first_order"],
                     g["reads"].as_f64().unwrap_or(0.0) / (n - g["empty"].as_f64().unwrap_or(0.0)).max(1.0),
                     100.0 * g["converged"].as_f64().unwrap_or(0.0) / n,
                     100.0 * g["clamped_thickness"].as_f64().unwrap_or(0.0) / n,
                     100.0 * g["clamped_mu_l"].as_f64().unwrap_or(0.0) / n,
                     100.0 * g["clamped_depth"].as_f64().unwrap_or(0.0) / n,
+                    100.0 * g["held_by_view"].as_f64().unwrap_or(0.0) / n,
                     100.0 * g["empty"].as_f64().unwrap_or(0.0) / n,
                     100.0 * g["dark"].as_f64().unwrap_or(0.0) / n,
                 );

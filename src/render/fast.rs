@@ -34,7 +34,7 @@ use crate::phase::Phase;
 use anyhow::{bail, ensure, Result};
 use nephele_runtime::transport::{
     find_collector, local_slab, FilteredSurface, LitSurface, SearchOptions, SlabPoint,
-    TransportTables,
+    TransportTables, Viewpoint,
 };
 use rayon::prelude::*;
 use serde::Serialize;
@@ -253,6 +253,8 @@ pub struct GroupStats {
     pub clamped_mu_l: u64,
     /// See `clamped_thickness`.
     pub clamped_depth: u64,
+    /// Searches whose last read moved d so that the slab holds the view ray's medium beyond p.
+    pub held_by_view: u64,
 }
 
 /// What one view ray gathers.
@@ -264,6 +266,10 @@ struct ViewRay {
     integrals: [f64; MAX_OCTAVES],
     /// Where the ray meets the lit surface (or its densest sub-step).
     surface: Option<Vec3>,
+    /// The optical depth of the ray beyond the surface point (mfp), and whether that is all of
+    /// it (the ray left the medium) or a lower bound (the march stopped where T_v < 10⁻⁴).
+    behind: f64,
+    behind_exact: bool,
 }
 
 /// Region codes of `regions.npy`.
@@ -362,12 +368,9 @@ pub fn render_fast(
 }
 
 /// The sun side of `scene` (default maps) and, for every `stride`-th pixel of its camera whose
-/// ray meets the cloud, the surface point p and the view ω_V (f32, as the collector search takes
-/// them): what a benchmark of the search runs on.
-pub fn surface_points(
-    scene: &Scene,
-    stride: usize,
-) -> Result<(SunSide, Vec<([f32; 3], [f32; 3])>)> {
+/// ray meets the cloud, the viewpoint the collector search takes: what a benchmark of the
+/// search runs on.
+pub fn surface_points(scene: &Scene, stride: usize) -> Result<(SunSide, Vec<Viewpoint>)> {
     let medium = scene.build_medium()?;
     let opts = FastOptions::default();
     let step = 0.5 / scene.sigma_t;
@@ -390,8 +393,18 @@ pub fn surface_points(
     let mut points = Vec::new();
     for px in (0..cam.width * cam.height).step_by(stride.max(1)) {
         let w = cam.direction(px % cam.width, px / cam.width, 0.5, 0.5);
-        if let Some(p) = frame.march(cam.position, w).surface {
-            points.push((p.map(|x| x as f32), w.map(|x| -x as f32)));
+        let v = frame.march(cam.position, w);
+        if let Some(p) = v.surface {
+            points.push(Viewpoint {
+                position: p.map(|x| x as f32),
+                view: w.map(|x| -x as f32),
+                behind_min: v.behind as f32,
+                behind_max: if v.behind_exact {
+                    v.behind as f32
+                } else {
+                    f32::INFINITY
+                },
+            });
         }
     }
     Ok((frame.side, points))
@@ -606,23 +619,26 @@ impl Frame<'_> {
         px.sun_tau = self.side.optical_depth(p);
         let view = w.map(|x| -x as f32);
         let (p32, sun32) = (p.map(|x| x as f32), sun.map(|x| x as f32));
+        let vp = Viewpoint {
+            position: p32,
+            view,
+            behind_min: v.behind as f32,
+            behind_max: if v.behind_exact {
+                v.behind as f32
+            } else {
+                f32::INFINITY
+            },
+        };
         match self.opts.method {
             Method::Collector => {
                 let mut first_slab = None;
                 for (g, st) in stats.iter_mut().enumerate() {
                     st.searches += 1;
-                    let found = find_collector(
-                        self.tables,
-                        g,
-                        &self.side,
-                        p32,
-                        view,
-                        sun32,
-                        &self.opts.search,
-                    );
+                    let found =
+                        find_collector(self.tables, g, &self.side, &vp, sun32, &self.opts.search);
                     let Some(f) = found else {
                         st.empty += 1;
-                        match self.coarse_slab(p32, view, sun32) {
+                        match self.coarse_slab(&vp, sun32) {
                             Some(at) => {
                                 let t = self.tables.evaluate(g, &at).t as f64;
                                 px.sun[g + 1] = [alpha * t; 3];
@@ -630,8 +646,16 @@ impl Frame<'_> {
                                     px.sky[g + 1] = alpha * sky.radiance(g + 1, &at);
                                 }
                                 st.dark += (t == 0.0) as u64;
+                                if std::env::var("NEPHELE_DEBUG").is_ok() && g == 0 {
+                                    eprintln!("dark: {at:?} T {t}");
+                                }
                             }
-                            None => st.dark += 1,
+                            None => {
+                                st.dark += 1;
+                                if std::env::var("NEPHELE_DEBUG").is_ok() && g == 0 {
+                                    eprintln!("no surface at p {p:?}");
+                                }
+                            }
                         }
                         continue;
                     };
@@ -640,6 +664,7 @@ impl Frame<'_> {
                     st.clamped_thickness += f.clamps.thickness as u64;
                     st.clamped_mu_l += f.clamps.mu_l as u64;
                     st.clamped_depth += f.clamps.depth as u64;
+                    st.held_by_view += f.clamps.view as u64;
                     px.sun[g + 1] = [alpha * f.transport.t as f64; 3];
                     if let Some(sky) = &self.sky {
                         px.sky[g + 1] = alpha * sky.radiance(g + 1, &f.at);
@@ -654,7 +679,7 @@ impl Frame<'_> {
                 if self.opts.method == Method::Octaves {
                     px.sun[1] = self.octaves(cos, &v.integrals);
                 }
-                if let (Some(sky), Some(at)) = (&self.sky, self.coarse_slab(p32, view, sun32)) {
+                if let (Some(sky), Some(at)) = (&self.sky, self.coarse_slab(&vp, sun32)) {
                     // One slab for every group: the surface filtered at the cloud's size.
                     for g in 0..GROUP_FIRST.len() {
                         px.sky[g] = alpha * sky.radiance(g, &at);
@@ -667,9 +692,9 @@ impl Frame<'_> {
     }
 
     /// The slab of p under the surface filtered at the cloud's size (no search).
-    fn coarse_slab(&self, p: [f32; 3], view: [f32; 3], sun: [f32; 3]) -> Option<SlabPoint<f32>> {
-        let s = self.side.filtered(p, self.side.initial_scale())?;
-        Some(local_slab(self.tables, &s, p, view, sun).at)
+    fn coarse_slab(&self, v: &Viewpoint, sun: [f32; 3]) -> Option<SlabPoint<f32>> {
+        let s = self.side.filtered(v.position, self.side.initial_scale())?;
+        Some(local_slab(self.tables, &s, v, sun).at)
     }
 
     /// Σ_{1 ≤ i < N} bⁱ ϖ p_HG(θ; cⁱ g) I_{aⁱ} (per unit E_sun; octave 0 is order 1).
@@ -704,6 +729,9 @@ impl Frame<'_> {
         let at = |t: f64| -> Vec3 { std::array::from_fn(|k| o[k] + t * w[k]) };
         let mut tau_a: Option<(f64, f64)> = None;
         let (mut prev, mut densest) = (None::<(f64, f64)>, (0.0f64, 0.0f64));
+        // The view ray's optical depth so far, and where the surface point was found.
+        let (mut tau_v, mut tau_at_p, mut stopped) = (0.0f64, None::<f64>, false);
+        let mut tau_at_densest = 0.0;
         let _: Option<()> = substeps(self.medium, o, w, range, self.step, |a, b, sigma| {
             let h = b - a;
             let ta = match tau_a {
@@ -733,13 +761,17 @@ impl Frame<'_> {
                         _ => a,
                     };
                     v.surface = Some(at(s));
+                    tau_at_p = Some(tau_v + sigma * (s - a).max(0.0));
                 } else if sigma > densest.1 {
                     densest = (mid, sigma);
+                    tau_at_densest = tau_v + 0.5 * sigma * h;
                 }
             }
             prev = Some((mid, sigma));
+            tau_v += sigma * h;
             v.transmittance *= (-sigma * h).exp();
             if v.transmittance < 1e-4 {
+                stopped = true;
                 ControlFlow::Break(())
             } else {
                 ControlFlow::Continue(())
@@ -747,7 +779,10 @@ impl Frame<'_> {
         });
         if v.surface.is_none() && densest.1 > 0.0 {
             v.surface = Some(at(densest.0));
+            tau_at_p = Some(tau_at_densest);
         }
+        v.behind = (tau_v - tau_at_p.unwrap_or(tau_v)).max(0.0);
+        v.behind_exact = !stopped;
         v
     }
 }
@@ -788,6 +823,7 @@ impl GroupStats {
         self.clamped_thickness += o.clamped_thickness;
         self.clamped_mu_l += o.clamped_mu_l;
         self.clamped_depth += o.clamped_depth;
+        self.held_by_view += o.held_by_view;
     }
 }
 

@@ -26,7 +26,7 @@ mod search;
 pub use geometry::SlabPoint;
 pub use search::{
     find_collector, local_slab, Clamps, Collector, FilteredSurface, LitSurface, LocalSlab,
-    SearchOptions,
+    SearchOptions, Viewpoint,
 };
 pub use single::{scattering_cosine, single_scattering, PhaseValue};
 pub use tables::{Domain, Transport, TransportTables};

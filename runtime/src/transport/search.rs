@@ -80,6 +80,33 @@ impl Default for SearchOptions {
     }
 }
 
+/// Where the light is seen, along which direction, and how much medium the view ray holds
+/// beyond that point (what the renderer's march knows).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Viewpoint {
+    /// p (m, world).
+    pub position: Vec3<f32>,
+    /// ω_V: the direction the light travels toward the eye (unit).
+    pub view: Vec3<f32>,
+    /// The optical depth (mfp) the view ray crosses beyond p, away from the eye, is at least
+    /// this…
+    pub behind_min: f32,
+    /// …and at most this (infinite when unknown).
+    pub behind_max: f32,
+}
+
+impl Viewpoint {
+    /// p seen along `view`, nothing known of the medium beyond it.
+    pub fn new(position: Vec3<f32>, view: Vec3<f32>) -> Self {
+        Self {
+            position,
+            view,
+            behind_min: 0.0,
+            behind_max: f32::INFINITY,
+        }
+    }
+}
+
 /// Which slab parameters of the last read were outside the tables' domain and held at its end.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Clamps {
@@ -89,12 +116,15 @@ pub struct Clamps {
     pub mu_l: bool,
     /// p above the filtered lit face (d < 0) or below its far face (d > t).
     pub depth: bool,
+    /// d moved so that the slab holds the view ray's medium beyond p (a side wall seen from
+    /// the side: the far face of the light's slab, with the view going into it).
+    pub view: bool,
 }
 
 impl Clamps {
     /// Whether any parameter was clamped.
     pub fn any(&self) -> bool {
-        self.thickness || self.mu_l || self.depth
+        self.thickness || self.mu_l || self.depth || self.view
     }
 }
 
@@ -162,18 +192,22 @@ fn angle_of(cos: f32, sin: f32) -> f32 {
     }
 }
 
-/// The slab tangent to `s` that holds `p`, seen along `view` (the light's travel toward the
-/// eye, unit) with the sun toward `sun` (unit): μ_L = n̄·ω_L, t = τ_chord μ_L (the chord crosses
-/// the slab obliquely), d = κ̄ (entry − p)·n̄, μ_V = ω_V·n̄, ψ_V the angle between the horizontal
-/// parts of the beam's travel (−ω_L) and of ω_V. t and μ_L are held within `tables`' domain,
-/// d within [0, t] (each flagged).
+/// The slab tangent to `s` that holds the viewpoint `v` with the sun toward `sun` (unit):
+/// μ_L = n̄·ω_L, t = τ_chord μ_L (the chord crosses the slab obliquely), d = κ̄ (entry − p)·n̄,
+/// μ_V = ω_V·n̄, ψ_V the angle between the horizontal parts of the beam's travel (−ω_L) and of
+/// ω_V. t and μ_L are held within `tables`' domain, d within [0, t] (each flagged). Then d is
+/// held where the slab's path beyond p along −ω_V — (t − d)/μ_V for μ_V > 0, d/|μ_V| for
+/// μ_V < 0 — lies within the view ray's own [behind_min, behind_max] (flagged `view`): the
+/// radiance at p toward the eye is scattered by the medium behind p, and a slab fitted to the
+/// light alone may have none there (a cloud's side seen from the side: p on the light's far
+/// face, the view going up into the slab) or far more than the cloud (a thin wisp).
 pub fn local_slab(
     tables: &TransportTables,
     s: &FilteredSurface,
-    p: Vec3<f32>,
-    view: Vec3<f32>,
+    v: &Viewpoint,
     sun: Vec3<f32>,
 ) -> LocalSlab {
+    let (p, view) = (v.position, v.view);
     let domain = tables.domain();
     let n = s.normal;
     let mut clamps = Clamps::default();
@@ -193,6 +227,20 @@ pub fn local_slab(
     let depth = d_raw.clamp_to(0.0, thickness);
     clamps.depth = depth != d_raw;
     let mu_v = dot(view, n).clamp_to(-1.0, 1.0);
+    let (lo, hi) = if mu_v > 0.0 {
+        (
+            thickness - mu_v * v.behind_max,
+            thickness - mu_v * v.behind_min,
+        )
+    } else if mu_v < 0.0 {
+        (-mu_v * v.behind_min, -mu_v * v.behind_max)
+    } else {
+        (0.0, thickness)
+    };
+    let (lo, hi) = (lo.clamp_to(0.0, thickness), hi.clamp_to(0.0, thickness));
+    let depth_v = depth.clamp_to(lo, hi.max(lo));
+    clamps.view = depth_v != depth;
+    let depth = depth_v;
     // Horizontal parts (⊥ n̄) of the beam's travel and of the view.
     let beam_h = add([-sun[0], -sun[1], -sun[2]], n, mu_l_raw);
     let view_h = add(view, n, -mu_v);
@@ -242,21 +290,19 @@ fn any_perpendicular(n: Vec3<f32>) -> Vec3<f32> {
     t
 }
 
-/// The collector of group `g` for the viewpoint `p` (m, world) seen along `view` (the light's
-/// travel toward the eye, unit), the sun toward `sun` (unit): the fixed point of the module's
-/// doc. None where the surface has no cloud on the light line through p, or where the tables
+/// The collector of group `g` for the viewpoint `v`, the sun toward `sun` (unit): the fixed
+/// point of the module's doc. None where the surface has no cloud on the light line through p, or where the tables
 /// hold no light or no collector for this group there; a later step that finds no cloud (or
 /// no light) ends the search with the step before it (not converged).
 pub fn find_collector<S: LitSurface + ?Sized>(
     tables: &TransportTables,
     g: usize,
     surface: &S,
-    p: Vec3<f32>,
-    view: Vec3<f32>,
+    v: &Viewpoint,
     sun: Vec3<f32>,
     opts: &SearchOptions,
 ) -> Option<Collector> {
-    let (mut c, mut sigma) = (p, surface.initial_scale());
+    let (mut c, mut sigma) = (v.position, surface.initial_scale());
     let mut last: Option<Collector> = None;
     let mut reads = 0;
     loop {
@@ -264,7 +310,7 @@ pub fn find_collector<S: LitSurface + ?Sized>(
         let Some(s) = query(surface, c, scale, last.as_ref()) else {
             return last;
         };
-        let slab = local_slab(tables, &s, p, view, sun);
+        let slab = local_slab(tables, &s, v, sun);
         let tr = tables.evaluate(g, &slab.at);
         reads += 1;
         if !(tr.t > 0.0 && tr.sigma > 0.0 && slab.extinction > 0.0) {
@@ -399,16 +445,9 @@ mod tests {
             };
             for g in 0..tables.groups() {
                 let want = tables.evaluate(g, &own);
-                let got = find_collector(
-                    &tables,
-                    g,
-                    &surface,
-                    p,
-                    view,
-                    sun,
-                    &SearchOptions::default(),
-                )
-                .expect("light on a plane");
+                let vp = Viewpoint::new(p, view);
+                let got = find_collector(&tables, g, &surface, &vp, sun, &SearchOptions::default())
+                    .expect("light on a plane");
                 assert_eq!(got.reads, 2, "group {g}: reads");
                 assert!(got.converged && !got.clamps.any());
                 let rel = |a: f32, b: f32| (a - b).abs() <= 1e-4 * (1.0 + b.abs());
@@ -431,6 +470,38 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The slab holds the view ray's medium beyond p: on the light's far face with the view
+    /// going up into the slab, d moves up by μ_V × the medium the view ray is known to have; a
+    /// view whose ray holds all of the slab's path keeps its d.
+    #[test]
+    fn the_slab_holds_the_view_rays_medium() {
+        let tables = crate::embedded::mie_10um();
+        let sun = unit([0.0, 0.6, 0.8]);
+        let plane = Plane { h: 200.0, k: 0.05 };
+        let s = Chord(&plane, sun).filtered([0.0, 0.0, 0.0], 1.0).unwrap();
+        let view = unit([0.3, -0.2, 0.5]);
+        let mut vp = Viewpoint::new([0.0, 0.0, 0.0], view);
+        let free = local_slab(&tables, &s, &vp, sun);
+        assert!((free.at.depth - 10.0).abs() < 1e-4 && !free.clamps.view);
+        vp.behind_min = 5.0;
+        let held = local_slab(&tables, &s, &vp, sun);
+        let want = 10.0 - view[2] * 5.0;
+        assert!(
+            (held.at.depth - want).abs() < 1e-4 && held.clamps.view,
+            "{held:?}"
+        );
+        // From above, the ray holds at least 9 mfp: the lit face keeps d = 0.
+        let mut top = Viewpoint::new([0.0, 0.0, 200.0], view);
+        top.behind_min = 9.0;
+        let at = local_slab(
+            &tables,
+            &Chord(&plane, sun).filtered(top.position, 1.0).unwrap(),
+            &top,
+            sun,
+        );
+        assert!(at.at.depth.abs() < 1e-4 && !at.clamps.view, "{at:?}");
     }
 
     /// The plane as a light-space map sees it: the chord along the light is t/μ_L.
@@ -507,8 +578,9 @@ mod tests {
             let p = unit(p).map(|x| x * 380.0);
             for g in 0..tables.groups() {
                 let o = SearchOptions::default();
-                let a = find_collector(&tables, g, &ball, p, view, sun, &o).expect("lit");
-                let b = find_collector(&tables, g, &ball, m(p), m(view), sun, &o).expect("lit");
+                let (va, vb) = (Viewpoint::new(p, view), Viewpoint::new(m(p), m(view)));
+                let a = find_collector(&tables, g, &ball, &va, sun, &o).expect("lit");
+                let b = find_collector(&tables, g, &ball, &vb, sun, &o).expect("lit");
                 let close = |x: f32, y: f32| (x - y).abs() <= 1e-3 * (1.0 + x.abs());
                 assert!(close(a.transport.t, b.transport.t), "T {a:?} {b:?}");
                 assert!(close(a.sigma, b.sigma), "σ");
