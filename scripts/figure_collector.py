@@ -37,7 +37,7 @@ def main():
         ax.set_title(title, fontsize=9)
         ax.axis("off")
     fig.tight_layout()
-    fig.savefig(out)
+    fig.savefig(out, bbox_inches="tight")
 
 
 if __name__ == "__main__":

@@ -646,16 +646,8 @@ impl Frame<'_> {
                                     px.sky[g + 1] = alpha * sky.radiance(g + 1, &at);
                                 }
                                 st.dark += (t == 0.0) as u64;
-                                if std::env::var("NEPHELE_DEBUG").is_ok() && g == 0 {
-                                    eprintln!("dark: {at:?} T {t}");
-                                }
                             }
-                            None => {
-                                st.dark += 1;
-                                if std::env::var("NEPHELE_DEBUG").is_ok() && g == 0 {
-                                    eprintln!("no surface at p {p:?}");
-                                }
-                            }
+                            None => st.dark += 1,
                         }
                         continue;
                     };
