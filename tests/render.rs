@@ -178,6 +178,10 @@ impl nephele::render::medium::Medium for Blob {
             max: self.sigma0,
         })
     }
+
+    fn bounds(&self) -> Option<([f64; 3], [f64; 3])> {
+        Some(([-self.r; 3], [self.r; 3]))
+    }
 }
 
 /// White furnace around a heterogeneous blob.
