@@ -255,7 +255,8 @@ const DEFINITIONS: &str = "luminance per pixel; pixels with reference opacity > 
     and apart the candidate's regions (lit: sun optical depth < 2 at the visible surface point, \
     shadowed, silhouette: 0.5 < opacity < 0.99); bias = <c>/<r> - 1 with bias_noise the \
     reference mean's relative standard error; rel_rmse = sqrt<(c - r)^2>/<r>, reference_noise = \
-    sqrt<v>/<r> with v = (A - B)^2/4 the split-sample variance of a reference pixel (halves.npy), \
+    sqrt<v>/<r> with v = (A - B)^2/4 the split-sample variance of a reference pixel (halves.npy; \
+    for the beauty image that of the scattered light, the unscattered sky's own noise left out), \
     rel_rmse_corrected = sqrt(max(0, <(c - r)^2 - v>))/<r> and its standard error; psnr_db on the \
     beauty images tone-mapped with the reference's exposure (8-bit sRGB); flip_mean from \
     scripts/compare_flip.py on the same images";

@@ -24,17 +24,19 @@
 //! - the march stops where T_v < 10⁻⁴ (what lies behind adds < 10⁻⁴ of the pixel).
 
 use super::geometry::{dot, Vec3};
-use super::light_map::{LightMaps, MapOptions};
+use super::light_map::MapOptions;
 use super::march::substeps;
 use super::medium::Medium;
+pub use super::octaves::{Octaves, MAX_OCTAVES};
 use super::run::{Pinhole, Rendered, GROUP_FIRST};
-use super::scene::{MediumSpec, Scene};
+use super::scene::Scene;
 use super::sky::SkyTable;
+use super::sun_side::sun_side;
+pub use super::sun_side::SunSide;
 use crate::phase::Phase;
 use anyhow::{bail, ensure, Result};
 use nephele_runtime::transport::{
-    find_collector, local_slab, FilteredSurface, LitSurface, SearchOptions, SlabPoint,
-    TransportTables, Viewpoint,
+    find_collector, local_slab, LitSurface, SearchOptions, SlabPoint, TransportTables, Viewpoint,
 };
 use rayon::prelude::*;
 use serde::Serialize;
@@ -55,35 +57,6 @@ pub enum Method {
     /// The multi-octave approximation of real-time engines.
     Octaves,
 }
-
-/// The multi-octave approximation's parameters: N octaves, extinction, scattering and
-/// anisotropy factors a, b, c.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct Octaves {
-    /// N (1…8).
-    pub n: usize,
-    /// a: the sun's extinction of octave i is aⁱ σ_t.
-    pub a: f64,
-    /// b: octave i is weighted bⁱ.
-    pub b: f64,
-    /// c: octave i's anisotropy is cⁱ g.
-    pub c: f64,
-}
-
-impl Default for Octaves {
-    /// The engines' defaults: N = 4, a = b = c = 0.5.
-    fn default() -> Self {
-        Self {
-            n: 4,
-            a: 0.5,
-            b: 0.5,
-            c: 0.5,
-        }
-    }
-}
-
-/// Most octaves.
-pub const MAX_OCTAVES: usize = 8;
 
 /// Settings of the fast renderers.
 #[derive(Clone, Copy, Debug, Serialize)]
@@ -129,6 +102,16 @@ impl Default for FastOptions {
 }
 
 impl FastOptions {
+    /// The light maps' settings for a march sub-step and a surface extinction.
+    fn maps(&self, step: f64, threshold: f64) -> MapOptions {
+        MapOptions {
+            resolution: self.map_resolution,
+            planes: self.planes,
+            step,
+            threshold,
+        }
+    }
+
     /// Checks the settings.
     pub fn validate(&self) -> Result<()> {
         ensure!(
@@ -168,66 +151,6 @@ impl FastOptions {
             "octave factors a, b, c must be in [0, 1]"
         );
         Ok(())
-    }
-}
-
-/// The sun's side of a scene: the lit surface and the sun's optical depth anywhere.
-pub enum SunSide {
-    /// A homogeneous slab z ∈ [0, h]: its lit face is the plane z = h (exact, no map).
-    Plane {
-        /// Thickness (m).
-        h: f64,
-        /// Extinction (1/m).
-        sigma_t: f64,
-        /// Toward the sun (unit, z > 0).
-        sun: Vec3,
-    },
-    /// Light-space maps of a bounded medium.
-    Maps(Box<LightMaps>),
-    /// Another side whose chords (geometric and optical alike, so κ̄ and the depths stay)
-    /// are scaled: the thickness ablation.
-    Scaled(Box<SunSide>, f32),
-}
-
-impl SunSide {
-    /// The sun's optical depth to `p` (mfp).
-    pub fn optical_depth(&self, p: Vec3) -> f64 {
-        match self {
-            SunSide::Plane { h, sigma_t, sun } => sigma_t * (h - p[2]).clamp(0.0, *h) / sun[2],
-            SunSide::Maps(m) => m.sun_optical_depth(p),
-            SunSide::Scaled(side, _) => side.optical_depth(p),
-        }
-    }
-}
-
-impl LitSurface for SunSide {
-    fn filtered(&self, at: [f32; 3], sigma: f32) -> Option<FilteredSurface> {
-        match self {
-            SunSide::Plane { h, sigma_t, sun } => {
-                let back = (*h as f32 - at[2]) / sun[2] as f32;
-                let chord = *h as f32 / sun[2] as f32;
-                Some(FilteredSurface {
-                    entry: std::array::from_fn(|k| at[k] + back * sun[k] as f32),
-                    normal: [0.0, 0.0, 1.0],
-                    length: chord,
-                    optical_length: chord * *sigma_t as f32,
-                })
-            }
-            SunSide::Maps(m) => m.filtered(at, sigma),
-            SunSide::Scaled(side, k) => side.filtered(at, sigma).map(|mut s| {
-                s.length *= k;
-                s.optical_length *= k;
-                s
-            }),
-        }
-    }
-
-    fn initial_scale(&self) -> f32 {
-        match self {
-            SunSide::Plane { h, .. } => 10.0 * *h as f32,
-            SunSide::Maps(m) => m.initial_scale(),
-            SunSide::Scaled(side, _) => side.initial_scale(),
-        }
     }
 }
 
@@ -317,7 +240,12 @@ pub fn render_fast(
     let step = opts.step.unwrap_or(0.5 / scene.sigma_t);
     let threshold = opts.surface_density * scene.sigma_t;
     let t0 = Instant::now();
-    let side = sun_side(scene, medium.as_ref(), opts, step, threshold)?;
+    let side = sun_side(
+        scene,
+        medium.as_ref(),
+        &opts.maps(step, threshold),
+        opts.thickness_scale,
+    )?;
     let t_maps = t0.elapsed().as_secs_f64();
     let t0 = Instant::now();
     let has_sky = scene.sky.iter().any(|&s| s > 0.0);
@@ -375,7 +303,7 @@ pub fn surface_points(scene: &Scene, stride: usize) -> Result<(SunSide, Vec<View
     let opts = FastOptions::default();
     let step = 0.5 / scene.sigma_t;
     let threshold = opts.surface_density * scene.sigma_t;
-    let side = sun_side(scene, medium.as_ref(), &opts, step, threshold)?;
+    let side = sun_side(scene, medium.as_ref(), &opts.maps(step, threshold), 1.0)?;
     let cam = Pinhole::new(&scene.camera);
     let tables = nephele_runtime::embedded::mie_10um();
     let frame = Frame {
@@ -481,48 +409,6 @@ fn mean_cosine(phases: &[Phase]) -> f64 {
             2.0 * std::f64::consts::PI * mu * channel_mean(phases, mu) * th.sin() * h
         })
         .sum()
-}
-
-/// The scene's sun side: the exact plane for a slab, light-space maps otherwise.
-fn sun_side(
-    scene: &Scene,
-    medium: &dyn Medium,
-    opts: &FastOptions,
-    step: f64,
-    threshold: f64,
-) -> Result<SunSide> {
-    let sun = scene.sun.direction;
-    if let MediumSpec::Slab { thickness } = scene.medium {
-        ensure!(
-            sun[2] > 1e-3,
-            "the sun must be above the slab's lit face (sun.direction z > 0)"
-        );
-        let side = SunSide::Plane {
-            h: thickness,
-            sigma_t: scene.sigma_t,
-            sun,
-        };
-        return Ok(if opts.thickness_scale == 1.0 {
-            side
-        } else {
-            SunSide::Scaled(Box::new(side), opts.thickness_scale as f32)
-        });
-    }
-    let Some(bounds) = medium.bounds() else {
-        bail!("the fast renderers need a bounded medium or a slab");
-    };
-    let o = MapOptions {
-        resolution: opts.map_resolution,
-        planes: opts.planes,
-        step,
-        threshold,
-    };
-    let side = SunSide::Maps(Box::new(LightMaps::build(medium, bounds, sun, &o)));
-    Ok(if opts.thickness_scale == 1.0 {
-        side
-    } else {
-        SunSide::Scaled(Box::new(side), opts.thickness_scale as f32)
-    })
 }
 
 impl Frame<'_> {
@@ -692,14 +578,7 @@ impl Frame<'_> {
     /// Σ_{1 ≤ i < N} bⁱ ϖ p_HG(θ; cⁱ g) I_{aⁱ} (per unit E_sun; octave 0 is order 1).
     fn octaves(&self, cos: f64, integrals: &[f64; MAX_OCTAVES]) -> [f64; 3] {
         let o = &self.opts.octaves;
-        let mut sum = 0.0;
-        for (i, integral) in integrals.iter().enumerate().take(o.n).skip(1) {
-            let g = o.c.powi(i as i32) * self.g;
-            let p = (1.0 - g * g)
-                / (4.0 * std::f64::consts::PI * (1.0 + g * g - 2.0 * g * cos).powf(1.5));
-            sum += o.b.powi(i as i32) * self.scene.albedo * p * integral;
-        }
-        [sum; 3]
+        [o.scattered(self.g, self.scene.albedo, cos, integrals); 3]
     }
 
     /// Marches the view ray o + t w.
