@@ -123,7 +123,10 @@ fn collector_beside(scene: &Scene, reference: &Path) -> Result<String> {
         anyhow::bail!("the comparison has no opaque pixels");
     };
     Ok(format!(
-        "collector renderer: {:.2} s a frame vs the path tracer's {:.0} s; over opaque pixels,          orders ≥ 2 bias {:+.1} %, relative RMSE {:.1} % (the reference's own noise {:.1} %,          corrected {:.1} %), order 1 bias {:+.1} %, beauty bias {:+.1} %, PSNR {:.1} dB → {}/         panel.png, report.json (docs/collector.md)",
+        "collector renderer: {:.2} s a frame vs the path tracer's {:.0} s; over opaque pixels, \
+         orders ≥ 2 bias {:+.1} %, relative RMSE {:.1} % (the reference's own noise {:.1} %, \
+         corrected {:.1} %), order 1 bias {:+.1} %, beauty bias {:+.1} %, PSNR {:.1} dB → \
+         {}/panel.png, report.json (docs/collector.md)",
         c.seconds,
         report.reference_seconds,
         100.0 * ms.bias,
