@@ -37,6 +37,15 @@ pub fn direction_from_cosine<F: Real>(wi: Vec3<F>, mu: F, one_minus_mu: F, xi: F
     ]
 }
 
+/// a × b.
+pub fn cross<F: Real>(a: Vec3<F>, b: Vec3<F>) -> Vec3<F> {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
 /// Dot product.
 pub fn dot<F: Real>(a: Vec3<F>, b: Vec3<F>) -> F {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]

@@ -195,6 +195,25 @@ struct ViewRay {
     behind_exact: bool,
 }
 
+impl ViewRay {
+    /// The viewpoint the collector search takes for this ray of direction `w`: its surface
+    /// point, the light's travel toward the eye, and what the march knows of the medium
+    /// beyond the point.
+    fn viewpoint(&self, w: Vec3) -> Option<Viewpoint> {
+        let p = self.surface?;
+        Some(Viewpoint {
+            position: p.map(|x| x as f32),
+            view: w.map(|x| -x as f32),
+            behind_min: self.behind as f32,
+            behind_max: if self.behind_exact {
+                self.behind as f32
+            } else {
+                f32::INFINITY
+            },
+        })
+    }
+}
+
 /// Region codes of `regions.npy`.
 pub mod region {
     /// Opacity ≤ 0.5.
@@ -321,19 +340,7 @@ pub fn surface_points(scene: &Scene, stride: usize) -> Result<(SunSide, Vec<View
     let mut points = Vec::new();
     for px in (0..cam.width * cam.height).step_by(stride.max(1)) {
         let w = cam.direction(px % cam.width, px / cam.width, 0.5, 0.5);
-        let v = frame.march(cam.position, w);
-        if let Some(p) = v.surface {
-            points.push(Viewpoint {
-                position: p.map(|x| x as f32),
-                view: w.map(|x| -x as f32),
-                behind_min: v.behind as f32,
-                behind_max: if v.behind_exact {
-                    v.behind as f32
-                } else {
-                    f32::INFINITY
-                },
-            });
-        }
+        points.extend(frame.march(cam.position, w).viewpoint(w));
     }
     Ok((frame.side, points))
 }
@@ -499,22 +506,11 @@ impl Frame<'_> {
             let phase = &self.phases[c.min(self.phases.len() - 1)];
             *p = albedo * phase.with(|f| f.eval(cos)) * v.integrals[0];
         }
-        let Some(p) = v.surface else {
+        let (Some(p), Some(vp)) = (v.surface, v.viewpoint(w)) else {
             return px;
         };
         px.sun_tau = self.side.optical_depth(p);
-        let view = w.map(|x| -x as f32);
-        let (p32, sun32) = (p.map(|x| x as f32), sun.map(|x| x as f32));
-        let vp = Viewpoint {
-            position: p32,
-            view,
-            behind_min: v.behind as f32,
-            behind_max: if v.behind_exact {
-                v.behind as f32
-            } else {
-                f32::INFINITY
-            },
-        };
+        let sun32 = sun.map(|x| x as f32);
         match self.opts.method {
             Method::Collector => {
                 let mut first_slab = None;

@@ -1,19 +1,10 @@
 //! Vectors, ray–box clipping and affine maps in world space (m, z up): what the media, the
 //! majorant grids and the camera share.
 
-pub use nephele_runtime::frame::dot;
+pub use nephele_runtime::frame::{cross, dot};
 
 /// A point or direction in world space (m); z is up (the runtime's vector, in f64).
 pub type Vec3 = nephele_runtime::frame::Vec3<f64>;
-
-/// a × b.
-pub fn cross(a: Vec3, b: Vec3) -> Vec3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
 
 /// a / |a|.
 pub fn normalize(a: Vec3) -> Vec3 {

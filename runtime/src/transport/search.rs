@@ -29,7 +29,7 @@
 
 use super::geometry::SlabPoint;
 use super::tables::{Transport, TransportTables};
-use crate::frame::{dot, Vec3};
+use crate::frame::{cross, dot, Vec3};
 use crate::real::Real;
 
 /// The lit surface filtered at one place and scale, as a renderer's light-space maps give it.
@@ -275,14 +275,6 @@ pub fn local_slab(
         x_axis,
         extinction,
     }
-}
-
-fn cross(a: Vec3<f32>, b: Vec3<f32>) -> Vec3<f32> {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }
 
 fn any_perpendicular(n: Vec3<f32>) -> Vec3<f32> {
