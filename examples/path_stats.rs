@@ -9,8 +9,9 @@
 
 use nephele::phase::Phase;
 use nephele::render::geometry::normalize;
-use nephele::render::integrator::{trace, Volume};
-use nephele::render::run::{volume, GROUP_FIRST};
+use nephele::render::image::GROUP_FIRST;
+use nephele::render::path::integrator::{trace, Volume};
+use nephele::render::path::volume;
 use nephele::render::scene::Scene;
 use rand::SeedableRng;
 

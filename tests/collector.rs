@@ -6,8 +6,9 @@
 
 use nephele::render::compare::compare;
 use nephele::render::fast::{render_fast, FastOptions, Method};
+use nephele::render::image::{Rendered, GROUP_FIRST};
 use nephele::render::output::write_outputs;
-use nephele::render::run::{render, Rendered, GROUP_FIRST};
+use nephele::render::path::render;
 use nephele::render::scene::Scene;
 use std::process::Command;
 

@@ -3,10 +3,10 @@
 //! order group, the radiance of the slab tables' bins, L/E⊥ = T, within their combined standard
 //! errors — and a white furnace, where every medium must pass the sky radiance on unchanged.
 
-use nephele::render::integrator::{trace, Volume};
 use nephele::render::majorant::{Bounds, Majorants};
 use nephele::render::medium::Slab;
-use nephele::render::sun_lobe::SunLobe;
+use nephele::render::path::integrator::{trace, Volume};
+use nephele::render::path::sun_lobe::SunLobe;
 use nephele::slab::{run_slice, SlabGrid, Slice, StopRule};
 use nephele_runtime::phase::HenyeyGreenstein;
 use nephele_runtime::PhaseFunction;
@@ -264,7 +264,7 @@ fn small_cloud() -> nephele::render::scene::Scene {
 /// sky add up to the beauty image.
 #[test]
 fn renders_are_bit_identical_for_any_thread_count_and_aovs_add_up() {
-    use nephele::render::run::render;
+    use nephele::render::path::render;
     let scene = small_cloud();
     let with = |threads: usize| {
         rayon::ThreadPoolBuilder::new()
@@ -500,7 +500,7 @@ fn per_channel_phase_functions_match_monochrome_renders() {
 /// it allowed, the image is the one a single render at the same total spp gives.
 #[test]
 fn a_time_budget_gives_the_image_of_its_total_spp() {
-    use nephele::render::run::render;
+    use nephele::render::path::render;
     let mut scene = small_cloud();
     scene.spp = 1;
     scene.time_budget_s = Some(0.3);

@@ -46,8 +46,8 @@ pub mod fitting {
     };
     pub use crate::transport::single::single_scattering_bin;
     pub use crate::transport::tables::{
-        names, pack_u_range, stretched_u, unpack_u_range, CEILING_FACTOR, MAX_GROUPS, MAX_NODES,
-        MAX_Q, U_STEPS,
+        names, pack_u_range, stretched_u, unpack_u_range, CEILING_FACTOR, DEFAULT_GROUP_FIRST,
+        MAX_GROUPS, MAX_NODES, MAX_Q, STRETCH_EXPONENT, STRETCH_SCALE, U_STEPS,
     };
 }
 pub use real::Real;

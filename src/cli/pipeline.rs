@@ -11,7 +11,7 @@ use nephele::compress::run::{compress, Options};
 use nephele::render::compare::compare;
 use nephele::render::fast::{render_fast, FastOptions};
 use nephele::render::output::write_outputs;
-use nephele::render::run::render;
+use nephele::render::path::render;
 use nephele::render::scene::Scene;
 use std::path::Path;
 use std::time::Instant;

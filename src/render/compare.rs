@@ -15,8 +15,8 @@
 //! - PSNR of the beauty images tone-mapped with the reference's exposure (8-bit sRGB, what
 //!   people look at; FLIP on the same images by scripts/compare_flip.py).
 
+use super::image::GROUP_FIRST;
 use super::output::{exposure, tone_map_with};
-use super::run::GROUP_FIRST;
 use crate::io::AtomicFiles;
 use anyhow::{bail, ensure, Context, Result};
 use serde::Serialize;
@@ -292,9 +292,9 @@ pub fn compare(reference: &Path, candidates: &[PathBuf], out: &Path) -> Result<R
     let mut masks = vec![("opaque".to_string(), opaque.clone())];
     if let Some(reg) = &regions {
         for (name, code) in [
-            ("lit", super::fast::region::LIT),
-            ("shadowed", super::fast::region::SHADOWED),
-            ("silhouette", super::fast::region::SILHOUETTE),
+            ("lit", super::regions::LIT),
+            ("shadowed", super::regions::SHADOWED),
+            ("silhouette", super::regions::SILHOUETTE),
         ] {
             masks.push((
                 name.to_string(),

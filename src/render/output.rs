@@ -2,7 +2,7 @@
 //! (tone-mapped, sRGB-encoded) and .npy (linear), the per-order-group radiance, the unscattered sky, the transmittance and the
 //! opacity as .npy (float32, row 0 at the top), and a JSON sidecar — all atomically.
 
-use super::run::{Rendered, GROUP_FIRST};
+use super::image::{Rendered, GROUP_FIRST};
 use super::scene::Scene;
 use crate::io::AtomicFiles;
 use anyhow::{Context, Result};

@@ -227,9 +227,9 @@ impl Scene {
         );
         ensure!((1..=1 << 20).contains(&self.spp), "spp must be 1…1048576");
         ensure!(
-            self.sun_lobe_steps <= super::sun_lobe::MAX_STEPS,
+            self.sun_lobe_steps <= super::path::sun_lobe::MAX_STEPS,
             "sun_lobe_steps must be 0…{}",
-            super::sun_lobe::MAX_STEPS
+            super::path::sun_lobe::MAX_STEPS
         );
         if let Some(b) = self.time_budget_s {
             ensure!(

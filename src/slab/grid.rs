@@ -7,33 +7,30 @@
 //!   ΔΩ = 2 Δμ Δψ.
 //! - Planes are stretched toward the lit face for thick slabs: with s = d/t and u uniform on
 //!   [0, 1], s = (e^{βu} − 1)/(e^β − 1), β = 0.3 t^0.65 (0.3 at t = 1, 4.5 at t = 64): at t = 64
-//!   the orders 1–8 live within ~10 mfp of the lit face.
+//!   the orders 1–8 live within ~10 mfp of the lit face. The law is the runtime's (its
+//!   constants, and its inverse for the tables' lookups), as are the default order groups.
 
 use anyhow::{bail, Result};
+use nephele_runtime::fitting::{STRETCH_EXPONENT, STRETCH_SCALE};
+
+pub use nephele_runtime::fitting::DEFAULT_GROUP_FIRST;
 
 /// The default order groups: 1, 2, 3–4, 5–6, 7–8, 9–12, 13–18, 19–30, 31–∞ (inclusive bounds;
-/// `u32::MAX` is ∞).
-pub const DEFAULT_GROUPS: [(u32, u32); 9] = [
-    (1, 1),
-    (2, 2),
-    (3, 4),
-    (5, 6),
-    (7, 8),
-    (9, 12),
-    (13, 18),
-    (19, 30),
-    (31, u32::MAX),
-];
-
-/// The first orders of [`DEFAULT_GROUPS`]: 1, 2, 3, 5, 7, 9, 13, 19, 31.
-pub const DEFAULT_GROUP_FIRST: [u32; 9] = {
-    let mut first = [0; 9];
+/// `u32::MAX` is ∞), from their first orders, the runtime's [`DEFAULT_GROUP_FIRST`].
+pub const DEFAULT_GROUPS: [(u32, u32); 9] = {
+    let first = DEFAULT_GROUP_FIRST;
+    let mut groups = [(0, 0); 9];
     let mut i = 0;
     while i < 9 {
-        first[i] = DEFAULT_GROUPS[i].0;
+        let last = if i + 1 < 9 {
+            first[i + 1] - 1
+        } else {
+            u32::MAX
+        };
+        groups[i] = (first[i], last);
         i += 1;
     }
-    first
+    groups
 };
 
 /// Default of [`SlabGrid::grazing_mu`].
@@ -271,9 +268,10 @@ pub fn stretched_depths(t: f64, n: usize) -> Vec<f64> {
 }
 
 /// The depth (mfp) at stretched depth u ∈ [0, 1] of a slab of thickness t:
-/// t (e^{βu} − 1)/(e^β − 1), β = 0.3 t^0.65 (module docs).
+/// t (e^{βu} − 1)/(e^β − 1), β = 0.3 t^0.65 (module docs): the runtime's law
+/// ([`nephele_runtime::fitting::STRETCH_SCALE`]; its inverse is the runtime's `stretched_u`).
 pub fn stretched_depth(t: f64, u: f64) -> f64 {
-    let beta = 0.3 * t.powf(0.65);
+    let beta = STRETCH_SCALE * t.powf(STRETCH_EXPONENT);
     t * (beta * u).exp_m1() / beta.exp_m1()
 }
 
@@ -332,6 +330,20 @@ mod tests {
             .map(|&k| g.group(k))
             .collect();
         assert_eq!(groups, [0, 1, 2, 2, 3, 4, 5, 5, 6, 7, 8, 8]);
+        assert_eq!(
+            DEFAULT_GROUPS,
+            [
+                (1, 1),
+                (2, 2),
+                (3, 4),
+                (5, 6),
+                (7, 8),
+                (9, 12),
+                (13, 18),
+                (19, 30),
+                (31, u32::MAX)
+            ]
+        );
         // Stretched: at t = 64 half the planes lie within the first ~10 mfp.
         assert_eq!(g.depths[0], 0.0);
         assert_eq!(g.depths[15], 64.0);

@@ -74,6 +74,16 @@ pub const MAX_Q: usize = MAX_LEGENDRE;
 pub const CEILING_FACTOR: f64 = 1.5;
 /// Most order groups.
 pub const MAX_GROUPS: usize = 64;
+/// nephele slab's default order groups by their first orders, order 1 first: 1, 2, 3–4, 5–6,
+/// 7–8, 9–12, 13–18, 19–30, 31–∞ (a `.ntt` holds those of orders ≥ 2:
+/// [`TransportTables::group_first_order`]).
+pub const DEFAULT_GROUP_FIRST: [u32; 9] = [1, 2, 3, 5, 7, 9, 13, 19, 31];
+/// The stretch of nephele slab's default depth planes: d/t = (e^{βu} − 1)/(e^β − 1) at
+/// stretched depth u ∈ [0, 1], β = `STRETCH_SCALE` · t^`STRETCH_EXPONENT` (t in mfp), which
+/// crowds the planes toward the lit face of thick slabs ([`stretched_u`] is its inverse).
+pub const STRETCH_SCALE: f64 = 0.3;
+/// See [`STRETCH_SCALE`].
+pub const STRETCH_EXPONENT: f64 = 0.65;
 /// Most nodes of each grid (sun cosines, view cosines, thicknesses).
 pub const MAX_NODES: usize = 1024;
 /// Room for the features of one point: J ≤ 16 Legendre terms on two μ_V and two μ_L nodes,
@@ -728,9 +738,10 @@ fn bracket(a: &ArrayView, x: f32) -> usize {
 }
 
 /// The stretched depth u ∈ [0, 1] of depth d in a slab of thickness t: the inverse of the slab
-/// grid's planes d/t = (e^{βu} − 1)/(e^β − 1), β = 0.3 t^0.65 (nephele slab's default grid).
+/// grid's planes d/t = (e^{βu} − 1)/(e^β − 1), β = 0.3 t^0.65 (nephele slab's default grid,
+/// [`STRETCH_SCALE`]).
 pub fn stretched_u(d: f32, t: f32) -> f32 {
-    let beta = 0.3 * Real::exp(0.65 * Real::ln(t));
+    let beta = STRETCH_SCALE as f32 * Real::exp(STRETCH_EXPONENT as f32 * Real::ln(t));
     if beta < 1e-6 {
         return d / t;
     }

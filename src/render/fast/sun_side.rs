@@ -2,10 +2,10 @@
 //! collector search filters ([`LitSurface`]) and the sun's optical depth anywhere — exact for a
 //! slab (its lit face is a plane), from light-space maps for bounded media.
 
-use super::geometry::Vec3;
 use super::light_map::{LightMaps, MapOptions};
-use super::medium::Medium;
-use super::scene::{MediumSpec, Scene};
+use crate::render::geometry::Vec3;
+use crate::render::medium::Medium;
+use crate::render::scene::{MediumSpec, Scene};
 use anyhow::{bail, ensure, Result};
 use nephele_runtime::transport::{FilteredSurface, LitSurface};
 

@@ -1,124 +1,30 @@
-//! Rendering a scene: a pinhole camera, rows of pixels in parallel, each pixel's samples drawn
-//! from its own random stream (xoshiro256++ seeded by a hash of the scene's seed and the pixel),
-//! so the image is the same bits for any thread count; passes while a time budget lasts.
+//! The ground-truth volumetric path tracer (docs/render.md): rows of pixels in parallel through
+//! the shared pinhole camera, each pixel's samples drawn from its own random stream
+//! (xoshiro256++ seeded by a hash of the scene's seed and the pixel), so the image is the same
+//! bits for any thread count; passes while a time budget lasts. The estimator is
+//! [`integrator`], its sun-lobe next-event estimation [`sun_lobe`].
 
-use super::geometry::{cross, normalize, Vec3};
-use super::integrator::{trace, Volume};
+pub mod integrator;
+pub mod sun_lobe;
+
+use super::camera::Pinhole;
+use super::image::{Rendered, GROUP_FIRST};
 use super::medium::Medium;
-use super::scene::{Camera, Scene};
-use super::sun_lobe::SunLobe;
+use super::scene::Scene;
 use crate::phase::Phase;
 use anyhow::Result;
+use integrator::{trace, Volume};
 use nephele_runtime::PhaseFunction;
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
-
-/// The slab tables' order groups (their first orders), which the renders are split into.
-pub const GROUP_FIRST: [u32; 9] = crate::slab::grid::DEFAULT_GROUP_FIRST;
-
-/// A rendered image and its arrays (linear radiance, W m⁻² sr⁻¹; row 0 at the top).
-pub struct Rendered {
-    /// Width and height (pixels).
-    pub width: usize,
-    /// See `width`.
-    pub height: usize,
-    /// Radiance per order group, [group, row, column, RGB].
-    pub groups: Vec<f32>,
-    /// The sky seen through the medium without scattering, [row, column, RGB].
-    pub unscattered: Vec<f32>,
-    /// Transmittance of the camera ray through the medium, [row, column].
-    pub transmittance: Vec<f32>,
-    /// The sum of the groups and the unscattered part, [row, column, RGB].
-    pub beauty: Vec<f32>,
-    /// Wall-clock seconds.
-    pub seconds: f64,
-    /// Camera paths traced.
-    pub paths: u64,
-    /// Samples per pixel (the scene's times the passes a time budget allowed).
-    pub spp: u32,
-    /// The method's name (render.json).
-    pub method: String,
-    /// The path tracer's split-sample halves: the groups' radiance from the even and from the
-    /// odd samples of each pixel, [half, group, row, column, RGB] (empty for other methods):
-    /// (A − B)²/4 estimates the variance of a pixel's mean.
-    pub halves: Vec<f32>,
-    /// The fast renderers' region of each pixel (`fast::region`), [row, column] (empty for
-    /// the path tracer).
-    pub regions: Vec<u8>,
-    /// Method-specific facts for render.json.
-    pub details: serde_json::Value,
-}
-
-impl Rendered {
-    /// A black, empty image of w × h pixels.
-    pub fn empty(w: usize, h: usize) -> Self {
-        let ng = GROUP_FIRST.len();
-        Self {
-            width: w,
-            height: h,
-            groups: vec![0.0; ng * h * w * 3],
-            unscattered: vec![0.0; h * w * 3],
-            transmittance: vec![0.0; h * w],
-            beauty: vec![0.0; h * w * 3],
-            seconds: 0.0,
-            paths: 0,
-            spp: 0,
-            method: String::new(),
-            halves: Vec::new(),
-            regions: Vec::new(),
-            details: serde_json::Value::Null,
-        }
-    }
-}
+use sun_lobe::SunLobe;
 
 /// The seed of pixel `i`'s stream (SplitMix64).
 fn pixel_seed(seed: u64, i: u64) -> u64 {
     crate::stats::splitmix64(seed ^ i.wrapping_mul(0x9E37_79B9_7F4A_7C15))
-}
-
-/// The camera's primary rays: a pinhole at `position`, looking along `fwd`.
-pub struct Pinhole {
-    /// The eye (m).
-    pub position: Vec3,
-    fwd: Vec3,
-    right: Vec3,
-    up: Vec3,
-    /// tan(fov_y / 2).
-    tan: f64,
-    /// Image width and height (pixels).
-    pub width: usize,
-    /// See `width`.
-    pub height: usize,
-}
-
-impl Pinhole {
-    /// The camera's rays.
-    pub fn new(cam: &Camera) -> Self {
-        let fwd = normalize(std::array::from_fn(|k| cam.look_at[k] - cam.position[k]));
-        let right = normalize(cross(fwd, cam.up));
-        Self {
-            position: cam.position,
-            fwd,
-            right,
-            up: cross(right, fwd),
-            tan: (0.5 * cam.fov_deg.to_radians()).tan(),
-            width: cam.width as usize,
-            height: cam.height as usize,
-        }
-    }
-
-    /// The unit direction through (i + u, j + v) in pixel coordinates (row 0 at the top).
-    pub fn direction(&self, i: usize, j: usize, u: f64, v: f64) -> Vec3 {
-        let (w, h) = (self.width as f64, self.height as f64);
-        let x = (2.0 * (i as f64 + u) / w - 1.0) * self.tan * w / h;
-        let y = (1.0 - 2.0 * (j as f64 + v) / h) * self.tan;
-        normalize(std::array::from_fn(|k| {
-            self.fwd[k] + x * self.right[k] + y * self.up[k]
-        }))
-    }
 }
 
 /// Per-pixel sums of one half of the samples (the even or the odd ones): [sun group g

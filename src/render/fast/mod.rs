@@ -4,7 +4,7 @@
 //! multi-octave approximation of real-time engines (Wrenninge et al. 2013; Hillaire 2016).
 //!
 //! Per pixel, one ray through the pixel's centre (or an n × n grid of them) is marched through
-//! the medium ([`super::march`]) in sub-steps of length h with extinction σ, view
+//! the medium ([`march`], [`view_march`]) in sub-steps of length h with extinction σ, view
 //! transmittance T_v, and the sun's optical depth τ_sun from the light-space map, linear over
 //! a sub-step (τ_a → τ_b):
 //!
@@ -18,31 +18,47 @@
 //! - octaves: L ≈ Σ_{i<N} bⁱ ϖ p(θ; cⁱ g) E_sun I_{aⁱ} — octave 0 is order 1 exactly (the true
 //!   p), octaves i ≥ 1 use Henyey–Greenstein at cⁱ g, g the phase function's mean cosine; their
 //!   sum is written as the group of order 2 (the octaves do not split orders);
-//! - sky: the sky seen through 1 − α (`unscattered`), and the sky term of [`super::sky`] for
+//! - sky: the sky seen through 1 − α (`unscattered`), and the sky term of [`sky`] for
 //!   the scattered orders (α S_g L_sky per group; order 1 from the same table), reported apart
 //!   in render.json;
 //! - the march stops where T_v < 10⁻⁴ (what lies behind adds < 10⁻⁴ of the pixel).
+//!
+//! Files: this one drives a frame (options, pixels, one ray's order 1 and the baselines);
+//! [`view_march`] marches a view ray, [`collector`] is the collector's branch with its search
+//! statistics, [`table_check`] checks the tables against the scene; the sun's side of the
+//! scene ([`sun_side`](mod@sun_side)) comes from light-space maps ([`light_map`]), the sky term
+//! from [`sky`], the octave baseline from [`octaves`]. The camera, the image and its regions
+//! are the floor's (`render::{camera, image, regions}`), shared with the path tracer.
 
+pub mod collector;
+pub mod light_map;
+pub mod march;
+pub mod octaves;
+pub mod sky;
+pub mod sun_side;
+pub mod table_check;
+pub mod view_march;
+
+use super::camera::Pinhole;
 use super::geometry::{dot, Vec3};
-use super::light_map::MapOptions;
-use super::march::substeps;
+use super::image::{Rendered, GROUP_FIRST};
 use super::medium::Medium;
-pub use super::octaves::{Octaves, MAX_OCTAVES};
-use super::run::{Pinhole, Rendered, GROUP_FIRST};
+use super::regions::region_of;
 use super::scene::Scene;
-use super::sky::SkyTable;
-use super::sun_side::sun_side;
-pub use super::sun_side::SunSide;
 use crate::phase::Phase;
-use anyhow::{bail, ensure, Result};
-use nephele_runtime::transport::{
-    find_collector, local_slab, LitSurface, SearchOptions, SlabPoint, TransportTables, Viewpoint,
-};
+use anyhow::{ensure, Result};
+pub use collector::GroupStats;
+use light_map::MapOptions;
+use nephele_runtime::transport::{SearchOptions, TransportTables, Viewpoint};
+pub use octaves::{Octaves, MAX_OCTAVES};
 use rayon::prelude::*;
 use serde::Serialize;
-use std::ops::ControlFlow;
+use sky::SkyTable;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
+use sun_side::sun_side;
+pub use sun_side::SunSide;
+use table_check::{check_tables, mean_cosine};
 
 /// How a frame is rendered.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
@@ -152,78 +168,6 @@ impl FastOptions {
         );
         Ok(())
     }
-}
-
-/// Per group of orders ≥ 2: how the searches went.
-#[derive(Clone, Debug, Default, Serialize)]
-pub struct GroupStats {
-    /// First order of the group.
-    pub first_order: u32,
-    /// Searches run (pixels × rays with a surface point).
-    pub searches: u64,
-    /// Searches that found no light (no cloud on the light line through p, or T = 0 there):
-    /// T read instead in the slab of the surface filtered at the cloud's size.
-    pub empty: u64,
-    /// Of those, how many found no light there either (the group is 0 in that pixel).
-    pub dark: u64,
-    /// Table reads, summed.
-    pub reads: u64,
-    /// Searches that met the stopping rule before the cap.
-    pub converged: u64,
-    /// Searches whose last read held t, μ_L or d at the tables' domain.
-    pub clamped_thickness: u64,
-    /// See `clamped_thickness`.
-    pub clamped_mu_l: u64,
-    /// See `clamped_thickness`.
-    pub clamped_depth: u64,
-    /// Searches whose last read moved d so that the slab holds the view ray's medium beyond p.
-    pub held_by_view: u64,
-}
-
-/// What one view ray gathers.
-#[derive(Clone, Copy, Debug, Default)]
-struct ViewRay {
-    /// T_v at the end.
-    transmittance: f64,
-    /// I_{aⁱ} per octave (I₀ is order 1's integral).
-    integrals: [f64; MAX_OCTAVES],
-    /// Where the ray meets the lit surface (or its densest sub-step).
-    surface: Option<Vec3>,
-    /// The optical depth of the ray beyond the surface point (mfp), and whether that is all of
-    /// it (the ray left the medium) or a lower bound (the march stopped where T_v < 10⁻⁴).
-    behind: f64,
-    behind_exact: bool,
-}
-
-impl ViewRay {
-    /// The viewpoint the collector search takes for this ray of direction `w`: its surface
-    /// point, the light's travel toward the eye, and what the march knows of the medium
-    /// beyond the point.
-    fn viewpoint(&self, w: Vec3) -> Option<Viewpoint> {
-        let p = self.surface?;
-        Some(Viewpoint {
-            position: p.map(|x| x as f32),
-            view: w.map(|x| -x as f32),
-            behind_min: self.behind as f32,
-            behind_max: if self.behind_exact {
-                self.behind as f32
-            } else {
-                f32::INFINITY
-            },
-        })
-    }
-}
-
-/// Region codes of `regions.npy`.
-pub mod region {
-    /// Opacity ≤ 0.5.
-    pub const EMPTY: u8 = 0;
-    /// Opaque, the visible surface point sunlit (τ_sun < 2).
-    pub const LIT: u8 = 1;
-    /// Opaque, the visible surface point in the cloud's shadow (τ_sun ≥ 2).
-    pub const SHADOWED: u8 = 2;
-    /// 0.5 < opacity < 0.99: the silhouette.
-    pub const SILHOUETTE: u8 = 3;
 }
 
 /// Everything a frame needs, built once.
@@ -345,80 +289,12 @@ pub fn surface_points(scene: &Scene, stride: usize) -> Result<(SunSide, Vec<View
     Ok((frame.side, points))
 }
 
-/// The tables are for one phase function and ϖ = 1: the scene's must match (p within 5 % at
-/// every degree, the forward peak included) unless the caller allows a mismatch.
-fn check_tables(
-    scene: &Scene,
-    tables: &TransportTables,
-    phases: &[Phase],
-    opts: &FastOptions,
-    warnings: &mut Vec<String>,
-) -> Result<()> {
-    // Without a sky, only the collector reads the tables.
-    if opts.method != Method::Collector && !scene.sky.iter().any(|&s| s > 0.0) {
-        return Ok(());
-    }
-    let mut problems = Vec::new();
-    if (scene.albedo - 1.0).abs() > 1e-9 {
-        problems.push(format!(
-            "the tables are for albedo 1, the scene's is {}",
-            scene.albedo
-        ));
-    }
-    let mut worst = (0.0f64, 0.0f64);
-    for deg in 0..=180 {
-        let mu = (deg as f64).to_radians().cos();
-        let p = channel_mean(phases, mu);
-        let q = tables.phase(mu as f32) as f64;
-        let rel = (p - q).abs() / q.max(1e-30);
-        if rel > worst.0 {
-            worst = (rel, deg as f64);
-        }
-    }
-    if worst.0 > 0.05 {
-        problems.push(format!(
-            "the scene's phase function differs from the tables' by {:.0} % at {}° (the \
-             tables are for one phase function and droplet size; make tables for this one with \
-             `nephele slab` and `nephele compress`, and pass them with --tables)",
-            100.0 * worst.0,
-            worst.1
-        ));
-    }
-    if problems.is_empty() {
-        return Ok(());
-    }
-    if opts.allow_mismatch {
-        for p in problems {
-            eprintln!("warning: {p}");
-            warnings.push(p);
-        }
-        return Ok(());
-    }
-    bail!(
-        "the scene does not match the transport tables: {} (--allow-table-mismatch renders \
-         anyway)",
-        problems.join("; ")
-    )
-}
-
-fn channel_mean(phases: &[Phase], mu: f64) -> f64 {
-    phases.iter().map(|p| p.with(|f| f.eval(mu))).sum::<f64>() / phases.len() as f64
-}
-
-/// g = ∫ μ p dΩ of the channels' mean, by the midpoint rule on 20 000 angles.
-fn mean_cosine(phases: &[Phase]) -> f64 {
-    let n = 20_000;
-    let h = std::f64::consts::PI / n as f64;
-    (0..n)
-        .map(|k| {
-            let th = (k as f64 + 0.5) * h;
-            let mu = th.cos();
-            2.0 * std::f64::consts::PI * mu * channel_mean(phases, mu) * th.sin() * h
-        })
-        .sum()
-}
-
 impl Frame<'_> {
+    /// The order groups of orders ≥ 2 rendered: the tables' (at most the image's).
+    fn groups(&self) -> usize {
+        self.tables.groups().min(GROUP_FIRST.len() - 1)
+    }
+
     /// Every pixel, rows in parallel (deterministic: no randomness, sums in a fixed order).
     /// Also the sky term's share of the scattered light.
     fn pixels(&self, progress: &(dyn Fn(f64) + Sync)) -> (Rendered, Vec<GroupStats>, f64) {
@@ -466,16 +342,6 @@ impl Frame<'_> {
         (out, stats, sky_sum / all.max(1e-300))
     }
 
-    fn empty_stats(&self) -> Vec<GroupStats> {
-        GROUP_FIRST[1..]
-            .iter()
-            .map(|&f| GroupStats {
-                first_order: f,
-                ..Default::default()
-            })
-            .collect()
-    }
-
     /// One pixel: the mean over its n × n rays.
     fn pixel(&self, cam: &Pinhole, i: usize, j: usize, stats: &mut [GroupStats]) -> Pixel {
         let n = self.opts.rays as usize;
@@ -512,50 +378,14 @@ impl Frame<'_> {
         px.sun_tau = self.side.optical_depth(p);
         let sun32 = sun.map(|x| x as f32);
         match self.opts.method {
-            Method::Collector => {
-                let mut first_slab = None;
-                for (g, st) in stats.iter_mut().enumerate() {
-                    st.searches += 1;
-                    let found =
-                        find_collector(self.tables, g, &self.side, &vp, sun32, &self.opts.search);
-                    let Some(f) = found else {
-                        st.empty += 1;
-                        match self.coarse_slab(&vp, sun32) {
-                            Some(at) => {
-                                let t = self.tables.evaluate(g, &at).t as f64;
-                                px.sun[g + 1] = [alpha * t; 3];
-                                if let Some(sky) = &self.sky {
-                                    px.sky[g + 1] = alpha * sky.radiance(g + 1, &at);
-                                }
-                                st.dark += (t == 0.0) as u64;
-                            }
-                            None => st.dark += 1,
-                        }
-                        continue;
-                    };
-                    st.reads += f.reads as u64;
-                    st.converged += f.converged as u64;
-                    st.clamped_thickness += f.clamps.thickness as u64;
-                    st.clamped_mu_l += f.clamps.mu_l as u64;
-                    st.clamped_depth += f.clamps.depth as u64;
-                    st.held_by_view += f.clamps.view as u64;
-                    px.sun[g + 1] = [alpha * f.transport.t as f64; 3];
-                    if let Some(sky) = &self.sky {
-                        px.sky[g + 1] = alpha * sky.radiance(g + 1, &f.at);
-                    }
-                    first_slab.get_or_insert(f.at);
-                }
-                if let (Some(sky), Some(at)) = (&self.sky, first_slab) {
-                    px.sky[0] = alpha * sky.radiance(0, &at);
-                }
-            }
+            Method::Collector => self.collector(&mut px, alpha, &vp, sun32, stats),
             Method::Single | Method::Octaves => {
                 if self.opts.method == Method::Octaves {
                     px.sun[1] = self.octaves(cos, &v.integrals);
                 }
                 if let (Some(sky), Some(at)) = (&self.sky, self.coarse_slab(&vp, sun32)) {
                     // One slab for every group: the surface filtered at the cloud's size.
-                    for g in 0..GROUP_FIRST.len() {
+                    for g in 0..=self.groups() {
                         px.sky[g] = alpha * sky.radiance(g, &at);
                     }
                 }
@@ -565,92 +395,10 @@ impl Frame<'_> {
         px
     }
 
-    /// The slab of p under the surface filtered at the cloud's size (no search).
-    fn coarse_slab(&self, v: &Viewpoint, sun: [f32; 3]) -> Option<SlabPoint<f32>> {
-        let s = self.side.filtered(v.position, self.side.initial_scale())?;
-        Some(local_slab(self.tables, &s, v, sun).at)
-    }
-
     /// Σ_{1 ≤ i < N} bⁱ ϖ p_HG(θ; cⁱ g) I_{aⁱ} (per unit E_sun; octave 0 is order 1).
     fn octaves(&self, cos: f64, integrals: &[f64; MAX_OCTAVES]) -> [f64; 3] {
         let o = &self.opts.octaves;
         [o.scattered(self.g, self.scene.albedo, cos, integrals); 3]
-    }
-
-    /// Marches the view ray o + t w.
-    fn march(&self, o: Vec3, w: Vec3) -> ViewRay {
-        let mut v = ViewRay {
-            transmittance: 1.0,
-            ..Default::default()
-        };
-        let Some(range) = self.medium.clip(o, w) else {
-            return v;
-        };
-        let n_oct = if self.opts.method == Method::Octaves {
-            self.opts.octaves.n
-        } else {
-            1
-        };
-        let factors: [f64; MAX_OCTAVES] =
-            std::array::from_fn(|i| self.opts.octaves.a.powi(i as i32));
-        let at = |t: f64| -> Vec3 { std::array::from_fn(|k| o[k] + t * w[k]) };
-        let mut tau_a: Option<(f64, f64)> = None;
-        let (mut prev, mut densest) = (None::<(f64, f64)>, (0.0f64, 0.0f64));
-        // The view ray's optical depth so far, and where the surface point was found.
-        let (mut tau_v, mut tau_at_p, mut stopped) = (0.0f64, None::<f64>, false);
-        let mut tau_at_densest = 0.0;
-        let _: Option<()> = substeps(self.medium, o, w, range, self.step, |a, b, sigma| {
-            let h = b - a;
-            let ta = match tau_a {
-                Some((s, t)) if s == a => t,
-                _ => self.side.optical_depth(at(a)),
-            };
-            let tb = self.side.optical_depth(at(b));
-            tau_a = Some((b, tb));
-            let k = (tb - ta) / h;
-            for (i, integral) in v.integrals.iter_mut().enumerate().take(n_oct) {
-                let ai = factors[i];
-                let rate = sigma + ai * k;
-                let e = if rate.abs() * h < 1e-9 {
-                    h
-                } else {
-                    -(-rate * h).exp_m1() / rate
-                };
-                *integral += sigma * v.transmittance * (-ai * ta).exp() * e;
-            }
-            let mid = 0.5 * (a + b);
-            if v.surface.is_none() {
-                if sigma >= self.threshold {
-                    let s = match prev {
-                        Some((pm, ps)) if ps < self.threshold && sigma > ps => {
-                            pm + (mid - pm) * (self.threshold - ps) / (sigma - ps)
-                        }
-                        _ => a,
-                    };
-                    v.surface = Some(at(s));
-                    tau_at_p = Some(tau_v + sigma * (s - a).max(0.0));
-                } else if sigma > densest.1 {
-                    densest = (mid, sigma);
-                    tau_at_densest = tau_v + 0.5 * sigma * h;
-                }
-            }
-            prev = Some((mid, sigma));
-            tau_v += sigma * h;
-            v.transmittance *= (-sigma * h).exp();
-            if v.transmittance < 1e-4 {
-                stopped = true;
-                ControlFlow::Break(())
-            } else {
-                ControlFlow::Continue(())
-            }
-        });
-        if v.surface.is_none() && densest.1 > 0.0 {
-            v.surface = Some(at(densest.0));
-            tau_at_p = Some(tau_at_densest);
-        }
-        v.behind = (tau_v - tau_at_p.unwrap_or(tau_v)).max(0.0);
-        v.behind_exact = !stopped;
-        v
     }
 }
 
@@ -668,6 +416,7 @@ struct Pixel {
 }
 
 impl Pixel {
+    /// Adds `o` with weight `w`.
     fn add(&mut self, o: &Pixel, w: f64) {
         self.transmittance += w * o.transmittance;
         for g in 0..GROUP_FIRST.len() {
@@ -677,33 +426,5 @@ impl Pixel {
             self.sky[g] += w * o.sky[g];
         }
         self.sun_tau += w * o.sun_tau;
-    }
-}
-
-impl GroupStats {
-    fn add(&mut self, o: &GroupStats) {
-        self.searches += o.searches;
-        self.empty += o.empty;
-        self.dark += o.dark;
-        self.reads += o.reads;
-        self.converged += o.converged;
-        self.clamped_thickness += o.clamped_thickness;
-        self.clamped_mu_l += o.clamped_mu_l;
-        self.clamped_depth += o.clamped_depth;
-        self.held_by_view += o.held_by_view;
-    }
-}
-
-/// The region code of a pixel of opacity `alpha` whose surface point has sun optical depth
-/// `tau`.
-fn region_of(alpha: f64, tau: f64) -> u8 {
-    if alpha <= 0.5 {
-        region::EMPTY
-    } else if alpha < 0.99 {
-        region::SILHOUETTE
-    } else if tau < 2.0 {
-        region::LIT
-    } else {
-        region::SHADOWED
     }
 }

@@ -18,9 +18,9 @@
 //! crowded there (quadratic spacing: order 1 comes from the first mean free paths), linear
 //! between them, for the sun's transmittance at any point (order 1 and the octave baseline).
 
-use super::geometry::{cross, dot, normalize, Vec3};
 use super::march::substeps;
-use super::medium::Medium;
+use crate::render::geometry::{cross, dot, normalize, Vec3};
+use crate::render::medium::Medium;
 use nephele_runtime::transport::{FilteredSurface, LitSurface};
 use rayon::prelude::*;
 use std::ops::ControlFlow;

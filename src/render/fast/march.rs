@@ -2,8 +2,8 @@
 //! with the extinction on each, read from the majorant grid where a cell is homogeneous (no
 //! lookup) and at the sub-step's midpoint elsewhere; empty cells are skipped.
 
-use super::geometry::Vec3;
-use super::medium::Medium;
+use crate::render::geometry::Vec3;
+use crate::render::medium::Medium;
 use std::ops::ControlFlow;
 
 /// Calls `f(a, b, σ)` on consecutive sub-steps [a, b] (b − a ≤ `step`) of the ray o + t w

@@ -31,9 +31,9 @@
 //! it: once ϖⁿ falls below 10⁻³ the path survives with probability 0.1 per decade (its weight
 //! ×10) — never for ϖ = 1.
 
-use super::geometry::{dot, normalize, Vec3};
-use super::medium::Medium;
 use super::sun_lobe::{mis_weight, History, Step, SunLobe, MAX_STEPS};
+use crate::render::geometry::{dot, normalize, Vec3};
+use crate::render::medium::Medium;
 use nephele_runtime::PhaseFunction;
 use rand::Rng;
 use std::f64::consts::PI;

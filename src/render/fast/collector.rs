@@ -1,0 +1,116 @@
+//! The collector branch of the fast renderers (docs/collector.md, "The collector search"):
+//! orders ≥ 2 of a view ray from its surface point p, per order group g of the tables, by
+//! nephele-runtime's collector search on the sun side's lit surface — L_g = α T_g E_sun, α the
+//! ray's opacity — and the sky term S_g in the slab the search found; where the search finds
+//! no light, T and S are read in the slab of the surface filtered at the cloud's size. How the
+//! searches went is counted per group ([`GroupStats`], render.json).
+
+use super::{Frame, Pixel};
+use nephele_runtime::transport::{find_collector, local_slab, LitSurface, SlabPoint, Viewpoint};
+use serde::Serialize;
+
+/// Per group of orders ≥ 2: how the searches went.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct GroupStats {
+    /// First order of the group.
+    pub first_order: u32,
+    /// Searches run (pixels × rays with a surface point).
+    pub searches: u64,
+    /// Searches that found no light (no cloud on the light line through p, or T = 0 there):
+    /// T read instead in the slab of the surface filtered at the cloud's size.
+    pub empty: u64,
+    /// Of those, how many found no light there either (the group is 0 in that pixel).
+    pub dark: u64,
+    /// Table reads, summed.
+    pub reads: u64,
+    /// Searches that met the stopping rule before the cap.
+    pub converged: u64,
+    /// Searches whose last read held t, μ_L or d at the tables' domain.
+    pub clamped_thickness: u64,
+    /// See `clamped_thickness`.
+    pub clamped_mu_l: u64,
+    /// See `clamped_thickness`.
+    pub clamped_depth: u64,
+    /// Searches whose last read moved d so that the slab holds the view ray's medium beyond p.
+    pub held_by_view: u64,
+}
+
+impl GroupStats {
+    /// Adds the counts of `o` (another row of pixels).
+    pub(super) fn add(&mut self, o: &GroupStats) {
+        self.searches += o.searches;
+        self.empty += o.empty;
+        self.dark += o.dark;
+        self.reads += o.reads;
+        self.converged += o.converged;
+        self.clamped_thickness += o.clamped_thickness;
+        self.clamped_mu_l += o.clamped_mu_l;
+        self.clamped_depth += o.clamped_depth;
+        self.held_by_view += o.held_by_view;
+    }
+}
+
+impl Frame<'_> {
+    /// Orders ≥ 2 of a view ray of opacity `alpha` whose surface point the collector search
+    /// takes as `vp`, group by group into `px` (sun and sky; order 1's sky term from the first
+    /// slab found), the searches counted in `stats` (one entry per group).
+    pub(super) fn collector(
+        &self,
+        px: &mut Pixel,
+        alpha: f64,
+        vp: &Viewpoint,
+        sun32: [f32; 3],
+        stats: &mut [GroupStats],
+    ) {
+        let mut first_slab = None;
+        for (g, st) in stats.iter_mut().enumerate() {
+            st.searches += 1;
+            let found = find_collector(self.tables, g, &self.side, vp, sun32, &self.opts.search);
+            let Some(f) = found else {
+                st.empty += 1;
+                match self.coarse_slab(vp, sun32) {
+                    Some(at) => {
+                        let t = self.tables.evaluate(g, &at).t as f64;
+                        px.sun[g + 1] = [alpha * t; 3];
+                        if let Some(sky) = &self.sky {
+                            px.sky[g + 1] = alpha * sky.radiance(g + 1, &at);
+                        }
+                        st.dark += (t == 0.0) as u64;
+                    }
+                    None => st.dark += 1,
+                }
+                continue;
+            };
+            st.reads += f.reads as u64;
+            st.converged += f.converged as u64;
+            st.clamped_thickness += f.clamps.thickness as u64;
+            st.clamped_mu_l += f.clamps.mu_l as u64;
+            st.clamped_depth += f.clamps.depth as u64;
+            st.held_by_view += f.clamps.view as u64;
+            px.sun[g + 1] = [alpha * f.transport.t as f64; 3];
+            if let Some(sky) = &self.sky {
+                px.sky[g + 1] = alpha * sky.radiance(g + 1, &f.at);
+            }
+            first_slab.get_or_insert(f.at);
+        }
+        if let (Some(sky), Some(at)) = (&self.sky, first_slab) {
+            px.sky[0] = alpha * sky.radiance(0, &at);
+        }
+    }
+
+    /// Empty statistics, one entry per order group of the tables the image holds.
+    pub(super) fn empty_stats(&self) -> Vec<GroupStats> {
+        (0..self.groups())
+            .map(|g| GroupStats {
+                first_order: self.tables.group_first_order(g).map_or(0, |f| f as u32),
+                ..Default::default()
+            })
+            .collect()
+    }
+
+    /// The slab of p under the surface filtered at the cloud's size (no search).
+    pub(super) fn coarse_slab(&self, v: &Viewpoint, sun: [f32; 3]) -> Option<SlabPoint<f32>> {
+        let s = self.side.filtered(v.position, self.side.initial_scale())?;
+        Some(local_slab(self.tables, &s, v, sun).at)
+    }
+}

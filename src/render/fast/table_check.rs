@@ -1,0 +1,84 @@
+//! The fast renderers' checks of the transport tables against the scene: the tables are for one
+//! phase function and ϖ = 1, so a scene with another phase function or albedo is refused (or
+//! rendered with a warning); and the mean cosine g of the scene's phase function, which the
+//! octave baseline scales.
+
+use super::{FastOptions, Method};
+use crate::phase::Phase;
+use crate::render::scene::Scene;
+use anyhow::{bail, Result};
+use nephele_runtime::transport::TransportTables;
+
+/// The tables are for one phase function and ϖ = 1: the scene's must match (p within 5 % at
+/// every degree, the forward peak included) unless the caller allows a mismatch.
+pub(super) fn check_tables(
+    scene: &Scene,
+    tables: &TransportTables,
+    phases: &[Phase],
+    opts: &FastOptions,
+    warnings: &mut Vec<String>,
+) -> Result<()> {
+    // Without a sky, only the collector reads the tables.
+    if opts.method != Method::Collector && !scene.sky.iter().any(|&s| s > 0.0) {
+        return Ok(());
+    }
+    let mut problems = Vec::new();
+    if (scene.albedo - 1.0).abs() > 1e-9 {
+        problems.push(format!(
+            "the tables are for albedo 1, the scene's is {}",
+            scene.albedo
+        ));
+    }
+    let mut worst = (0.0f64, 0.0f64);
+    for deg in 0..=180 {
+        let mu = (deg as f64).to_radians().cos();
+        let p = channel_mean(phases, mu);
+        let q = tables.phase(mu as f32) as f64;
+        let rel = (p - q).abs() / q.max(1e-30);
+        if rel > worst.0 {
+            worst = (rel, deg as f64);
+        }
+    }
+    if worst.0 > 0.05 {
+        problems.push(format!(
+            "the scene's phase function differs from the tables' by {:.0} % at {}° (the \
+             tables are for one phase function and droplet size; make tables for this one with \
+             `nephele slab` and `nephele compress`, and pass them with --tables)",
+            100.0 * worst.0,
+            worst.1
+        ));
+    }
+    if problems.is_empty() {
+        return Ok(());
+    }
+    if opts.allow_mismatch {
+        for p in problems {
+            eprintln!("warning: {p}");
+            warnings.push(p);
+        }
+        return Ok(());
+    }
+    bail!(
+        "the scene does not match the transport tables: {} (--allow-table-mismatch renders \
+         anyway)",
+        problems.join("; ")
+    )
+}
+
+/// The mean of the channels' phase functions at cosine `mu`.
+fn channel_mean(phases: &[Phase], mu: f64) -> f64 {
+    phases.iter().map(|p| p.with(|f| f.eval(mu))).sum::<f64>() / phases.len() as f64
+}
+
+/// g = ∫ μ p dΩ of the channels' mean, by the midpoint rule on 20 000 angles.
+pub(super) fn mean_cosine(phases: &[Phase]) -> f64 {
+    let n = 20_000;
+    let h = std::f64::consts::PI / n as f64;
+    (0..n)
+        .map(|k| {
+            let th = (k as f64 + 0.5) * h;
+            let mu = th.cos();
+            2.0 * std::f64::consts::PI * mu * channel_mean(phases, mu) * th.sin() * h
+        })
+        .sum()
+}

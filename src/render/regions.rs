@@ -1,0 +1,26 @@
+//! The regions of an image (`regions.npy`, written by the fast renderers, read by `compare`):
+//! empty sky, the lit and the shadowed face of the cloud, and its silhouette, from a pixel's
+//! opacity and the sun's optical depth at its visible surface point.
+
+/// Opacity ≤ 0.5.
+pub const EMPTY: u8 = 0;
+/// Opaque, the visible surface point sunlit (τ_sun < 2).
+pub const LIT: u8 = 1;
+/// Opaque, the visible surface point in the cloud's shadow (τ_sun ≥ 2).
+pub const SHADOWED: u8 = 2;
+/// 0.5 < opacity < 0.99: the silhouette.
+pub const SILHOUETTE: u8 = 3;
+
+/// The region code of a pixel of opacity `alpha` whose surface point has sun optical depth
+/// `tau`.
+pub fn region_of(alpha: f64, tau: f64) -> u8 {
+    if alpha <= 0.5 {
+        EMPTY
+    } else if alpha < 0.99 {
+        SILHOUETTE
+    } else if tau < 2.0 {
+        LIT
+    } else {
+        SHADOWED
+    }
+}
