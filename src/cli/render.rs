@@ -3,7 +3,7 @@
 use anyhow::{Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use nephele::render::fast::{render_fast, FastOptions, Method, Octaves};
+use nephele::render::fast::{render_fast, FastOptions, Finite, Method, Octaves};
 use nephele::render::image::Rendered;
 use nephele::render::output::write_outputs;
 use nephele::render::path::render;
@@ -88,9 +88,33 @@ pub struct FastArgs {
     /// method as published).
     #[arg(long, default_value_t = 1.0, value_name = "F")]
     pub thickness_scale: f64,
+    /// Collector: the finite-cloud correction (docs/collector.md, "Finite clouds"): light lost
+    /// through the cloud's sides per order group (leakage, the default), the footprint's
+    /// coverage, both, or none (the method as published).
+    #[arg(long, value_enum, default_value_t = Correction::Leakage)]
+    pub correction: Correction,
+    /// Collector: the lateral loss rate κ⊥ times this factor (1: diffusion theory as is).
+    #[arg(long, default_value_t = 1.0, value_name = "K")]
+    pub leakage_scale: f64,
+    /// Collector: the sides count from order n_c = A (δ̄ + z_e)²/D on (0: from the first).
+    #[arg(long, default_value_t = 0.0, value_name = "A")]
+    pub leakage_delay: f64,
     /// Octaves: N, a, b, c of L ≈ Σ_{i<N} bⁱ σ_s p(θ; cⁱ g) E Tr_sun(aⁱ σ_t).
     #[arg(long, value_names = ["N", "A", "B", "C"], num_args = 4)]
     pub octaves: Option<Vec<f64>>,
+}
+
+/// The collector's finite-cloud correction.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Correction {
+    /// The method as published: the infinite slab's T.
+    None,
+    /// Light lost through the cloud's sides, per order group.
+    Leakage,
+    /// T weighed by the share of the collector's footprint that the cloud covers.
+    Coverage,
+    /// Leakage and coverage.
+    Both,
 }
 
 impl FastArgs {
@@ -126,6 +150,12 @@ impl FastArgs {
             },
             octaves,
             allow_mismatch: self.allow_table_mismatch,
+            finite: Finite {
+                leakage: matches!(self.correction, Correction::Leakage | Correction::Both),
+                coverage: matches!(self.correction, Correction::Coverage | Correction::Both),
+                rate_scale: self.leakage_scale,
+                delay_scale: self.leakage_delay,
+            },
             thickness_scale: self.thickness_scale,
         };
         o.validate()?;

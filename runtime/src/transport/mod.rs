@@ -20,12 +20,15 @@ macro_rules! form_module {
 }
 
 form_module!(collector, log_additive, single, tables);
+mod finite;
 mod geometry;
+pub mod leakage;
 mod search;
 
+pub use finite::{finite_cloud, mean_cosine, FiniteCloud, Kept};
 pub use geometry::SlabPoint;
 pub use search::{
-    find_collector, local_slab, Clamps, Collector, FilteredSurface, LitSurface, LocalSlab,
+    find_collector, local_slab, Clamps, Collector, FilteredSurface, Lateral, LitSurface, LocalSlab,
     SearchOptions, Viewpoint,
 };
 pub use single::{scattering_cosine, single_scattering, PhaseValue};

@@ -53,6 +53,24 @@ pub trait LitSurface {
 
     /// σ₀ (m): the scale of the first filtering, the cloud's size.
     fn initial_scale(&self) -> f32;
+
+    /// The cloud's cross-section seen from the sun, filtered at scale `sigma` (m) around the
+    /// light line through `at`: what the finite-cloud correction reads
+    /// ([`super::finite_cloud`]). None (the default) where the surface does not know it:
+    /// an unbounded slab.
+    fn lateral(&self, _at: Vec3<f32>, _sigma: f32) -> Option<Lateral> {
+        None
+    }
+}
+
+/// The cloud's cross-section across the light, filtered around a point at a scale.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lateral {
+    /// The share of the footprint the cloud covers, in [0, 1].
+    pub coverage: f32,
+    /// The mean, over the covered part of the footprint, of the distance across the light
+    /// to the cross-section's edge (m).
+    pub edge_distance: f32,
 }
 
 /// The search's settings.
@@ -145,6 +163,8 @@ pub struct Collector {
     pub converged: bool,
     /// Parameters held at the tables' domain in the last read.
     pub clamps: Clamps,
+    /// κ̄ (1/m) of the last read's slab: mfp per metre.
+    pub extinction: f32,
 }
 
 /// The local slab of a viewpoint under a filtered surface, and its horizontal frame.
@@ -338,6 +358,7 @@ pub fn find_collector<S: LitSurface + ?Sized>(
             reads,
             converged,
             clamps: slab.clamps,
+            extinction: slab.extinction,
         };
         if converged || reads >= opts.max_reads.max(1) {
             return Some(found);

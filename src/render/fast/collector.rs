@@ -4,10 +4,65 @@
 //! ray's opacity — and the sky term S_g in the slab the search found; where the search finds
 //! no light, T and S are read in the slab of the surface filtered at the cloud's size. How the
 //! searches went is counted per group ([`GroupStats`], render.json).
+//!
+//! The finite-cloud correction (docs/collector.md, "Finite clouds"): each group's T and S are
+//! multiplied by the share a finite, possibly absorbing cloud keeps of the infinite slab's
+//! light ([`finite_cloud`]: the sides' leakage from the cross-section around the collector,
+//! the medium's absorption; where no collector is found, the absorption alone).
 
 use super::{Frame, Pixel};
-use nephele_runtime::transport::{find_collector, local_slab, LitSurface, SlabPoint, Viewpoint};
+use nephele_runtime::transport::leakage::{group_survival, Loss};
+use nephele_runtime::transport::{
+    find_collector, finite_cloud, local_slab, mean_cosine, FiniteCloud, LitSurface, SlabPoint,
+    TransportTables, Viewpoint,
+};
 use serde::Serialize;
+
+/// The collector's finite-cloud correction (docs/collector.md, "Finite clouds").
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Finite {
+    /// Light lost through the cloud's sides, per order group (diffusion theory).
+    pub leakage: bool,
+    /// T weighed by the share of the collector's footprint the cloud covers (an ablation).
+    pub coverage: bool,
+    /// κ⊥ times this (1: diffusion theory as is, no fitted constant).
+    pub rate_scale: f64,
+    /// The sides count from order n_c = this × (δ̄ + z_e)²/D on (0: from the first order).
+    pub delay_scale: f64,
+}
+
+impl Finite {
+    /// The method as published: the infinite slab's T.
+    pub const PUBLISHED: Finite = Finite {
+        leakage: false,
+        coverage: false,
+        rate_scale: 1.0,
+        delay_scale: 0.0,
+    };
+
+    /// The runtime's settings: the tables' mean cosine, the scene's absorption κ_a = −ln ϖ
+    /// per scattering (applied whatever the correction: the tables are for ϖ = 1).
+    pub fn runtime(&self, tables: &TransportTables, albedo: f64) -> FiniteCloud {
+        FiniteCloud {
+            leakage: self.leakage,
+            coverage: self.coverage,
+            rate_scale: self.rate_scale as f32,
+            delay_scale: self.delay_scale as f32,
+            absorption: (-albedo.ln()).max(0.0) as f32,
+            mean_cosine: mean_cosine(tables),
+        }
+    }
+}
+
+impl Default for Finite {
+    /// Lateral leakage, no fitted constant.
+    fn default() -> Self {
+        Finite {
+            leakage: true,
+            ..Finite::PUBLISHED
+        }
+    }
+}
 
 /// Per group of orders ≥ 2: how the searches went.
 #[derive(Clone, Debug, Default, Serialize)]
@@ -33,6 +88,9 @@ pub struct GroupStats {
     pub clamped_depth: u64,
     /// Searches whose last read moved d so that the slab holds the view ray's medium beyond p.
     pub held_by_view: u64,
+    /// The finite-cloud correction's factors on T, summed over the searches that found a
+    /// collector (their mean: the share of the slab's light the cloud keeps).
+    pub kept: f64,
 }
 
 impl GroupStats {
@@ -47,6 +105,7 @@ impl GroupStats {
         self.clamped_mu_l += o.clamped_mu_l;
         self.clamped_depth += o.clamped_depth;
         self.held_by_view += o.held_by_view;
+        self.kept += o.kept;
     }
 }
 
@@ -70,10 +129,11 @@ impl Frame<'_> {
                 st.empty += 1;
                 match self.coarse_slab(vp, sun32) {
                     Some(at) => {
+                        let weight = alpha * self.absorbed(g, &at);
                         let t = self.tables.evaluate(g, &at).t as f64;
-                        px.sun[g + 1] = [alpha * t; 3];
+                        px.sun[g + 1] = [weight * t; 3];
                         if let Some(sky) = &self.sky {
-                            px.sky[g + 1] = alpha * sky.radiance(g + 1, &at);
+                            px.sky[g + 1] = weight * sky.radiance(g + 1, &at);
                         }
                         st.dark += (t == 0.0) as u64;
                     }
@@ -87,9 +147,12 @@ impl Frame<'_> {
             st.clamped_mu_l += f.clamps.mu_l as u64;
             st.clamped_depth += f.clamps.depth as u64;
             st.held_by_view += f.clamps.view as u64;
-            px.sun[g + 1] = [alpha * f.transport.t as f64; 3];
+            let kept = finite_cloud(self.tables, g, &self.side, &f, &self.finite).factor as f64;
+            st.kept += kept;
+            let weight = alpha * kept;
+            px.sun[g + 1] = [weight * f.transport.t as f64; 3];
             if let Some(sky) = &self.sky {
-                px.sky[g + 1] = alpha * sky.radiance(g + 1, &f.at);
+                px.sky[g + 1] = weight * sky.radiance(g + 1, &f.at);
             }
             first_slab.get_or_insert(f.at);
         }
@@ -106,6 +169,19 @@ impl Frame<'_> {
                 ..Default::default()
             })
             .collect()
+    }
+
+    /// The share of group `g` an absorbing medium keeps in the slab `at` (1 for ϖ = 1).
+    fn absorbed(&self, g: usize, at: &SlabPoint<f32>) -> f64 {
+        let loss = Loss {
+            absorption: self.finite.absorption,
+            lateral: 0.0,
+            delay: 0.0,
+        };
+        let first = self.tables.group_first_order(g).unwrap_or(2.0);
+        let last = self.tables.group_first_order(g + 1).map(|n| n - 1.0);
+        let g_mean = self.finite.mean_cosine;
+        group_survival(first, last, at.depth, at.thickness, g_mean, &loss) as f64
     }
 
     /// The slab of p under the surface filtered at the cloud's size (no search).

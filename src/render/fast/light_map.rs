@@ -21,12 +21,13 @@
 use super::march::substeps;
 use crate::render::geometry::{cross, dot, normalize, Vec3};
 use crate::render::medium::Medium;
-use nephele_runtime::transport::{FilteredSurface, LitSurface};
+use nephele_runtime::transport::{FilteredSurface, Lateral, LitSurface};
 use rayon::prelude::*;
 use std::ops::ControlFlow;
 
-/// Channels per texel: A, A·Z_min, A·Z_max, A·τ, A·N (3).
-const CHANNELS: usize = 7;
+/// Channels per texel: A, A·Z_min, A·Z_max, A·τ, A·N (3), A·δ (the distance across the
+/// light to the cross-section's edge, m: [`with_edge_distances`]).
+const CHANNELS: usize = 8;
 
 /// Orthographic light space: u, v across the beam, s along it (m, 0 on the sun's side of the
 /// bounds).
@@ -164,6 +165,7 @@ impl LightMaps {
             shadow.extend_from_slice(&c.shadow);
         }
         with_normals(&frame, &mut level0);
+        with_edge_distances(&frame, &mut level0);
         let mut levels = vec![(n, level0)];
         while levels.last().map_or(0, |l| l.0) > 1 {
             let (m, prev) = levels.last().expect("a level");
@@ -227,6 +229,16 @@ impl LightMaps {
             tau += w * ((1.0 - wz) * c[1 + k] as f64 + wz * c[2 + k] as f64);
         });
         tau
+    }
+
+    /// The light-space (u, v) of `at` and the channels filtered there at scale `sigma` (m);
+    /// None where the cloud covers less than 10⁻⁴ of the footprint.
+    fn covered(&self, at: [f32; 3], sigma: f32) -> Option<(f64, f64, [f64; CHANNELS])> {
+        let f = &self.frame;
+        let (u, v, _) = f.to_light(at.map(f64::from));
+        let level = (sigma as f64 / f.texel).max(1.0).log2();
+        let x = self.sample(u, v, level);
+        (x[0] >= 1e-4).then_some((u, v, x))
     }
 
     /// Level-0 texel size (m).
@@ -295,6 +307,84 @@ fn with_normals(f: &LightFrame, level0: &mut [f32]) {
             t[4..7].copy_from_slice(&nrm);
         }
     }
+}
+
+/// The distance δ (m) from each covered texel's centre to the edge of the cloud's cross-section
+/// across the light: the exact Euclidean distance to the nearest uncovered texel centre (the
+/// map's border counts as uncovered), less half a texel (the edge lies between the two
+/// centres). Two passes of the 1-D lower envelope of parabolas (Felzenszwalb & Huttenlocher
+/// 2012), by columns then by rows.
+fn with_edge_distances(f: &LightFrame, level0: &mut [f32]) {
+    let n = f.n;
+    let m = n + 2;
+    let far = (4 * m * m) as f64;
+    // Squared distances (texels²) on the map padded by one uncovered texel on every side.
+    let mut d2: Vec<f64> = (0..m * m)
+        .map(|k| {
+            let (i, j) = (k % m, k / m);
+            let inside = i >= 1 && j >= 1 && i <= n && j <= n;
+            if inside && level0[((j - 1) * n + i - 1) * CHANNELS] > 0.0 {
+                far
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let mut line = vec![0.0; m];
+    for pass in 0..2 {
+        for a in 0..m {
+            let at = |b: usize| if pass == 0 { b * m + a } else { a * m + b };
+            for (b, x) in line.iter_mut().enumerate() {
+                *x = d2[at(b)];
+            }
+            let out = lower_envelope(&line);
+            for (b, x) in out.into_iter().enumerate() {
+                d2[at(b)] = x;
+            }
+        }
+    }
+    for j in 0..n {
+        for i in 0..n {
+            let t = &mut level0[(j * n + i) * CHANNELS..(j * n + i + 1) * CHANNELS];
+            if t[0] > 0.0 {
+                let d = d2[(j + 1) * m + i + 1].sqrt();
+                t[7] = ((d - 0.5).max(0.5) * f.texel) as f32;
+            }
+        }
+    }
+}
+
+/// min over q of (p − q)² + g(q) for every p: the squared distance transform of one line.
+fn lower_envelope(g: &[f64]) -> Vec<f64> {
+    let n = g.len();
+    let (mut v, mut z) = (vec![0usize; n], vec![0.0f64; n + 1]);
+    let mut k = 0;
+    z[0] = f64::NEG_INFINITY;
+    z[1] = f64::INFINITY;
+    let cross = |q: usize, p: usize| {
+        ((g[q] + (q * q) as f64) - (g[p] + (p * p) as f64)) / (2.0 * (q as f64 - p as f64))
+    };
+    for q in 1..n {
+        let mut s = cross(q, v[k]);
+        while s <= z[k] {
+            k -= 1;
+            s = cross(q, v[k]);
+        }
+        k += 1;
+        v[k] = q;
+        z[k] = s;
+        z[k + 1] = f64::INFINITY;
+    }
+    let mut out = vec![0.0; n];
+    k = 0;
+    for (p, o) in out.iter_mut().enumerate() {
+        while z[k + 1] < p as f64 {
+            k += 1;
+        }
+        let d = p as f64 - v[k] as f64;
+        *o = d * d + g[v[k]];
+    }
+    out
 }
 
 /// Calls `f(texel index, weight)` for the texels of an m × m map around the continuous texel
@@ -390,12 +480,7 @@ fn column(medium: &dyn Medium, f: &LightFrame, i: usize, j: usize, o: &MapOption
 impl LitSurface for LightMaps {
     fn filtered(&self, at: [f32; 3], sigma: f32) -> Option<FilteredSurface> {
         let f = &self.frame;
-        let (u, v, _) = f.to_light(at.map(f64::from));
-        let level = (sigma as f64 / f.texel).max(1.0).log2();
-        let x = self.sample(u, v, level);
-        if x[0] < 1e-4 {
-            return None;
-        }
+        let (u, v, x) = self.covered(at, sigma)?;
         let (z0, z1, tau) = (x[1] / x[0], x[2] / x[0], x[3] / x[0]);
         let nl = (x[4] * x[4] + x[5] * x[5] + x[6] * x[6]).sqrt();
         let normal = if nl > 1e-9 {
@@ -413,6 +498,14 @@ impl LitSurface for LightMaps {
 
     fn initial_scale(&self) -> f32 {
         (self.frame.texel * self.frame.n as f64) as f32
+    }
+
+    fn lateral(&self, at: [f32; 3], sigma: f32) -> Option<Lateral> {
+        let (_, _, x) = self.covered(at, sigma)?;
+        Some(Lateral {
+            coverage: x[0] as f32,
+            edge_distance: (x[7] / x[0]) as f32,
+        })
     }
 }
 

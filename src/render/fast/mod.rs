@@ -47,9 +47,9 @@ use super::regions::region_of;
 use super::scene::Scene;
 use crate::phase::Phase;
 use anyhow::{ensure, Result};
-pub use collector::GroupStats;
+pub use collector::{Finite, GroupStats};
 use light_map::MapOptions;
-use nephele_runtime::transport::{SearchOptions, TransportTables, Viewpoint};
+use nephele_runtime::transport::{FiniteCloud, SearchOptions, TransportTables, Viewpoint};
 pub use octaves::{Octaves, MAX_OCTAVES};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -98,6 +98,8 @@ pub struct FastOptions {
     pub allow_mismatch: bool,
     /// An ablation: the local slabs' thickness times this factor (1: the method as is).
     pub thickness_scale: f64,
+    /// The collector's finite-cloud correction.
+    pub finite: Finite,
 }
 
 impl Default for FastOptions {
@@ -113,6 +115,7 @@ impl Default for FastOptions {
             octaves: Octaves::default(),
             allow_mismatch: false,
             thickness_scale: 1.0,
+            finite: Finite::default(),
         }
     }
 }
@@ -157,6 +160,15 @@ impl FastOptions {
             (1..=64).contains(&self.search.max_reads),
             "search iterations must be 1…64"
         );
+        let f = &self.finite;
+        ensure!(
+            f.rate_scale >= 0.0 && f.rate_scale.is_finite(),
+            "the leakage scale must be ≥ 0"
+        );
+        ensure!(
+            f.delay_scale >= 0.0 && f.delay_scale.is_finite(),
+            "the leakage delay must be ≥ 0"
+        );
         let o = &self.octaves;
         ensure!(
             (1..=MAX_OCTAVES).contains(&o.n),
@@ -183,6 +195,9 @@ struct Frame<'a> {
     /// p(θ) per channel and the mean cosine g (for the octaves).
     phases: Vec<Phase>,
     g: f64,
+    /// The collector's finite-cloud correction, with the tables' mean cosine and the scene's
+    /// absorption.
+    finite: FiniteCloud,
 }
 
 /// Renders `scene` with a fast method; `progress(fraction)` as rows finish.
@@ -225,6 +240,7 @@ pub fn render_fast(
         threshold,
         phases,
         g,
+        finite: opts.finite.runtime(tables, scene.albedo),
     };
     let t0 = Instant::now();
     let (image, stats, sky_share) = frame.pixels(progress);
@@ -280,6 +296,7 @@ pub fn surface_points(scene: &Scene, stride: usize) -> Result<(SunSide, Vec<View
         threshold,
         phases: Vec::new(),
         g: 0.0,
+        finite: FiniteCloud::published(0.0),
     };
     let mut points = Vec::new();
     for px in (0..cam.width * cam.height).step_by(stride.max(1)) {

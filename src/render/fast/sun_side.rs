@@ -7,7 +7,7 @@ use crate::render::geometry::Vec3;
 use crate::render::medium::Medium;
 use crate::render::scene::{MediumSpec, Scene};
 use anyhow::{bail, ensure, Result};
-use nephele_runtime::transport::{FilteredSurface, LitSurface};
+use nephele_runtime::transport::{FilteredSurface, Lateral, LitSurface};
 
 /// The sun's side of a scene: the lit surface and the sun's optical depth anywhere.
 pub enum SunSide {
@@ -74,6 +74,14 @@ impl LitSurface for SunSide {
             SunSide::Plane { h, .. } => 10.0 * *h as f32,
             SunSide::Maps(m) => m.initial_scale(),
             SunSide::Scaled(side, _) => side.initial_scale(),
+        }
+    }
+
+    fn lateral(&self, at: [f32; 3], sigma: f32) -> Option<Lateral> {
+        match self {
+            SunSide::Plane { .. } => None,
+            SunSide::Maps(m) => m.lateral(at, sigma),
+            SunSide::Scaled(side, _) => side.lateral(at, sigma),
         }
     }
 }

@@ -1,6 +1,7 @@
 //! The fast renderers' checks of the transport tables against the scene: the tables are for one
-//! phase function and ϖ = 1, so a scene with another phase function or albedo is refused (or
-//! rendered with a warning); and the mean cosine g of the scene's phase function, which the
+//! phase function and ϖ = 1, so a scene with another phase function is refused (or rendered
+//! with a warning), and so is another albedo but for the collector, whose finite-cloud
+//! correction weighs each group by what absorption leaves (docs/collector.md); and the mean cosine g of the scene's phase function, which the
 //! octave baseline scales.
 
 use super::{FastOptions, Method};
@@ -10,7 +11,8 @@ use anyhow::{bail, Result};
 use nephele_runtime::transport::TransportTables;
 
 /// The tables are for one phase function and ϖ = 1: the scene's must match (p within 5 % at
-/// every degree, the forward peak included) unless the caller allows a mismatch.
+/// every degree, the forward peak included; ϖ = 1 but for the collector, which weighs in the
+/// absorption) unless the caller allows a mismatch.
 pub(super) fn check_tables(
     scene: &Scene,
     tables: &TransportTables,
@@ -23,7 +25,7 @@ pub(super) fn check_tables(
         return Ok(());
     }
     let mut problems = Vec::new();
-    if (scene.albedo - 1.0).abs() > 1e-9 {
+    if (scene.albedo - 1.0).abs() > 1e-9 && opts.method != Method::Collector {
         problems.push(format!(
             "the tables are for albedo 1, the scene's is {}",
             scene.albedo

@@ -1,0 +1,128 @@
+//! The finite-cloud correction of a collector (docs/collector.md, "Finite clouds"): what share
+//! of the infinite slab's T_g a real cloud keeps.
+//!
+//! - **Lateral leakage**: the cross-section of the cloud across the light, filtered at the
+//!   collector's spread σ_g around its centre, has a mean distance δ̄ to its edge; a disk of
+//!   radius R has δ̄ = R/3, so R = 3 δ̄ (a strip of width W gives R = 3W/4, whose κ⊥ is within
+//!   5 % of the strip's own π² D / W²). In mfp with the collector's κ̄, κ⊥ = D j₀²/R_e², and the
+//!   group keeps [`group_survival`] of κ⊥ + κ_a ([`super::leakage`]). A small footprint deep
+//!   inside a wide cloud sees a large δ̄ and keeps nearly all; near an edge, or once σ_g spans
+//!   the cloud, the cloud's own size sets the loss.
+//! - **Absorption**: κ_a = −ln ϖ per scattering, exact for any ϖ given the orders' distribution.
+//! - **Coverage** (an ablation): T_g times the share of the collector's footprint that the
+//!   cloud covers, ⟨A⟩ at level log₂(σ_g/texel).
+
+use super::leakage::{
+    diffusion_coefficient, extrapolation_length, group_survival, lateral_rate, Loss,
+};
+use super::search::{Collector, LitSurface};
+use super::tables::TransportTables;
+use crate::real::Real;
+
+/// Which corrections apply, and the medium's constants.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FiniteCloud {
+    /// Lateral leakage through the cloud's sides.
+    pub leakage: bool,
+    /// Weigh T by the share of the collector's footprint the cloud covers.
+    pub coverage: bool,
+    /// κ⊥ times this (1: diffusion theory as is, no fitted constant).
+    pub rate_scale: f32,
+    /// The sides count from order n_c = this × (δ̄ + z_e)²/D on (0: from the first order).
+    pub delay_scale: f32,
+    /// κ_a = −ln ϖ per scattering (0 for water clouds in the visible).
+    pub absorption: f32,
+    /// g, the phase function's mean cosine (the tables').
+    pub mean_cosine: f32,
+}
+
+impl FiniteCloud {
+    /// The method as published: the infinite slab's T.
+    pub fn published(mean_cosine: f32) -> Self {
+        Self {
+            leakage: false,
+            coverage: false,
+            rate_scale: 1.0,
+            delay_scale: 0.0,
+            absorption: 0.0,
+            mean_cosine,
+        }
+    }
+
+    /// Lateral leakage from diffusion theory, no fitted constant, for `tables`' phase function.
+    pub fn for_tables(tables: &TransportTables) -> Self {
+        Self {
+            leakage: true,
+            ..Self::published(mean_cosine(tables))
+        }
+    }
+
+    /// Whether anything is corrected.
+    pub fn any(&self) -> bool {
+        self.leakage || self.coverage || self.absorption > 0.0
+    }
+}
+
+/// What one group's collector keeps.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Kept {
+    /// The factor on T_g, in [0, 1].
+    pub factor: f32,
+    /// The lateral radius R it used (mfp; infinite where the surface knows no edge).
+    pub radius: f32,
+    /// The footprint's coverage (1 where the surface does not know it).
+    pub coverage: f32,
+}
+
+/// The share of group `g`'s T that the cloud keeps at the collector `c` found on `surface`.
+pub fn finite_cloud<S: LitSurface + ?Sized>(
+    tables: &TransportTables,
+    g: usize,
+    surface: &S,
+    c: &Collector,
+    opts: &FiniteCloud,
+) -> Kept {
+    let mut kept = Kept {
+        factor: 1.0,
+        radius: f32::INFINITY,
+        coverage: 1.0,
+    };
+    if !opts.any() {
+        return kept;
+    }
+    let g_mean = opts.mean_cosine;
+    let mut loss = Loss {
+        absorption: opts.absorption.max(0.0),
+        lateral: 0.0,
+        delay: 0.0,
+    };
+    if let Some(l) = surface.lateral(c.centre, c.sigma) {
+        kept.coverage = l.coverage.clamp_to(0.0, 1.0);
+        if opts.leakage && l.edge_distance.is_finite() {
+            let edge = l.edge_distance * c.extinction;
+            kept.radius = 3.0 * edge;
+            loss.lateral = opts.rate_scale * lateral_rate(kept.radius, g_mean);
+            let reach = edge + extrapolation_length(g_mean);
+            loss.delay = opts.delay_scale * reach * reach / diffusion_coefficient(g_mean);
+        }
+    }
+    let first = tables.group_first_order(g).unwrap_or(2.0);
+    let last = tables.group_first_order(g + 1).map(|next| next - 1.0);
+    kept.factor = group_survival(first, last, c.at.depth, c.at.thickness, g_mean, &loss);
+    if opts.coverage {
+        kept.factor *= kept.coverage;
+    }
+    kept
+}
+
+/// g = ∮ μ p dΩ of the tables' phase function (midpoint rule on 4096 angles).
+pub fn mean_cosine(tables: &TransportTables) -> f32 {
+    let n = 4096;
+    let h = f64::PI / n as f64;
+    let mut sum = 0.0f64;
+    for k in 0..n {
+        let (sin, cos) = Real::sin_cos((k as f64 + 0.5) * h);
+        sum += 2.0 * f64::PI * cos * tables.phase(cos as f32) as f64 * sin * h;
+    }
+    sum as f32
+}

@@ -1,0 +1,104 @@
+//! The collector renderer on finite clouds against the path tracer run here (docs/collector.md,
+//! "Finite clouds"): on a sphere of optical diameter 40 and on the default cumulus lit from the
+//! front, the orders ≥ 2 summed over the opaque pixels must be within 25 % of the path
+//! tracer's with the finite-cloud correction (measured at 160 × 120: −10 % and −1 %), where the
+//! method as published is +70 % and +100 % (and this test checks it still is: the bound can
+//! fail). And an absorbing slab (ϖ = 0.9, 0.99): the collector's absorption term against the
+//! path tracer per order group summed, within 5 % + 3 SE.
+
+use nephele::render::fast::{render_fast, FastOptions, Finite};
+use nephele::render::image::{Rendered, GROUP_FIRST};
+use nephele::render::path::render;
+use nephele::render::scene::Scene;
+
+fn scene(name: &str, width: u32, height: u32, spp: u32) -> Scene {
+    let path = format!(
+        "{}/fit-configs/scenes/{name}.json",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let mut s = Scene::load(std::path::Path::new(&path)).unwrap();
+    s.camera.width = width;
+    s.camera.height = height;
+    s.spp = spp;
+    s.time_budget_s = None;
+    s
+}
+
+/// Σ over the pixels the reference sees as opaque (transmittance < 0.5) of orders ≥ 2 (channel
+/// 0), and its standard error from the reference's split-sample halves (0 for a fast render).
+fn scattered(r: &Rendered, mask: &[bool]) -> (f64, f64) {
+    let n = r.width * r.height;
+    let ng = GROUP_FIRST.len();
+    let (mut sum, mut var) = (0.0, 0.0);
+    for px in (0..n).filter(|&px| mask[px]) {
+        let at = |a: &[f32], half: usize, g: usize| a[((half * ng + g) * n + px) * 3] as f64;
+        sum += (1..ng)
+            .map(|g| r.groups[(g * n + px) * 3] as f64)
+            .sum::<f64>();
+        if !r.halves.is_empty() {
+            let d: f64 = (1..ng)
+                .map(|g| at(&r.halves, 0, g) - at(&r.halves, 1, g))
+                .sum();
+            var += 0.25 * d * d;
+        }
+    }
+    (sum, var.sqrt())
+}
+
+/// The relative bias of orders ≥ 2 of the collector with `finite` against the path tracer,
+/// and the reference's relative standard error.
+fn bias(reference: &Rendered, s: &Scene, finite: Finite) -> (f64, f64) {
+    let opts = FastOptions {
+        finite,
+        map_resolution: 128,
+        ..FastOptions::default()
+    };
+    let tables = nephele_runtime::embedded::mie_10um();
+    let fast = render_fast(s, &tables, &opts, &|_| {}).unwrap();
+    let mask: Vec<bool> = reference.transmittance.iter().map(|&t| t < 0.5).collect();
+    assert!(
+        mask.iter().filter(|&&m| m).count() > 50,
+        "too few opaque pixels"
+    );
+    let (r, se) = scattered(reference, &mask);
+    let (c, _) = scattered(&fast, &mask);
+    (c / r - 1.0, se / r)
+}
+
+#[test]
+fn the_finite_cloud_correction_brings_orders_above_one_near_the_path_tracer() {
+    for (name, published_at_least) in [("sphere40", 0.4), ("cloud_front", 0.5)] {
+        let s = scene(name, 40, 30, 96);
+        let reference = render(&s, &|_| {}).unwrap();
+        let (corrected, se) = bias(&reference, &s, Finite::default());
+        let (published, _) = bias(&reference, &s, Finite::PUBLISHED);
+        eprintln!(
+            "{name}: orders ≥ 2 corrected {:+.1} %, published {:+.1} % (reference SE {:.1} %)",
+            100.0 * corrected,
+            100.0 * published,
+            100.0 * se
+        );
+        assert!(se < 0.03, "{name}: the reference is too noisy ({se})");
+        assert!(corrected.abs() < 0.25 + 3.0 * se, "{name}: {corrected}");
+        assert!(
+            published > published_at_least,
+            "{name}: published {published}"
+        );
+    }
+}
+
+#[test]
+fn an_absorbing_slab_keeps_what_the_path_tracer_keeps() {
+    for albedo in [0.9, 0.99] {
+        let mut s = scene("slab", 12, 8, 256);
+        s.albedo = albedo;
+        let reference = render(&s, &|_| {}).unwrap();
+        let (b, se) = bias(&reference, &s, Finite::default());
+        eprintln!(
+            "ϖ = {albedo}: orders ≥ 2 {:+.2} % ± {:.2} %",
+            100.0 * b,
+            100.0 * se
+        );
+        assert!(b.abs() < 0.05 + 3.0 * se, "ϖ = {albedo}: {b} ± {se}");
+    }
+}
