@@ -17,6 +17,7 @@
 
 use super::image::GROUP_FIRST;
 use super::output::{exposure, tone_map_with};
+use crate::io::plot::{image_grid, Tile};
 use crate::io::AtomicFiles;
 use anyhow::{bail, ensure, Context, Result};
 use serde::Serialize;
@@ -77,7 +78,7 @@ impl RenderDir {
         let regions = dir.join("regions.npy");
         Ok(Self {
             dir: dir.to_path_buf(),
-            method: meta["method"].as_str().unwrap_or("path_tracer").to_string(),
+            method: method_name(&meta),
             size: (w as usize, h as usize),
             groups: read_npy(&dir.join("groups.npy"), &[ng, h, w, 3])?,
             beauty: read_npy(&dir.join("beauty.npy"), &[h, w, 3])?,
@@ -386,6 +387,23 @@ fn split_variance(q: Quantity, halves: &[f32], n: usize) -> Vec<f64> {
         .collect()
 }
 
+/// A render's method as render.json names it, with the collector's finite-cloud correction
+/// when it has one ("collector (leakage)").
+fn method_name(meta: &serde_json::Value) -> String {
+    let method = meta["method"].as_str().unwrap_or("path_tracer");
+    match meta["details"]["correction"].as_str() {
+        Some(c) if method == "collector" => format!("{method} ({c})"),
+        _ => method.to_string(),
+    }
+}
+
+/// The colour bar of [`error_image`] as a w × h tile: −50 % on the left, +50 % on the right.
+fn colour_bar(w: usize, h: usize) -> Tile {
+    let error = |i: usize| (i as f64 + 0.5) / w as f64 - 0.5;
+    let c: Vec<f64> = (0..w * h).map(|k| 1.0 + error(k % w)).collect();
+    Tile::new(error_image(&c, &vec![1.0; w * h], &vec![true; w * h]), w, h)
+}
+
 /// The signed relative error (c − r)/r̄ per pixel as false colour: blue −50 %, white 0, red
 /// +50 % (r̄ the reference's opaque mean; transparent pixels grey).
 fn error_image(c: &[f64], r: &[f64], opaque: &[bool]) -> Vec<u8> {
@@ -435,7 +453,6 @@ fn figures(
     k_beauty: f32,
     errors: &[(usize, String, Vec<u8>)],
 ) -> Result<()> {
-    use crate::io::plot::{image_grid, Tile};
     let (w, h) = r.size;
     let n = w * h;
     let ng = GROUP_FIRST.len();
@@ -482,10 +499,8 @@ fn figures(
                     .map(|(_, _, img)| Tile::new(img.clone(), w, h))
             })
             .collect();
-        err_rows.push((
-            format!("{name}: (c - r)/<r>, blue -50 % … red +50 %"),
-            tiles,
-        ));
+        err_rows.push((format!("{name}: (c−r)/⟨r⟩"), tiles));
     }
+    err_rows.push(("−50 % … 0 … +50 %".into(), vec![Some(colour_bar(w, h))]));
     image_grid(&out.join("errors.png"), &cols[1..], &err_rows)
 }

@@ -40,6 +40,23 @@ impl Finite {
         delay_scale: 0.0,
     };
 
+    /// Its name in render.json and in `nephele compare`'s columns.
+    pub fn name(&self) -> String {
+        let mut name = match (self.leakage, self.coverage) {
+            (false, false) => "as published".to_string(),
+            (true, false) => "leakage".to_string(),
+            (false, true) => "coverage".to_string(),
+            (true, true) => "leakage+coverage".to_string(),
+        };
+        if self.leakage && self.rate_scale != 1.0 {
+            name += &format!(", κ⊥ × {}", self.rate_scale);
+        }
+        if self.leakage && self.delay_scale != 0.0 {
+            name += &format!(", delay {}", self.delay_scale);
+        }
+        name
+    }
+
     /// The runtime's settings: the tables' mean cosine, the scene's absorption κ_a = −ln ϖ
     /// per scattering (applied whatever the correction: the tables are for ϖ = 1).
     pub fn runtime(&self, tables: &TransportTables, albedo: f64) -> FiniteCloud {

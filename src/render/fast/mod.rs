@@ -250,6 +250,7 @@ pub fn render_fast(
     r.seconds = seconds;
     r.details = serde_json::json!({
         "method": opts.method,
+        "correction": opts.finite.name(),
         "options": opts,
         "search": {
             "max_reads": opts.search.max_reads,
