@@ -8,7 +8,8 @@
 //! The finite-cloud correction (docs/collector.md, "Finite clouds"): each group's T and S are
 //! multiplied by the share a finite, possibly absorbing cloud keeps of the infinite slab's
 //! light ([`finite_cloud`]: the sides' leakage from the cross-section around the collector,
-//! the medium's absorption; where no collector is found, the absorption alone).
+//! the medium's absorption; where no collector is found, the absorption alone); the sky term
+//! by what absorption leaves only (under a uniform sky the sides gain what they leak).
 
 use super::{Frame, Pixel};
 use nephele_runtime::transport::leakage::{group_survival, Loss};
@@ -166,10 +167,12 @@ impl Frame<'_> {
             st.held_by_view += f.clamps.view as u64;
             let kept = finite_cloud(self.tables, g, &self.side, &f, &self.finite).factor as f64;
             st.kept += kept;
-            let weight = alpha * kept;
-            px.sun[g + 1] = [weight * f.transport.t as f64; 3];
+            px.sun[g + 1] = [alpha * kept * f.transport.t as f64; 3];
             if let Some(sky) = &self.sky {
-                px.sky[g + 1] = weight * sky.radiance(g + 1, &f.at);
+                // A conservative body under a uniform sky glows at the sky's radiance whatever
+                // its shape: the sky entering its sides replaces what leaks out, so the sky
+                // term loses only what absorption takes.
+                px.sky[g + 1] = alpha * self.absorbed(g, &f.at) * sky.radiance(g + 1, &f.at);
             }
             first_slab.get_or_insert(f.at);
         }
