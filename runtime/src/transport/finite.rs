@@ -12,6 +12,7 @@
 //! - **Coverage** (an ablation): T_g times the share of the collector's footprint that the
 //!   cloud covers, ⟨A⟩ at level log₂(σ_g/texel).
 
+use super::geometry::SlabPoint;
 use super::leakage::{
     diffusion_coefficient, extrapolation_length, group_survival, lateral_rate, Loss,
 };
@@ -106,13 +107,39 @@ pub fn finite_cloud<S: LitSurface + ?Sized>(
             loss.delay = opts.delay_scale * reach * reach / diffusion_coefficient(g_mean);
         }
     }
-    let first = tables.group_first_order(g).unwrap_or(2.0);
-    let last = tables.group_first_order(g + 1).map(|next| next - 1.0);
+    let (first, last) = group_orders(tables, g);
     kept.factor = group_survival(first, last, c.at.depth, c.at.thickness, g_mean, &loss);
     if opts.coverage {
         kept.factor *= kept.coverage;
     }
     kept
+}
+
+/// The share of group `g`'s T an absorbing medium keeps in the slab `at` (1 for ϖ = 1): what
+/// applies where no collector was found, and to the sky term (under a uniform sky a body's
+/// sides gain what they leak, so only absorption takes light from it).
+pub fn absorbed(
+    tables: &TransportTables,
+    g: usize,
+    at: &SlabPoint<f32>,
+    opts: &FiniteCloud,
+) -> f32 {
+    let loss = Loss {
+        absorption: opts.absorption.max(0.0),
+        lateral: 0.0,
+        delay: 0.0,
+    };
+    let (first, last) = group_orders(tables, g);
+    group_survival(first, last, at.depth, at.thickness, opts.mean_cosine, &loss)
+}
+
+/// The orders group `g` holds: its first and its last (None: no end).
+fn group_orders(tables: &TransportTables, g: usize) -> (f32, Option<f32>) {
+    let first = tables.group_first_order(g).unwrap_or(2.0);
+    (
+        first,
+        tables.group_first_order(g + 1).map(|next| next - 1.0),
+    )
 }
 
 /// g = ∮ μ p dΩ of the tables' phase function (midpoint rule on 4096 angles).

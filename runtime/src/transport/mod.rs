@@ -25,7 +25,7 @@ mod geometry;
 pub mod leakage;
 mod search;
 
-pub use finite::{finite_cloud, mean_cosine, FiniteCloud, Kept};
+pub use finite::{absorbed, finite_cloud, mean_cosine, FiniteCloud, Kept};
 pub use geometry::SlabPoint;
 pub use search::{
     find_collector, local_slab, Clamps, Collector, FilteredSurface, Lateral, LitSurface, LocalSlab,

@@ -12,10 +12,9 @@
 //! by what absorption leaves only (under a uniform sky the sides gain what they leak).
 
 use super::{Frame, Pixel};
-use nephele_runtime::transport::leakage::{group_survival, Loss};
 use nephele_runtime::transport::{
-    find_collector, finite_cloud, local_slab, mean_cosine, FiniteCloud, LitSurface, SlabPoint,
-    TransportTables, Viewpoint,
+    absorbed, find_collector, finite_cloud, local_slab, mean_cosine, FiniteCloud, LitSurface,
+    SlabPoint, TransportTables, Viewpoint,
 };
 use serde::Serialize;
 
@@ -193,15 +192,7 @@ impl Frame<'_> {
 
     /// The share of group `g` an absorbing medium keeps in the slab `at` (1 for ϖ = 1).
     fn absorbed(&self, g: usize, at: &SlabPoint<f32>) -> f64 {
-        let loss = Loss {
-            absorption: self.finite.absorption,
-            lateral: 0.0,
-            delay: 0.0,
-        };
-        let first = self.tables.group_first_order(g).unwrap_or(2.0);
-        let last = self.tables.group_first_order(g + 1).map(|n| n - 1.0);
-        let g_mean = self.finite.mean_cosine;
-        group_survival(first, last, at.depth, at.thickness, g_mean, &loss) as f64
+        absorbed(self.tables, g, at, &self.finite) as f64
     }
 
     /// The slab of p under the surface filtered at the cloud's size (no search).
