@@ -198,24 +198,13 @@ impl<R: Real> Orders<R> {
 }
 
 /// W(n₀, s) = ∫₀^{n₀} f(n) e^{−s n} dn for the first-passage density f across `z` with
-/// diffusion coefficient `diffusion` (module docs), in the scaled complementary error function
-/// so that neither term overflows: e^{±zq} erfc(u ∓ v) = e^{−u² − v²} erfcx(u ∓ v) (u ∓ v ≥ 0).
+/// diffusion coefficient `diffusion` (module docs): ½ [e^{−zq} erfc(u − v) + e^{zq} erfc(u + v)].
 fn below<R: Real>(n0: R, s: R, z: R, diffusion: R) -> R {
-    let zero = R::of(0.0);
-    if !(n0 > zero) {
-        return zero;
+    if !(n0 > R::of(0.0)) {
+        return R::of(0.0);
     }
-    let u = z / (R::of(2.0) * (diffusion * n0).sqrt());
-    let v = (s * n0).sqrt();
-    let damp = (-(u * u) - v * v).exp();
-    let plus = damp * erfcx(u + v);
-    let minus = if u >= v {
-        damp * erfcx(u - v)
-    } else {
-        // erfc(u − v) = 2 − erfc(v − u).
-        R::of(2.0) * (-(R::of(2.0) * u * v)).exp() - damp * erfcx(v - u)
-    };
-    R::of(0.5) * (minus + plus)
+    let p = Passage::new(n0, s, z, diffusion);
+    R::of(0.5) * (p.tilted_erfc(p.u - p.v) + p.damp * erfcx(p.u + p.v))
 }
 
 /// W(∞, s) − W(n₀, s), without the cancellation of the difference:
@@ -225,21 +214,41 @@ fn above<R: Real>(n0: R, s: R, z: R, diffusion: R) -> R {
     if !(n0 > zero) {
         return (-z * (s / diffusion).sqrt()).exp();
     }
-    let u = z / (R::of(2.0) * (diffusion * n0).sqrt());
-    let v = (s * n0).sqrt();
-    let damp = (-(u * u) - v * v).exp();
-    let plus = damp * erfcx(u + v);
-    let first = if v >= u {
-        damp * erfcx(v - u)
-    } else {
-        // erfc(v − u) = 2 − erfc(u − v).
-        R::of(2.0) * (-(R::of(2.0) * u * v)).exp() - damp * erfcx(u - v)
-    };
-    let tail = R::of(0.5) * (first - plus);
+    let p = Passage::new(n0, s, z, diffusion);
+    let tail = R::of(0.5) * (p.tilted_erfc(p.v - p.u) - p.damp * erfcx(p.u + p.v));
     if tail > zero {
         tail
     } else {
         zero
+    }
+}
+
+/// The arguments of W at n₀: u = z/(2√(D n₀)), v = √(s n₀) (zq = 2uv), and e^{−u² − v²}.
+struct Passage<R> {
+    u: R,
+    v: R,
+    damp: R,
+}
+
+impl<R: Real> Passage<R> {
+    fn new(n0: R, s: R, z: R, diffusion: R) -> Self {
+        let u = z / (R::of(2.0) * (diffusion * n0).sqrt());
+        let v = (s * n0).sqrt();
+        Self {
+            u,
+            v,
+            damp: (-(u * u) - v * v).exp(),
+        }
+    }
+
+    /// e^{−2uv} erfc(x) for x = ±(u − v), in the scaled erfcx so that nothing overflows:
+    /// e^{−u² − v²} erfcx(x) for x ≥ 0, else 2 e^{−2uv} − e^{−u² − v²} erfcx(−x).
+    fn tilted_erfc(&self, x: R) -> R {
+        if x >= R::of(0.0) {
+            self.damp * erfcx(x)
+        } else {
+            R::of(2.0) * (-(R::of(2.0) * self.u * self.v)).exp() - self.damp * erfcx(-x)
+        }
     }
 }
 
