@@ -1,38 +1,10 @@
 //! The `nephele` binary: outputs on success, one clear error line and no files on bad input.
 
+mod common;
+
+use common::cli::{files_in, nephele, succeeds};
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn nephele(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_nephele"))
-        .args(args)
-        .output()
-        .expect("run nephele")
-}
-
-fn files_in(dir: &Path) -> Vec<String> {
-    match std::fs::read_dir(dir) {
-        Ok(rd) => {
-            let mut names: Vec<String> = rd
-                .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-                .collect();
-            names.sort();
-            names
-        }
-        Err(_) => vec![],
-    }
-}
-
-/// Runs nephele and asserts that it succeeded.
-fn succeeds(args: &[&str]) -> Output {
-    let o = nephele(args);
-    assert!(
-        o.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    o
-}
+use std::process::Command;
 
 #[test]
 fn mie_writes_npz_json_csv_and_plot() {
