@@ -87,6 +87,18 @@ fn tabulated_mie_tables_are_normalised_exact_at_nodes_and_sample_correctly() {
     }
 }
 
+/// Like every single-lobe model, the table samples μ = −1 at ξ = 0 and μ grows with ξ (its CDF
+/// runs in θ, forward first; docs/conventions.md, Sampling tables).
+#[test]
+fn the_tabulated_sampler_runs_from_back_to_forward() {
+    let t = mie(10.0);
+    let table = TabulatedTable::<f64>::from_phase(&t.theta_deg, &t.phase).unwrap();
+    let p = table.view();
+    let mu: Vec<f64> = (0..=4096).map(|k| p.sample_mu(k as f64 / 4096.0)).collect();
+    assert!(mu[0] < -0.999 && mu[4096] > 0.999, "{} → {}", mu[0], mu[4096]);
+    assert!(mu.windows(2).all(|w| w[1] >= w[0]), "decreases");
+}
+
 #[test]
 fn bad_tables_are_refused() {
     use nephele_runtime::phase::TableError;

@@ -148,9 +148,7 @@ pub fn run(args: PhaseArgs) -> Result<()> {
         .iter()
         .map(|d| model.eval(d.to_radians().cos()))
         .collect();
-    let icdf: Vec<f64> = (0..args.lut)
-        .map(|i| model.sample_mu(i as f64 / (args.lut - 1) as f64))
-        .collect();
+    let icdf = nephele::phase::lut::inverse_cdf(model.as_ref(), args.lut);
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(args.seed);
     let samples: Vec<f64> = (0..args.samples)
         .map(|_| model.sample_mu(rng.random::<f64>()))
@@ -169,7 +167,7 @@ pub fn run(args: PhaseArgs) -> Result<()> {
         "conventions": {
             "phase": "p(mu), normalised over the sphere, 1/sr; mu = cos(theta), theta between incident and scattered propagation directions",
             "lut_phase": "p at lut_theta_deg, uniform in theta from 0 to 180 degrees",
-            "icdf_mu": "mu = sample_mu(xi) at xi uniform from 0 to 1 (inverse CDF for single-lobe models)",
+            "icdf_mu": "mu = F^-1(xi) at xi = i/(n-1), F(mu) = 2 pi int_{-1}^{mu} p: increases from -1 (xi = 0, backward) to +1 (xi = 1, forward) for every model; interpolate linearly in xi",
             "samples_mu": "cosines drawn with xi from xoshiro256++ seeded with `seed`"
         }
     });
@@ -203,6 +201,7 @@ pub fn run(args: PhaseArgs) -> Result<()> {
 
 /// theta_deg and phase of a `nephele mie` npz.
 fn read_table(path: &std::path::Path) -> Result<(Vec<f64>, Vec<f64>)> {
-    let (theta, mut columns) = nephele::mie::output::read_phase(path, false)?;
+    let (theta, mut columns) = nephele::mie::output::read_phase(path, false)
+        .context("--table takes the phase.npz of `nephele mie`")?;
     Ok((theta, columns.pop().unwrap_or_default()))
 }

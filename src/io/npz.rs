@@ -7,8 +7,7 @@ use std::path::Path;
 
 /// The named float64 arrays of an `.npz` file, flattened (errors name the file and the array).
 pub fn read_arrays(path: &Path, names: &[&str]) -> Result<Vec<Vec<f64>>> {
-    let mut npz = npyz::npz::NpzArchive::open(path)
-        .with_context(|| format!("cannot open '{}'", path.display()))?;
+    let mut npz = open(path)?;
     names
         .iter()
         .map(|name| {
@@ -20,11 +19,24 @@ pub fn read_arrays(path: &Path, names: &[&str]) -> Result<Vec<Vec<f64>>> {
         .collect()
 }
 
+/// An `.npz` archive, refused with what it is instead when it is not one (a zip's first bytes
+/// are `PK`): "invalid Zip archive" does not tell a user they passed the JSON sidecar.
+fn open(path: &Path) -> Result<npyz::npz::NpzArchive<std::io::BufReader<std::fs::File>>> {
+    let mut head = [0u8; 2];
+    let file = std::fs::File::open(path).with_context(|| format!("cannot open '{}'", path.display()))?;
+    let is_zip = std::io::Read::read_exact(&mut &file, &mut head).is_ok() && head == *b"PK";
+    anyhow::ensure!(
+        is_zip,
+        "'{}' is not an .npz archive (NumPy's zip of arrays); pass the .npz, not its .json or .csv",
+        path.display()
+    );
+    npyz::npz::NpzArchive::open(path).with_context(|| format!("cannot open '{}'", path.display()))
+}
+
 /// The named float64 array of an `.npz` file, flattened, or None where the file has no such
 /// array (an optional part of a format).
 pub fn read_optional(path: &Path, name: &str) -> Result<Option<Vec<f64>>> {
-    let mut npz = npyz::npz::NpzArchive::open(path)
-        .with_context(|| format!("cannot open '{}'", path.display()))?;
+    let mut npz = open(path)?;
     let context = || format!("'{}': array '{name}'", path.display());
     let values = match npz.by_name(name).with_context(context)? {
         Some(arr) => Some(arr.into_vec::<f64>().with_context(context)?),

@@ -7,6 +7,7 @@
 //! on each other.
 
 mod function;
+pub mod lut;
 mod model;
 mod spec;
 

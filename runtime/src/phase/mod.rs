@@ -69,7 +69,9 @@ pub trait PhaseFunction<F: Real> {
         self.eval(mu)
     }
 
-    /// A scattering cosine distributed as p, from ξ ∈ [0, 1].
+    /// A scattering cosine distributed as p, from ξ ∈ [0, 1]. Single-lobe models invert the
+    /// CDF of μ, F(μ) = 2π ∫_{−1}^{μ} p: ξ = 0 gives μ = −1 and μ increases with ξ. Mixtures
+    /// pick a lobe with ξ, so theirs is not monotone (docs/conventions.md, Sampling tables).
     fn sample_mu(&self, xi: F) -> F {
         self.sample_cosine(xi).mu
     }

@@ -108,6 +108,9 @@ impl<F: Real> PhaseFunction<F> for Tabulated<'_, F> {
     }
 
     fn sample_cosine(&self, xi: F) -> Cosine<F> {
+        // The table's CDF runs in θ, forward first. ξ counts from the back (μ = −1), as in every
+        // other model's inverse CDF, so that ξ ↦ μ increases for all of them (docs/conventions.md).
+        let xi = F::of(1.0) - xi;
         let n = self.cdf.len();
         let i = if self.guide.is_empty() {
             self.cdf.partition_point(|c| *c <= xi).clamp(1, n - 1) - 1
