@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 use clap::Args;
-use nephele::render::compare::{compare, Report};
+use nephele::render::compare::{compare_with, Report, Stats, LEGEND};
 use std::path::PathBuf;
 
 /// Options of `nephele compare`.
@@ -18,11 +18,15 @@ pub struct CompareArgs {
     /// Output directory: report.json, reference.png, candidate<k>.png, panel.png, errors.png.
     #[arg(long, value_name = "DIR", default_value = "outputs/compare")]
     pub out: PathBuf,
+    /// Exposure K of the images: 1 − e^{−K x} of the linear radiance x [default: the
+    /// reference's, from its render.json]. The per-order rows of panel.png keep their own.
+    #[arg(long, value_name = "K", value_parser = nephele::render::output::parse_exposure)]
+    pub exposure: Option<f32>,
 }
 
 /// Runs `nephele compare`.
 pub fn run(args: CompareArgs) -> Result<()> {
-    let report = compare(&args.reference, &args.candidate, &args.out)?;
+    let report = compare_with(&args.reference, &args.candidate, &args.out, args.exposure)?;
     print_table(&report);
     println!(
         "wrote {}/report.json, panel.png, errors.png, reference.png, candidate*.png (mean FLIP: \
@@ -33,25 +37,43 @@ pub fn run(args: CompareArgs) -> Result<()> {
     Ok(())
 }
 
-/// The table on stdout: per candidate and quantity, over the opaque pixels, then the regions
-/// of orders ≥ 2.
+/// Seconds with three significant digits (0.570 s, 12.3 s, 135 s): a fast render's 0.57 s
+/// must not read "1 s".
+pub fn seconds(s: f64) -> String {
+    if !s.is_finite() || s <= 0.0 {
+        return "? s".into(); // render.json without its seconds
+    }
+    let decimals = (2 - s.log10().floor() as i32).clamp(0, 6) as usize;
+    format!("{s:.decimals$} s")
+}
+
+/// The table on stdout: a legend, then per candidate and quantity, over the opaque pixels,
+/// then the regions of orders ≥ 2.
 pub fn print_table(report: &Report) {
+    println!("{LEGEND}");
     println!(
-        "reference {} ({}, {} spp, {:.0} s)",
-        report.reference, report.reference_method, report.reference_spp, report.reference_seconds
+        "reference {} ({}, {} spp, {}); images at exposure {:.3}",
+        report.reference,
+        report.reference_method,
+        report.reference_spp,
+        seconds(report.reference_seconds),
+        report.exposure
     );
     for c in &report.candidates {
         println!(
-            "\n{} ({}): {:.3} s a frame, beauty PSNR {:.1} dB",
-            c.dir, c.method, c.seconds, c.psnr_db
+            "\n{} ({}): {} a frame, beauty PSNR {:.1} dB",
+            c.dir,
+            c.method,
+            seconds(c.seconds),
+            c.psnr_db
         );
         println!(
-            "  {:<14} {:>8} {:>8} {:>9} {:>8} {:>15}",
+            "  {:<22} {:>8} {:>8} {:>9} {:>8} {:>15}",
             "opaque pixels", "bias", "(noise)", "rel RMSE", "(noise)", "corrected"
         );
-        let row = |name: &str, s: &nephele::render::compare::Stats| {
+        let row = |name: &str, s: &Stats| {
             println!(
-                "  {:<14} {:>+7.1}% {:>7.1}% {:>8.1}% {:>7.1}% {:>7.1}% ± {:.1}",
+                "  {:<22} {:>+7.1}% {:>7.1}% {:>8.1}% {:>7.1}% {:>7.1}% ± {:.1}",
                 name,
                 100.0 * s.bias,
                 100.0 * s.bias_noise,

@@ -5,7 +5,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use nephele::render::fast::{render_fast, FastOptions, Finite, Method, Octaves};
 use nephele::render::image::Rendered;
-use nephele::render::output::write_outputs;
+use nephele::render::output::write_outputs_with;
 use nephele::render::path::render;
 use nephele::render::scene::Scene;
 use nephele_runtime::transport::{SearchOptions, TransportTables};
@@ -42,6 +42,10 @@ pub struct RenderArgs {
     /// Image width and height in pixels, overriding the scene's camera.
     #[arg(long, value_names = ["W", "H"], num_args = 2)]
     pub size: Option<Vec<u32>>,
+    /// Exposure K of beauty.png: 1 − e^{−K x} of the linear radiance x (render.json records the
+    /// one used) [default: the 90th percentile of the cloud's luminance maps to 0.75].
+    #[arg(long, value_name = "K", value_parser = nephele::render::output::parse_exposure)]
+    pub exposure: Option<f32>,
     #[command(flatten)]
     pub fast: FastArgs,
 }
@@ -218,7 +222,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     scene.validate()?;
     let out = args.out.unwrap_or_else(|| PathBuf::from("outputs/render"));
     let r = render_with(&scene, args.method, &args.fast)?;
-    write_outputs(&out, &scene, &r)?;
+    write_outputs_with(&out, &scene, &r, args.exposure)?;
     if args.method == Method::PathTracer {
         println!(
             "{}×{} pixels, {} spp: {} camera paths in {:.1} s ({:.0} paths/s); wrote {}/beauty.png, \

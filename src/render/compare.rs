@@ -16,11 +16,12 @@
 //!   people look at; FLIP on the same images by scripts/compare_flip.py).
 
 use super::image::GROUP_FIRST;
-use super::output::{exposure, tone_map_with};
+use super::output::{exposure as auto_exposure, png_bytes, tone_map_with, CLOUD_OPACITY};
 use crate::io::plot::{image_grid, Tile};
 use crate::io::AtomicFiles;
 use anyhow::{bail, ensure, Context, Result};
 use serde::Serialize;
+use serde_json::Value;
 use std::path::{Path, PathBuf};
 
 /// A render directory's arrays.
@@ -59,20 +60,30 @@ fn read_npy<T: npyz::Deserialize>(path: &Path, shape: &[u64]) -> Result<Vec<T>> 
     npy.into_vec::<T>().with_context(what)
 }
 
+/// A render directory's render.json.
+fn read_meta(dir: &Path) -> Result<serde_json::Value> {
+    let json = dir.join("render.json");
+    let text = std::fs::read_to_string(&json)
+        .with_context(|| format!("cannot read '{}' (a render directory?)", json.display()))?;
+    serde_json::from_str(&text).with_context(|| format!("'{}'", json.display()))
+}
+
+/// Width and height in render.json.
+fn meta_size(meta: &serde_json::Value) -> (u64, u64) {
+    let dim = |key: &str| meta[key].as_u64().unwrap_or(0);
+    (dim("width"), dim("height"))
+}
+
 impl RenderDir {
     /// Reads a directory `nephele render` wrote.
     pub fn read(dir: &Path) -> Result<Self> {
-        let json = dir.join("render.json");
-        let meta: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(&json).with_context(|| {
-                format!("cannot read '{}' (a render directory?)", json.display())
-            })?)
-            .with_context(|| format!("'{}'", json.display()))?;
-        let (w, h) = (
-            meta["width"].as_u64().unwrap_or(0),
-            meta["height"].as_u64().unwrap_or(0),
+        let meta = read_meta(dir)?;
+        let (w, h) = meta_size(&meta);
+        ensure!(
+            w > 0 && h > 0,
+            "'{}': no image size",
+            dir.join("render.json").display()
         );
-        ensure!(w > 0 && h > 0, "'{}': no image size", json.display());
         let ng = GROUP_FIRST.len() as u64;
         let halves = dir.join("halves.npy");
         let regions = dir.join("regions.npy");
@@ -246,10 +257,54 @@ pub struct Report {
     pub reference_spp: u64,
     /// See `reference`.
     pub reference_seconds: f64,
+    /// The exposure k (1 / radiance) of the tone-mapped images: 1 − e^{−k x}, then sRGB.
+    pub exposure: f32,
     /// Per candidate.
     pub candidates: Vec<CandidateReport>,
-    /// What the numbers mean.
+    /// What the numbers mean, in one line (as on stdout).
+    pub legend: &'static str,
+    /// The unit of each field.
+    pub units: std::collections::BTreeMap<&'static str, &'static str>,
+    /// What the numbers mean, in full.
     pub definitions: &'static str,
+}
+
+/// The table's legend: which number is which, and in what unit.
+pub const LEGEND: &str = "bias = <c>/<r> - 1 and rel RMSE = sqrt<(c - r)^2>/<r>, in % of the \
+    reference's mean luminance over the row's pixels, each beside the reference's own noise; \
+    corrected = rel RMSE less that noise (± its standard error); PSNR (dB, higher is closer) of \
+    the 8-bit tone-mapped beauty images";
+
+/// The unit of each field of report.json.
+fn units() -> std::collections::BTreeMap<&'static str, &'static str> {
+    let fraction = "fraction of the reference's mean luminance over the pixels (0.01 = 1 %)";
+    [
+        ("bias", fraction),
+        ("bias_noise", fraction),
+        ("rel_rmse", fraction),
+        ("reference_noise", fraction),
+        ("rel_rmse_corrected", fraction),
+        ("rel_rmse_corrected_se", fraction),
+        (
+            "mean_reference",
+            "luminance of the linear radiance (the scene's units)",
+        ),
+        (
+            "mean_candidate",
+            "luminance of the linear radiance (the scene's units)",
+        ),
+        ("pixels", "count"),
+        (
+            "psnr_db",
+            "dB of the 8-bit tone-mapped beauty images, higher is closer",
+        ),
+        ("flip_mean", "mean FLIP, 0 (identical) to 1"),
+        ("seconds", "s of wall-clock time a frame"),
+        ("reference_seconds", "s of wall-clock time"),
+        ("exposure", "1 / radiance: the tone curve is 1 - exp(-k x)"),
+    ]
+    .into_iter()
+    .collect()
 }
 
 const DEFINITIONS: &str = "luminance per pixel; pixels with reference opacity > 0.5 ('opaque'), \
@@ -263,95 +318,49 @@ const DEFINITIONS: &str = "luminance per pixel; pixels with reference opacity > 
     scripts/compare_flip.py on the same images";
 
 /// Compares `candidates` with `reference`; writes report.json, the tone-mapped images and the
-/// figures into `out`.
+/// figures into `out` (at the reference's exposure).
 pub fn compare(reference: &Path, candidates: &[PathBuf], out: &Path) -> Result<Report> {
+    compare_with(reference, candidates, out, None)
+}
+
+/// [`compare`] with the images' exposure k (1 / radiance) given; None: the reference's (its
+/// render.json's, or chosen as `nephele render` chooses it).
+pub fn compare_with(
+    reference: &Path,
+    candidates: &[PathBuf],
+    out: &Path,
+    exposure: Option<f32>,
+) -> Result<Report> {
+    check_inputs(reference, candidates)?;
     let r = RenderDir::read(reference)?;
     let cands: Vec<RenderDir> = candidates
         .iter()
         .map(|c| RenderDir::read(c))
         .collect::<Result<_>>()?;
-    for c in &cands {
-        if c.size != r.size {
-            bail!(
-                "'{}' is {}×{} pixels, the reference '{}' {}×{}",
-                c.dir.display(),
-                c.size.0,
-                c.size.1,
-                r.dir.display(),
-                r.size.0,
-                r.size.1
-            );
-        }
-    }
-    let n = r.pixels();
-    let ng = GROUP_FIRST.len();
-    let regions = r
-        .regions
-        .clone()
-        .or_else(|| cands.iter().find_map(|c| c.regions.clone()));
-    let opaque: Vec<bool> = r.opacity.iter().map(|&a| a > 0.5).collect();
-    let mut masks = vec![("opaque".to_string(), opaque.clone())];
-    if let Some(reg) = &regions {
-        for (name, code) in [
-            ("lit", super::regions::LIT),
-            ("shadowed", super::regions::SHADOWED),
-            ("silhouette", super::regions::SILHOUETTE),
-        ] {
-            masks.push((
-                name.to_string(),
-                (0..n).map(|i| opaque[i] && reg[i] == code).collect(),
-            ));
-        }
-    }
-    let mut quantities = vec![Quantity::Groups(0, 1), Quantity::Groups(1, ng)];
-    quantities.extend((1..ng).map(|g| Quantity::Groups(g, g + 1)));
-    quantities.push(Quantity::Beauty);
-    let k = exposure(&r.beauty);
+    let masks = masks(&r, &cands);
+    let k = exposure
+        .or_else(|| r.meta["exposure"].as_f64().map(|k| k as f32))
+        .unwrap_or_else(|| auto_exposure(&r.beauty, &r.opacity).k);
     let ref_ldr = tone_map_with(&r.beauty, k);
     let mut files = AtomicFiles::new();
     std::fs::create_dir_all(out).with_context(|| format!("cannot create '{}'", out.display()))?;
-    files.write_bytes(&out.join("reference.png"), &png(&ref_ldr, r.size)?)?;
+    files.write_bytes(&out.join("reference.png"), &png_bytes(&ref_ldr, r.size)?)?;
     let mut reports = Vec::new();
     let mut error_rows = Vec::new();
     for (ci, c) in cands.iter().enumerate() {
-        let mut qs = Vec::new();
-        for &q in &quantities {
-            if let Quantity::Groups(a, b) = q {
-                if b - a == 1 && a >= 1 && !c.splits_orders() {
-                    continue;
-                }
-            }
-            let rv = q.of(&r.groups, &r.beauty, n);
-            let cv = q.of(&c.groups, &c.beauty, n);
-            let var = r.halves.as_ref().map(|h| split_variance(q, h, n));
-            let mut regions = std::collections::BTreeMap::new();
-            for (name, mask) in &masks {
-                if let Some(s) = stats(&cv, &rv, var.as_deref(), mask) {
-                    regions.insert(name.clone(), s);
-                }
-            }
-            if matches!(q, Quantity::Groups(1, _) | Quantity::Groups(0, 1)) {
-                error_rows.push((ci, q.name(), error_image(&cv, &rv, &opaque)));
-            }
-            qs.push(QuantityReport {
-                quantity: q.name(),
-                regions,
-            });
-        }
+        let (quantities, errors) = judge(&r, c, &masks);
+        error_rows.extend(errors.into_iter().map(|(q, img)| (ci, q, img)));
         let ldr = tone_map_with(&c.beauty, k);
-        let mse = ldr
-            .iter()
-            .zip(&ref_ldr)
-            .map(|(&a, &b)| ((a as f64 - b as f64) / 255.0).powi(2))
-            .sum::<f64>()
-            / ldr.len() as f64;
-        files.write_bytes(&out.join(format!("candidate{ci}.png")), &png(&ldr, r.size)?)?;
+        files.write_bytes(
+            &out.join(format!("candidate{ci}.png")),
+            &png_bytes(&ldr, r.size)?,
+        )?;
         reports.push(CandidateReport {
             dir: c.dir.display().to_string(),
             method: c.method.clone(),
             seconds: c.meta["seconds"].as_f64().unwrap_or(f64::NAN),
-            quantities: qs,
-            psnr_db: 10.0 * (1.0 / mse.max(1e-12)).log10(),
+            quantities,
+            psnr_db: psnr_db(&ldr, &ref_ldr),
             flip_mean: None,
         });
     }
@@ -360,15 +369,208 @@ pub fn compare(reference: &Path, candidates: &[PathBuf], out: &Path) -> Result<R
         reference_method: r.method.clone(),
         reference_spp: r.meta["spp"].as_u64().unwrap_or(0),
         reference_seconds: r.meta["seconds"].as_f64().unwrap_or(f64::NAN),
+        exposure: k,
         candidates: reports,
+        legend: LEGEND,
+        units: units(),
         definitions: DEFINITIONS,
     };
     let mut json = serde_json::to_vec_pretty(&report)?;
     json.push(b'\n');
     files.write_bytes(&out.join("report.json"), &json)?;
+    figures(&mut files, out, &r, &cands, k, &error_rows)?;
     files.commit()?;
-    figures(out, &r, &cands, k, &error_rows)?;
     Ok(report)
+}
+
+/// Keys of render.json's scene that say how it was rendered, not what: renders that differ
+/// only in these are of one scene.
+const RENDER_SETTINGS: [&str; 5] = [
+    "description",
+    "spp",
+    "time_budget_s",
+    "sun_lobe_steps",
+    "seed",
+];
+
+/// Refuses what cannot be compared: a reference without the path tracer's halves.npy (its
+/// noise estimate), and candidates of another scene, camera or image size than the
+/// reference's (from render.json, before any array is read).
+fn check_inputs(reference: &Path, candidates: &[PathBuf]) -> Result<()> {
+    let r = read_meta(reference)?;
+    ensure!(
+        reference.join("halves.npy").exists(),
+        "'{}' has no halves.npy: the reference must be a path-traced render (it has \
+         halves.npy); did you swap --reference and --candidate?",
+        reference.display()
+    );
+    let (r_scene, r_camera) = scene_and_camera(&r, reference)?;
+    for c in candidates {
+        let m = read_meta(c)?;
+        let (c_scene, c_camera) = scene_and_camera(&m, c)?;
+        let pair = format!(
+            "'{}' and the reference '{}'",
+            c.display(),
+            reference.display()
+        );
+        if let Some(d) = first_difference(&r_scene, &c_scene, "") {
+            bail!("{pair} are renders of different scenes ({d}): compare renders of one scene");
+        }
+        if let Some(d) = first_difference(&r_camera, &c_camera, "camera") {
+            bail!("{pair} are seen from different cameras ({d}): compare renders of one scene");
+        }
+        let ((rw, rh), (cw, ch)) = (meta_size(&r), meta_size(&m));
+        ensure!(
+            (rw, rh) == (cw, ch),
+            "{pair} differ in image size ({cw}×{ch} against {rw}×{rh} pixels): render both at \
+             one --size"
+        );
+    }
+    Ok(())
+}
+
+/// render.json's scene without its render settings, and its camera without the image size.
+fn scene_and_camera(meta: &Value, dir: &Path) -> Result<(Value, Value)> {
+    let Some(Value::Object(scene)) = meta.get("scene") else {
+        bail!(
+            "'{}' records no scene (written by an older nephele?): render it again",
+            dir.join("render.json").display()
+        );
+    };
+    let mut scene = scene.clone();
+    for key in RENDER_SETTINGS {
+        scene.remove(key);
+    }
+    let mut camera = scene.remove("camera").unwrap_or_default();
+    if let Some(c) = camera.as_object_mut() {
+        c.remove("width");
+        c.remove("height");
+    }
+    Ok((Value::Object(scene), camera))
+}
+
+/// The first place where the reference's `r` and a candidate's `c` differ, as "path: c
+/// against the reference's r" (a "kind" first: a slab against a cloud says so, not their
+/// first field). Numbers count as equal within 1e-9 relative: one scene file echoed twice
+/// gives the same bits, but one rewritten by a script need not.
+fn first_difference(r: &Value, c: &Value, path: &str) -> Option<String> {
+    let at = |k: &str| match path {
+        "" => k.to_string(),
+        p => format!("{p}.{k}"),
+    };
+    match (r, c) {
+        (Value::Object(x), Value::Object(y)) => {
+            let mut keys: Vec<&String> = x.keys().chain(y.keys()).collect();
+            keys.sort_by_key(|k| (k.as_str() != "kind", k.as_str()));
+            keys.dedup();
+            keys.into_iter().find_map(|k| {
+                let get =
+                    |o: &serde_json::Map<String, Value>| o.get(k).cloned().unwrap_or_default();
+                first_difference(&get(x), &get(y), &at(k))
+            })
+        }
+        (Value::Array(x), Value::Array(y)) if x.len() == y.len() => x
+            .iter()
+            .zip(y)
+            .enumerate()
+            .find_map(|(i, (p, q))| first_difference(p, q, &format!("{path}[{i}]"))),
+        (Value::Number(x), Value::Number(y)) => match (x.as_f64(), y.as_f64()) {
+            (Some(p), Some(q)) if (p - q).abs() <= 1e-9 * p.abs().max(q.abs()) => None,
+            _ => Some(format!("{path}: {c} against the reference's {r}")),
+        },
+        _ => (r != c).then(|| format!("{path}: {} against the reference's {}", short(c), short(r))),
+    }
+}
+
+/// A JSON value for a one-line message: at most 40 characters.
+fn short(v: &Value) -> String {
+    let s = v.to_string();
+    match s.char_indices().nth(40) {
+        Some((i, _)) => format!("{}…", &s[..i]),
+        None => s,
+    }
+}
+
+/// The pixel sets the statistics are taken over: the reference's opaque pixels, and apart
+/// the lit face, the shadowed face and the silhouette where a render has regions.
+fn masks(r: &RenderDir, cands: &[RenderDir]) -> Vec<(String, Vec<bool>)> {
+    let opaque: Vec<bool> = r.opacity.iter().map(|&a| a > CLOUD_OPACITY).collect();
+    let regions = r
+        .regions
+        .as_ref()
+        .or_else(|| cands.iter().find_map(|c| c.regions.as_ref()));
+    let mut masks = vec![("opaque".to_string(), opaque.clone())];
+    if let Some(reg) = regions {
+        for (name, code) in [
+            ("lit", super::regions::LIT),
+            ("shadowed", super::regions::SHADOWED),
+            ("silhouette", super::regions::SILHOUETTE),
+        ] {
+            let mask = opaque
+                .iter()
+                .zip(reg)
+                .map(|(&o, &g)| o && g == code)
+                .collect();
+            masks.push((name.to_string(), mask));
+        }
+    }
+    masks
+}
+
+/// Order 1, orders ≥ 2 and each group of orders ≥ 2 (without the beauty image).
+fn group_quantities() -> Vec<Quantity> {
+    let ng = GROUP_FIRST.len();
+    let mut qs = vec![Quantity::Groups(0, 1), Quantity::Groups(1, ng)];
+    qs.extend((1..ng).map(|g| Quantity::Groups(g, g + 1)));
+    qs
+}
+
+/// One candidate's statistics per quantity and mask, and the error images of order 1 and
+/// orders ≥ 2 (by quantity name).
+fn judge(
+    r: &RenderDir,
+    c: &RenderDir,
+    masks: &[(String, Vec<bool>)],
+) -> (Vec<QuantityReport>, Vec<(String, Vec<u8>)>) {
+    let n = r.pixels();
+    let opaque = &masks[0].1;
+    let mut quantities = group_quantities();
+    quantities.push(Quantity::Beauty);
+    let mut reports = Vec::new();
+    let mut errors = Vec::new();
+    for q in quantities {
+        if let Quantity::Groups(a, b) = q {
+            if b - a == 1 && a >= 1 && !c.splits_orders() {
+                continue;
+            }
+        }
+        let rv = q.of(&r.groups, &r.beauty, n);
+        let cv = q.of(&c.groups, &c.beauty, n);
+        let var = r.halves.as_ref().map(|h| split_variance(q, h, n));
+        let regions = masks
+            .iter()
+            .filter_map(|(name, mask)| Some((name.clone(), stats(&cv, &rv, var.as_deref(), mask)?)))
+            .collect();
+        if matches!(q, Quantity::Groups(1, _) | Quantity::Groups(0, 1)) {
+            errors.push((q.name(), error_image(&cv, &rv, opaque)));
+        }
+        reports.push(QuantityReport {
+            quantity: q.name(),
+            regions,
+        });
+    }
+    (reports, errors)
+}
+
+/// PSNR (dB) of 8-bit images `a` against `b`.
+fn psnr_db(a: &[u8], b: &[u8]) -> f64 {
+    let mse = a
+        .iter()
+        .zip(b)
+        .map(|(&x, &y)| ((x as f64 - y as f64) / 255.0).powi(2))
+        .sum::<f64>()
+        / a.len().max(1) as f64;
+    10.0 * (1.0 / mse.max(1e-12)).log10()
 }
 
 /// v = (A − B)²/4 per pixel for quantity `q` from the halves [2, group, n, 3].
@@ -397,11 +599,19 @@ fn method_name(meta: &serde_json::Value) -> String {
     }
 }
 
-/// The colour bar of [`error_image`] as a w × h tile: −50 % on the left, +50 % on the right.
-fn colour_bar(w: usize, h: usize) -> Tile {
+/// The colour bar of [`error_image`], w × h pixels: −50 % on the left, +50 % on the right,
+/// black ticks at −50, −25, 0, +25 and +50 % along its bottom quarter.
+fn colour_bar(w: usize, h: usize) -> Vec<u8> {
     let error = |i: usize| (i as f64 + 0.5) / w as f64 - 0.5;
     let c: Vec<f64> = (0..w * h).map(|k| 1.0 + error(k % w)).collect();
-    Tile::new(error_image(&c, &vec![1.0; w * h], &vec![true; w * h]), w, h)
+    let mut rgb = error_image(&c, &vec![1.0; w * h], &vec![true; w * h]);
+    for t in 0..5 {
+        let x = (t * (w - 1) + 2) / 4;
+        for y in h - h.div_ceil(4)..h {
+            rgb[(y * w + x) * 3..(y * w + x) * 3 + 3].fill(0);
+        }
+    }
+    rgb
 }
 
 /// The signed relative error (c − r)/r̄ per pixel as false colour: blue −50 %, white 0, red
@@ -431,44 +641,68 @@ fn error_image(c: &[f64], r: &[f64], opaque: &[bool]) -> Vec<u8> {
     out
 }
 
-fn png(rgb: &[u8], (w, h): (usize, usize)) -> Result<Vec<u8>> {
-    let mut bytes = Vec::new();
-    image::ImageEncoder::write_image(
-        image::codecs::png::PngEncoder::new(&mut bytes),
-        rgb,
-        w as u32,
-        h as u32,
-        image::ColorType::Rgb8,
-    )?;
-    Ok(bytes)
+/// The width (pixels) of `text` as `image_grid` draws its titles (DejaVu Sans, 15 px),
+/// estimated from above by the font's widest advance in each class of character: narrow
+/// 0.42 em (i, l, r, t, space, brackets, punctuation), other lower case 0.64 em, wide 1 em
+/// (m, w, M, W, %, …, + and the relations), the rest (capitals, digits) 0.8 em.
+fn title_width(text: &str) -> usize {
+    let em: f64 = text
+        .chars()
+        .map(|c| match c {
+            'f' | 'i' | 'j' | 'l' | 'r' | 't' | ' ' | '(' | ')' | '[' | ']' | '.' | ',' | ':'
+            | ';' | '-' | '\'' | '|' | '/' => 0.42,
+            'm' | 'w' | 'M' | 'W' | '%' | '…' | '+' | '=' | '<' | '>' | '≥' | '≤' => 1.0,
+            'a'..='z' => 0.64,
+            _ => 0.8,
+        })
+        .sum();
+    (em * 15.0).ceil() as usize
 }
 
-/// panel.png (rows: beauty, order 1, orders ≥ 2 and each group, tone-mapped with the
-/// reference's exposure of that row; columns: reference, candidates) and errors.png (signed
-/// relative error of order 1 and orders ≥ 2 per candidate).
+/// The integer factor that tiles w pixels wide are enlarged by so that every one of `titles`
+/// fits over its column: `image_grid` draws them on one line at one size, 2 pixels into a
+/// column, and a 40-pixel column would print them over each other (at most 8×).
+fn tile_scale(titles: &[String], w: usize) -> usize {
+    let need = titles.iter().map(|t| title_width(t)).max().unwrap_or(0) + 2;
+    need.div_ceil(w.max(1)).clamp(1, 8)
+}
+
+/// `rgb` of w × h pixels enlarged s times (each pixel an s × s block), as a tile.
+fn tile(rgb: &[u8], (w, h): (usize, usize), s: usize) -> Tile {
+    let mut out = Vec::with_capacity(rgb.len() * s * s);
+    for y in 0..h * s {
+        for x in 0..w * s {
+            let i = ((y / s) * w + x / s) * 3;
+            out.extend_from_slice(&rgb[i..i + 3]);
+        }
+    }
+    Tile::new(out, w * s, h * s)
+}
+
+/// panel.png (rows: beauty at exposure `k_beauty`, then order 1, orders ≥ 2 and each group,
+/// each at the automatic exposure of the reference's image of that row; columns: reference,
+/// candidates) and errors.png (signed relative error of order 1 and orders ≥ 2 per
+/// candidate, and the colour bar), into `files`. Tiles are enlarged so that the column titles
+/// fit.
 fn figures(
+    files: &mut AtomicFiles,
     out: &Path,
     r: &RenderDir,
     cands: &[RenderDir],
     k_beauty: f32,
     errors: &[(usize, String, Vec<u8>)],
 ) -> Result<()> {
-    let (w, h) = r.size;
-    let n = w * h;
-    let ng = GROUP_FIRST.len();
-    let mut cols = vec![format!("reference ({})", r.method)];
+    let n = r.pixels();
+    let mut cols = vec!["reference".to_string()];
     cols.extend(cands.iter().map(|c| c.method.clone()));
+    let s = tile_scale(&cols, r.size.0);
     let mut rows: Vec<(String, Vec<Option<Tile>>)> = Vec::new();
-    let mut tiles = vec![Some(Tile::new(tone_map_with(&r.beauty, k_beauty), w, h))];
-    tiles.extend(
-        cands
-            .iter()
-            .map(|c| Some(Tile::new(tone_map_with(&c.beauty, k_beauty), w, h))),
-    );
-    rows.push(("beauty".into(), tiles));
-    let mut qs = vec![Quantity::Groups(0, 1), Quantity::Groups(1, ng)];
-    qs.extend((1..ng).map(|g| Quantity::Groups(g, g + 1)));
-    for q in qs {
+    let beauty = |d: &RenderDir| Some(tile(&tone_map_with(&d.beauty, k_beauty), r.size, s));
+    rows.push((
+        "beauty".into(),
+        std::iter::once(r).chain(cands).map(beauty).collect(),
+    ));
+    for q in group_quantities() {
         let Quantity::Groups(a, b) = q else { continue };
         let img = |d: &RenderDir| -> Vec<f32> {
             let mut v = vec![0f32; n * 3];
@@ -480,27 +714,45 @@ fn figures(
             v
         };
         let ri = img(r);
-        let k = exposure(&ri);
-        let mut tiles = vec![Some(Tile::new(tone_map_with(&ri, k), w, h))];
+        let k = auto_exposure(&ri, &r.opacity).k;
+        let mut tiles = vec![Some(tile(&tone_map_with(&ri, k), r.size, s))];
         for c in cands {
             let split = b - a > 1 || a == 0 || c.splits_orders();
-            tiles.push(split.then(|| Tile::new(tone_map_with(&img(c), k), w, h)));
+            tiles.push(split.then(|| tile(&tone_map_with(&img(c), k), r.size, s)));
         }
         rows.push((q.name(), tiles));
     }
-    image_grid(&out.join("panel.png"), &cols, &rows)?;
-    let mut err_rows: Vec<(String, Vec<Option<Tile>>)> = Vec::new();
+    files.write_via_path(&out.join("panel.png"), |p| image_grid(p, &cols, &rows))?;
+    let err_rows = error_rows(r.size, s, cands.len(), errors);
+    files.write_via_path(&out.join("errors.png"), |p| {
+        image_grid(p, &cols[1..], &err_rows)
+    })
+}
+
+/// errors.png's rows: order 1 and orders ≥ 2 per candidate, then the colour bar (tiles of
+/// `size` enlarged `s` times).
+fn error_rows(
+    size: (usize, usize),
+    s: usize,
+    candidates: usize,
+    errors: &[(usize, String, Vec<u8>)],
+) -> Vec<(String, Vec<Option<Tile>>)> {
+    let mut rows: Vec<(String, Vec<Option<Tile>>)> = Vec::new();
     for name in ["order 1", "orders >= 2"] {
-        let tiles = (0..cands.len())
+        let tiles = (0..candidates)
             .map(|ci| {
                 errors
                     .iter()
                     .find(|(c, q, _)| *c == ci && q == name)
-                    .map(|(_, _, img)| Tile::new(img.clone(), w, h))
+                    .map(|(_, _, img)| tile(img, size, s))
             })
             .collect();
-        err_rows.push((format!("{name}: (c−r)/⟨r⟩"), tiles));
+        rows.push((format!("{}: (c−r)/⟨r⟩", name.replace(">=", "≥")), tiles));
     }
-    err_rows.push(("−50 % … 0 … +50 %".into(), vec![Some(colour_bar(w, h))]));
-    image_grid(&out.join("errors.png"), &cols[1..], &err_rows)
+    let bar = colour_bar(size.0 * s, size.1 * s);
+    rows.push((
+        "−50 % … 0 … +50 %".into(),
+        vec![Some(Tile::new(bar, size.0 * s, size.1 * s))],
+    ));
+    rows
 }

@@ -25,27 +25,68 @@ fn npy_bytes<T: npyz::AutoSerialize + Copy>(shape: &[u64], data: &[T]) -> Result
     Ok(bytes)
 }
 
-/// Linear radiance to 8-bit sRGB: exposure so that the 90th percentile of the luminance maps to
-/// 0.75 before the curve 1 − e^{−x} (soft highlights; rare bright samples of a noisy image do
-/// not set the exposure), then the sRGB transfer function.
-pub fn tone_map(beauty: &[f32]) -> Vec<u8> {
-    tone_map_with(beauty, exposure(beauty))
+/// Pixels more opaque than this are the cloud's, for the automatic exposure (the same
+/// threshold as `nephele compare`'s "opaque" pixels).
+pub const CLOUD_OPACITY: f32 = 0.5;
+
+/// The automatic exposure looks at the cloud alone when it covers at least this share of the
+/// frame; a smaller cloud (a few pixels, or none) leaves it to the whole frame.
+const MIN_CLOUD_SHARE: f64 = 0.01;
+
+/// An exposure k (per unit of linear radiance: the tone curve is 1 − e^{−k x}) and how it was
+/// chosen: "cloud", "frame" or "--exposure" (render.json records both).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Exposure {
+    /// k (1 / radiance).
+    pub k: f32,
+    /// How it was chosen.
+    pub from: &'static str,
 }
 
-/// The exposure k of [`tone_map`]: 1 − e^{−k p90} = 0.75, p90 the 90th percentile of the
-/// luminance.
-pub fn exposure(beauty: &[f32]) -> f32 {
-    let mut lum: Vec<f32> = beauty
+/// The automatic exposure of `rgb` (linear, [pixel, RGB]): 1 − e^{−k p90} = 0.75 with p90 the
+/// 90th percentile of the luminance over the cloud's pixels (`opacity` > [`CLOUD_OPACITY`]),
+/// or over the whole frame when the cloud covers less than 1 % of it. On the cloud, because
+/// a bright sky around a small cloud would otherwise set k and leave the cloud flat white; a
+/// percentile, because rare bright samples of a noisy image must not set it.
+pub fn exposure(rgb: &[f32], opacity: &[f32]) -> Exposure {
+    let lum = |p: &[f32]| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+    let cloud: Vec<f32> = rgb
         .chunks_exact(3)
-        .map(|p| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2])
+        .zip(opacity)
+        .filter(|(_, &a)| a > CLOUD_OPACITY)
+        .map(|(p, _)| lum(p))
         .collect();
-    lum.sort_by(f32::total_cmp);
-    let p90 = lum
-        .get(lum.len() * 9 / 10)
+    let enough = !cloud.is_empty() && cloud.len() as f64 >= MIN_CLOUD_SHARE * opacity.len() as f64;
+    let (mut values, from) = if enough {
+        (cloud, "cloud")
+    } else {
+        (rgb.chunks_exact(3).map(lum).collect(), "frame")
+    };
+    values.sort_by(f32::total_cmp);
+    let p90 = values
+        .get(values.len() * 9 / 10)
         .copied()
         .unwrap_or(1.0)
         .max(1e-12);
-    (4.0f32).ln() / p90
+    Exposure {
+        k: (4.0f32).ln() / p90,
+        from,
+    }
+}
+
+const EXPOSURE_RULE: &str = "K multiplies the linear radiance before 1 - exp(-K x) and must \
+    be a positive number (render.json records the automatic one)";
+
+fn is_exposure(k: f32) -> bool {
+    k.is_finite() && k > 0.0
+}
+
+/// Parses a user's exposure K (`--exposure`): a positive, finite number.
+pub fn parse_exposure(s: &str) -> std::result::Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(k) if is_exposure(k) => Ok(k),
+        _ => Err(EXPOSURE_RULE.to_string()),
+    }
 }
 
 /// Linear radiance to 8-bit sRGB with exposure `k`: 1 − e^{−k x}, then the sRGB curve.
@@ -64,8 +105,30 @@ pub fn tone_map_with(beauty: &[f32], k: f32) -> Vec<u8> {
         .collect()
 }
 
-/// Writes every output of `r` into `out`.
+/// An 8-bit RGB image of w × h pixels as PNG bytes.
+pub fn png_bytes(rgb: &[u8], (w, h): (usize, usize)) -> Result<Vec<u8>> {
+    let mut bytes = Vec::new();
+    image::ImageEncoder::write_image(
+        image::codecs::png::PngEncoder::new(&mut bytes),
+        rgb,
+        w as u32,
+        h as u32,
+        image::ColorType::Rgb8,
+    )?;
+    Ok(bytes)
+}
+
+/// Writes every output of `r` into `out`, beauty.png at the automatic exposure.
 pub fn write_outputs(out: &Path, scene: &Scene, r: &Rendered) -> Result<()> {
+    write_outputs_with(out, scene, r, None)
+}
+
+/// Writes every output of `r` into `out`, beauty.png at exposure `k` (1 / radiance; None:
+/// the automatic [`exposure`]).
+pub fn write_outputs_with(out: &Path, scene: &Scene, r: &Rendered, k: Option<f32>) -> Result<()> {
+    if let Some(k) = k {
+        anyhow::ensure!(is_exposure(k), "exposure {k}: {EXPOSURE_RULE}");
+    }
     std::fs::create_dir_all(out).with_context(|| format!("cannot create '{}'", out.display()))?;
     let (w, h) = (r.width as u64, r.height as u64);
     let ng = GROUP_FIRST.len() as u64;
@@ -87,14 +150,14 @@ pub fn write_outputs(out: &Path, scene: &Scene, r: &Rendered) -> Result<()> {
     if !r.regions.is_empty() {
         files.write_bytes(&out.join("regions.npy"), &npy_bytes(&[h, w], &r.regions)?)?;
     }
-    let mut png = Vec::new();
-    image::ImageEncoder::write_image(
-        image::codecs::png::PngEncoder::new(&mut png),
-        &tone_map(&r.beauty),
-        w as u32,
-        h as u32,
-        image::ColorType::Rgb8,
-    )?;
+    let chosen = match k {
+        Some(k) => Exposure {
+            k,
+            from: "--exposure",
+        },
+        None => exposure(&r.beauty, &opacity),
+    };
+    let png = png_bytes(&tone_map_with(&r.beauty, chosen.k), (r.width, r.height))?;
     files.write_bytes(&out.join("beauty.png"), &png)?;
     files.write_via_path(&out.join("beauty.exr"), |p| {
         let px = |x: usize, y: usize| {
@@ -118,7 +181,7 @@ pub fn write_outputs(out: &Path, scene: &Scene, r: &Rendered) -> Result<()> {
             "transmittance.npy": "[H, W] transmittance of the camera ray through the medium",
             "opacity.npy": "[H, W] 1 - transmittance",
             "beauty.exr": "[H, W] RGB f32, linear (OpenEXR)",
-            "beauty.png": "tone-mapped (90th percentile of luminance at 0.75 of 1 - exp(-x)), sRGB",
+            "beauty.png": "tone-mapped: 1 - exp(-k x) with k the exposure (the automatic one: the 90th percentile of the cloud's luminance, or the frame's when the cloud covers < 1 %, at 0.75), sRGB",
     });
     if !r.halves.is_empty() {
         files_doc["halves.npy"] = "[2, group, H, W, 3] groups.npy from the even and from the odd samples of each pixel: (A - B)^2 / 4 estimates the variance of a pixel's mean".into();
@@ -137,6 +200,8 @@ pub fn write_outputs(out: &Path, scene: &Scene, r: &Rendered) -> Result<()> {
         "seconds": r.seconds,
         "paths_per_second": r.paths as f64 / r.seconds.max(1e-9),
         "threads": rayon::current_num_threads(),
+        "exposure": chosen.k,
+        "exposure_from": chosen.from,
         "group_first_orders": GROUP_FIRST,
         "units": "linear radiance, the sun's irradiance and the sky's radiance as given in the scene (RGB); row 0 at the top",
         "files": files_doc,
