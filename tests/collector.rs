@@ -192,9 +192,11 @@ fn scenes_that_do_not_match_the_tables_are_refused() {
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("power of two"));
 }
 
-/// Two path-traced renders of one scene with different seeds: compare's split-sample noise
-/// must explain their difference (RMSE ≈ √2 × the reference's noise, corrected RMSE ≈ the
-/// candidate's own noise, bias within its noise), and a render against itself gives zeros.
+/// Path-traced renders of one scene with different seeds: compare's split-sample noise must
+/// explain their difference (RMSE ≈ √2 × the reference's noise, bias within its noise), and a
+/// render against itself gives zeros. The ratio of one pair of 24 × 16 renders scatters by
+/// ±0.15 for order 1 (measured over ten pairs: 1.27–1.60), so its mean over four pairs is held
+/// to √2 ± 0.2; a noise estimate off by a factor 1.3 either way fails.
 #[test]
 fn compare_measures_the_references_noise() {
     let dir = tempfile::tempdir().unwrap();
@@ -203,34 +205,39 @@ fn compare_measures_the_references_noise() {
     scene.camera.height = 16;
     let a = dir.path().join("a");
     let b = dir.path().join("b");
-    write_outputs(&a, &scene, &render(&scene, &|_| {}).unwrap()).unwrap();
-    scene.seed = 99;
-    write_outputs(&b, &scene, &render(&scene, &|_| {}).unwrap()).unwrap();
-    let report = compare(&a, &[b.clone(), a.clone()], &dir.path().join("cmp")).unwrap();
-    let q = |k: usize, name: &str| {
-        report.candidates[k]
-            .quantities
-            .iter()
-            .find(|q| q.quantity == name)
-            .unwrap()
-            .regions["opaque"]
-            .clone()
-    };
-    for name in ["orders >= 2", "order 1", "beauty"] {
-        let s = q(0, name);
-        let ratio = s.rel_rmse / s.reference_noise;
-        println!(
-            "{name}: RMSE {:.4} noise {:.4} ratio {ratio:.3}",
-            s.rel_rmse, s.reference_noise
-        );
-        assert!((ratio - 2f64.sqrt()).abs() < 0.2, "{name}: ratio {ratio}");
-        assert!(
-            s.bias.abs() < 4.0 * s.bias_noise * 2f64.sqrt(),
-            "{name}: {s:?}"
-        );
-        let same = q(1, name);
-        assert_eq!(same.rel_rmse, 0.0);
-        assert_eq!(same.bias, 0.0);
+    let names = ["orders >= 2", "order 1", "beauty"];
+    let mut ratios = [0.0; 3];
+    for pair in 1..=4u64 {
+        scene.seed = pair;
+        write_outputs(&a, &scene, &render(&scene, &|_| {}).unwrap()).unwrap();
+        scene.seed = 100 + pair;
+        write_outputs(&b, &scene, &render(&scene, &|_| {}).unwrap()).unwrap();
+        let report = compare(&a, &[b.clone(), a.clone()], &dir.path().join("cmp")).unwrap();
+        let q = |k: usize, name: &str| {
+            report.candidates[k]
+                .quantities
+                .iter()
+                .find(|q| q.quantity == name)
+                .unwrap()
+                .regions["opaque"]
+                .clone()
+        };
+        for (i, name) in names.iter().enumerate() {
+            let s = q(0, name);
+            let ratio = s.rel_rmse / s.reference_noise;
+            println!("pair {pair} {name}: RMSE {:.4} noise {:.4} ratio {ratio:.3}", s.rel_rmse, s.reference_noise);
+            ratios[i] += ratio / 4.0;
+            assert!(
+                s.bias.abs() < 4.0 * s.bias_noise * 2f64.sqrt(),
+                "{name}: {s:?}"
+            );
+            let same = q(1, name);
+            assert_eq!(same.rel_rmse, 0.0);
+            assert_eq!(same.bias, 0.0);
+        }
+    }
+    for (name, ratio) in names.iter().zip(ratios) {
+        assert!((ratio - 2f64.sqrt()).abs() < 0.2, "{name}: mean ratio {ratio}");
     }
     assert!(
         dir.path().join("cmp/panel.png").exists() && dir.path().join("cmp/report.json").exists()

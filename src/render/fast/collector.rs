@@ -138,7 +138,6 @@ impl Frame<'_> {
         sun32: [f32; 3],
         stats: &mut [GroupStats],
     ) {
-        let mut first_slab = None;
         for (g, st) in stats.iter_mut().enumerate() {
             st.searches += 1;
             let found = find_collector(self.tables, g, &self.side, vp, sun32, &self.opts.search);
@@ -149,9 +148,6 @@ impl Frame<'_> {
                         let weight = alpha * self.absorbed(g, &at);
                         let t = self.tables.evaluate(g, &at).t as f64;
                         px.sun[g + 1] = [weight * t; 3];
-                        if let Some(sky) = &self.sky {
-                            px.sky[g + 1] = weight * sky.radiance(g + 1, &at);
-                        }
                         st.dark += (t == 0.0) as u64;
                     }
                     None => st.dark += 1,
@@ -167,16 +163,25 @@ impl Frame<'_> {
             let kept = finite_cloud(self.tables, g, &self.side, &f, &self.finite).factor as f64;
             st.kept += kept;
             px.sun[g + 1] = [alpha * kept * f.transport.t as f64; 3];
-            if let Some(sky) = &self.sky {
-                // A conservative body under a uniform sky glows at the sky's radiance whatever
-                // its shape: the sky entering its sides replaces what leaks out, so the sky
-                // term loses only what absorption takes.
-                px.sky[g + 1] = alpha * self.absorbed(g, &f.at) * sky.radiance(g + 1, &f.at);
-            }
-            first_slab.get_or_insert(f.at);
         }
-        if let (Some(sky), Some(at)) = (&self.sky, first_slab) {
-            px.sky[0] = alpha * sky.radiance(0, &at);
+    }
+
+    /// The sky term of every method, group by group into `px` (per unit L_sky), for a view
+    /// ray of transmittance `transmittance`: S_g in the ray's own slab ([`super::sky::SkyTable::view_slab`]).
+    /// A conservative body under a uniform sky glows at the sky's radiance whatever its shape
+    /// (the sky entering its sides replaces what leaks out), so no leakage applies, only what
+    /// absorption takes.
+    pub(super) fn sky_term(&self, px: &mut Pixel, transmittance: f64) {
+        let Some(sky) = &self.sky else {
+            return;
+        };
+        if transmittance >= 1.0 {
+            return;
+        }
+        let at = sky.view_slab(transmittance);
+        px.sky[0] = self.scene.albedo * sky.view_radiance(0, transmittance);
+        for g in 0..self.groups() {
+            px.sky[g + 1] = self.absorbed(g, &at) * sky.view_radiance(g + 1, transmittance);
         }
     }
 

@@ -390,6 +390,7 @@ impl Frame<'_> {
             let phase = &self.phases[c.min(self.phases.len() - 1)];
             *p = albedo * phase.with(|f| f.eval(cos)) * v.integrals[0];
         }
+        self.sky_term(&mut px, v.transmittance);
         let (Some(p), Some(vp)) = (v.surface, v.viewpoint(w)) else {
             return px;
         };
@@ -400,12 +401,6 @@ impl Frame<'_> {
             Method::Single | Method::Octaves => {
                 if self.opts.method == Method::Octaves {
                     px.sun[1] = self.octaves(cos, &v.integrals);
-                }
-                if let (Some(sky), Some(at)) = (&self.sky, self.coarse_slab(&vp, sun32)) {
-                    // One slab for every group: the surface filtered at the cloud's size.
-                    for g in 0..=self.groups() {
-                        px.sky[g] = alpha * sky.radiance(g, &at);
-                    }
                 }
             }
             Method::PathTracer => unreachable!("validated"),

@@ -77,6 +77,39 @@ impl SkyTable {
         self.lookup(g, d, t, mu) + self.lookup(g, t - d, t, -mu)
     }
 
+    /// The slab of the sky term: the medium a view ray of transmittance `transmittance`
+    /// crosses, τ = −ln T optical (mfp), as a slab across the ray seen face-on from its near
+    /// face (d = 0, μ_V = 1), τ held inside the tables' thickness range.
+    ///
+    /// Why not the sun's slab: under a uniform sky the light has no direction to follow; what
+    /// sets it is how much medium lies around the point seen, and the view ray measures that.
+    /// A ray through the middle of a cloud crosses a thick slab (the face glows by diffusion); a
+    /// ray that grazes the edge crosses a thin one, which the sky lights from behind through
+    /// the forward peak (the bright rim). Both faces lit, all orders and the unscattered sky sum
+    /// to the sky's radiance, as they must in a conservative body.
+    pub fn view_slab(&self, transmittance: f64) -> SlabPoint<f32> {
+        let tau = -transmittance.max(1e-30).ln();
+        let t = tau.clamp(self.ln_t.0.exp(), self.ln_t.1.exp());
+        SlabPoint {
+            depth: 0.0,
+            thickness: t as f32,
+            mu_v: 1.0,
+            psi_v: 0.0,
+            mu_l: 1.0,
+        }
+    }
+
+    /// L/L_sky of group `g` (0: order 1) seen along a view ray of transmittance
+    /// `transmittance`, from its [`Self::view_slab`]. Where τ lies outside the tables' range,
+    /// S at the nearest thickness is scaled by the ray's opacity over that slab's, so that
+    /// thin matter scatters in proportion to what it holds.
+    pub fn view_radiance(&self, g: usize, transmittance: f64) -> f64 {
+        let at = self.view_slab(transmittance);
+        let t = f64::from(at.thickness);
+        let opacity = (1.0 - transmittance) / -(-t).exp_m1();
+        opacity * self.radiance(g, &at)
+    }
+
     fn lookup(&self, g: usize, d: f64, t: f64, mu_v: f64) -> f64 {
         if g >= self.groups || t <= 0.0 {
             return 0.0;
@@ -122,12 +155,57 @@ fn integrate(tables: &TransportTables, d: f64, t: f64, mu_v: f64, groups: usize)
                 psi_v: psi as f32,
                 mu_l: mu_l.max(f64::from(tables.domain().mu_l.0)) as f32,
             };
-            sum[0] += w * tables.order1(&at) as f64;
             tables.transport_all(&at, &mut t_g);
             for (g, v) in t_g.iter().enumerate() {
                 sum[g + 1] += w * *v as f64;
             }
         }
     }
+    sum[0] = order1(tables, d, t, mu_v);
     sum.into_iter().map(|v| v as f32).collect()
+}
+
+/// Order 1 of the slab under a sky of unit radiance on its lit face, S₁ = ∫ T₁ dΩ_L, in
+/// polar coordinates (Θ, φ) around the direction s* whose light reaches the view unscattered
+/// in angle (Θ = 0 is the forward peak). The sun grid of the other groups would miss that peak
+/// (a degree wide for 10 µm droplets, half of all scattering): Θ runs on Gauss–Legendre panels
+/// that narrow toward 0, and the lit face's hemisphere (μ_L > 0) is what counts.
+fn order1(tables: &TransportTables, d: f64, t: f64, mu_v: f64) -> f64 {
+    use std::f64::consts::PI;
+    const EDGES_DEG: [f64; 8] = [0.0, 0.25, 1.0, 3.0, 8.0, 20.0, 60.0, 180.0];
+    const AZ: usize = 24;
+    // The light leaves along ω = (sin θ_V, 0, μ_V); s* = −ω, and e₁, e₂ complete the frame.
+    let sin_v = (1.0 - mu_v * mu_v).max(0.0).sqrt();
+    let star = [-sin_v, 0.0, -mu_v];
+    let e1 = [mu_v, 0.0, -sin_v];
+    let e2 = [0.0, 1.0, 0.0];
+    let mut sum = 0.0;
+    for edge in EDGES_DEG.windows(2) {
+        let (a, b) = (edge[0].to_radians(), edge[1].to_radians());
+        for (x, wx) in GAUSS6 {
+            let theta = 0.5 * (a + b) + 0.5 * (b - a) * x;
+            let (st, ct) = theta.sin_cos();
+            for k in 0..AZ {
+                let phi = (k as f64 + 0.5) * 2.0 * PI / AZ as f64;
+                let (sp, cp) = phi.sin_cos();
+                let s: Vec<f64> = (0..3)
+                    .map(|i| ct * star[i] + st * (cp * e1[i] + sp * e2[i]))
+                    .collect();
+                if s[2] <= 0.0 {
+                    continue;
+                }
+                // ψ_V: the view's azimuth (0) from the sun's horizontal travel (the sun's + π).
+                let at = SlabPoint {
+                    depth: d as f32,
+                    thickness: t as f32,
+                    mu_v: mu_v as f32,
+                    psi_v: (-s[1].atan2(s[0]) - PI) as f32,
+                    mu_l: s[2] as f32,
+                };
+                let w = 0.5 * (b - a) * wx * st * 2.0 * PI / AZ as f64;
+                sum += w * tables.order1(&at) as f64;
+            }
+        }
+    }
+    sum
 }
