@@ -3,7 +3,7 @@
 use anyhow::Result;
 use clap::Args;
 use nephele::compress::report::{CollectorError, GroupError};
-use nephele::compress::run::{compress, Options, Outcome};
+use nephele::compress::run::{compress_reporting, Options, Outcome};
 use nephele::compress::LogAdditive;
 use nephele_runtime::fitting::CollectorForm;
 use std::path::{Path, PathBuf};
@@ -55,6 +55,16 @@ pub struct CompressArgs {
     pub no_held_out: bool,
 }
 
+/// Compresses with a spinner naming the stage (a minute and a half on the default tables).
+pub(super) fn compress_with_spinner(tables: &Path, out: &Path, opt: &Options) -> Result<Outcome> {
+    let bar = super::mie::spinner("compress", "");
+    let o = compress_reporting(tables, out, opt, &|stage| {
+        bar.set_message(stage.to_string())
+    });
+    bar.finish_and_clear();
+    o
+}
+
 /// Runs `nephele compress`.
 pub fn run(args: CompressArgs) -> Result<()> {
     let opt = Options {
@@ -75,7 +85,7 @@ pub fn run(args: CompressArgs) -> Result<()> {
         collector_q: args.collector_smooth_t,
     };
     opt.check()?;
-    let o = compress(&args.tables, &args.out, &opt)?;
+    let o = compress_with_spinner(&args.tables, &args.out, &opt)?;
     print_outcome(&o, &args.out);
     Ok(())
 }

@@ -3,7 +3,6 @@
 use super::mie::{compute_with_bar, write_outputs as write_mie, MieArgs};
 use anyhow::{Context, Result};
 use clap::Args;
-use indicatif::{ProgressBar, ProgressStyle};
 use nephele::fit::output::write_fits;
 use nephele::fit::{figures, run::FitReport, FitConfig};
 use nephele::mie::PhaseTable;
@@ -101,14 +100,11 @@ fn run_file(file: &FitFile, out: &Path, mie_out: &Path, plot: bool) -> Result<()
     let t0 = Instant::now();
     let (tables, stats, mie_s) = compute_with_bar(&job)?;
     let t1 = Instant::now();
-    let bar = ProgressBar::new(0).with_style(
-        ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} fits ({elapsed}, eta {eta})")
-            .expect("static template"),
-    );
-    bar.set_message("fit");
+    let bar = super::mie::work_bar("fit", 0);
     let (report, _targets) = nephele::fit::run(&file.fit, &tables, &|done, total| {
         bar.set_length(total as u64);
         bar.set_position(done as u64);
+        bar.set_message(format!("{done}/{total} fits"));
     })?;
     bar.finish_and_clear();
     let fit_s = t1.elapsed().as_secs_f64();
@@ -116,6 +112,7 @@ fn run_file(file: &FitFile, out: &Path, mie_out: &Path, plot: bool) -> Result<()
     let timings =
         json!({ "mie_s": mie_s, "fit_s": fit_s, "threads": rayon::current_num_threads() });
     let config = serde_json::to_value(file)?;
+    let spin = super::mie::spinner("fit", "writing the fits and figures");
     write_fits(&config, &file.fit, &tables, &report, timings, out, plot)?;
     // The Mie tables of the figure diameters, as `nephele mie` writes them.
     let mut shown: Vec<PhaseTable> = Vec::new();
@@ -129,6 +126,7 @@ fn run_file(file: &FitFile, out: &Path, mie_out: &Path, plot: bool) -> Result<()
         }
     }
     write_mie(&job, &file.mie, &shown, &stats, mie_s, mie_out)?;
+    spin.finish_and_clear();
     print_summary(&report, &file.fit, out);
     eprintln!(
         "Mie {mie_s:.1} s, fits {fit_s:.1} s, writing {:.1} s; total {:.1} s",

@@ -2,12 +2,13 @@
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::{ProgressBar, ProgressFinish, ProgressStyle};
 use nephele::io::{plot, AtomicFiles};
 use nephele::mie::colour::Illuminant;
 use nephele::mie::distribution::SizeDistribution;
 use nephele::mie::grid::angles_from_spec;
 use nephele::mie::index::RefractiveIndex;
+use nephele::mie::limits::short;
 use nephele::mie::output::write_table;
 use nephele::mie::polydisperse::{JobStats, CONVERGED_DEFAULT, DEFAULT_WAVELENGTHS};
 use nephele::mie::{MieJob, PhaseTable, SizeRule};
@@ -279,19 +280,59 @@ pub fn run(args: MieArgs) -> Result<()> {
 }
 
 /// Computes a job with a progress bar: the tables, their statistics and the seconds taken.
+/// Refuses first a job that would not fit in the memory available.
 pub(super) fn compute_with_bar(job: &MieJob) -> Result<(Vec<PhaseTable>, JobStats, f64)> {
-    let bar = ProgressBar::new(0).with_style(
-        ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} spheres ({elapsed}, eta {eta})")
-            .expect("static template"),
-    );
-    bar.set_message("Mie");
+    job.validate()?;
+    if let Some(bytes) = available_memory() {
+        job.check_memory(bytes)?;
+    }
+    let bar = work_bar("Mie", 0);
+    bar.set_message(format!("{} spheres", short(job.footprint().spheres)));
     let t0 = Instant::now();
+    // Positions count Mie terms: a sphere's cost grows with its size, so spheres alone would
+    // run the estimate far ahead of the large, slow ones that come last.
     let (tables, stats) = job.compute(&|done, total| {
         bar.set_length(total as u64);
         bar.set_position(done as u64);
     })?;
     bar.finish_and_clear();
     Ok((tables, stats, t0.elapsed().as_secs_f64()))
+}
+
+/// A bar on stderr over `len` units of work: "PREFIX [███░░░] 42% MSG (elapsed, eta)". Like
+/// every bar here it is hidden when stderr is not a terminal, so scripts and tests see only
+/// the lines they expect.
+pub(super) fn work_bar(prefix: &str, len: u64) -> ProgressBar {
+    let style = ProgressStyle::with_template(
+        "{prefix} [{bar:30}] {percent:>3}% {msg} ({elapsed}, eta {eta})",
+    )
+    .expect("static template");
+    ProgressBar::new(len)
+        .with_style(style)
+        .with_prefix(prefix.to_string())
+        .with_finish(ProgressFinish::AndClear)
+}
+
+/// A spinner on stderr for a step of unknown length: "⠋ PREFIX: MSG (elapsed)".
+pub(super) fn spinner(prefix: &str, msg: &str) -> ProgressBar {
+    let style = ProgressStyle::with_template("{spinner} {prefix}: {msg} ({elapsed})")
+        .expect("static template");
+    // Cleared when dropped: an error line then stands alone.
+    let bar = ProgressBar::new_spinner()
+        .with_style(style)
+        .with_prefix(prefix.to_string())
+        .with_finish(ProgressFinish::AndClear)
+        .with_message(msg.to_string());
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    bar
+}
+
+/// Bytes of memory available to a new allocation (Linux's MemAvailable), if known.
+fn available_memory() -> Option<f64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024.0)
 }
 
 fn compute_and_write(job: &MieJob, args: &MieArgs, out: &Path) -> Result<()> {
@@ -377,13 +418,14 @@ fn report(tables: &[PhaseTable], stats: &JobStats, compute_s: f64, write_s: f64,
         "d (µm)", "g", "C_sca (µm²)", "Q_sca", "d_eff (µm)"
     );
     for t in tables {
+        // Significant digits: tiny droplets' cross-sections would print as 0.0000.
         println!(
-            "{:>10.3} {:>10.6} {:>12.4} {:>10.6} {:>12.4}",
-            t.distribution.nominal_diameter_um(),
+            "{:>10} {:>10.6} {:>12} {:>10} {:>12}",
+            short(t.distribution.nominal_diameter_um()),
             t.g,
-            t.c_sca_um2,
-            t.q_sca,
-            t.effective_diameter_um
+            short(t.c_sca_um2),
+            short(t.q_sca),
+            short(t.effective_diameter_um)
         );
     }
     println!(

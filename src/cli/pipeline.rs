@@ -7,7 +7,7 @@
 
 use super::{compress as compress_cli, fit, slab};
 use anyhow::Result;
-use nephele::compress::run::{compress, Options};
+use nephele::compress::run::Options;
 use nephele::render::compare::compare;
 use nephele::render::fast::{render_fast, FastOptions};
 use nephele::render::output::write_outputs;
@@ -61,7 +61,7 @@ pub fn run(full: bool) -> Result<()> {
         ..Options::default()
     };
     let tables = Path::new(slab_out).join("tables.npz");
-    let o = compress(&tables, Path::new(comp_out), &opt)?;
+    let o = compress_cli::compress_with_spinner(&tables, Path::new(comp_out), &opt)?;
     compress_cli::print_outcome(&o, Path::new(comp_out));
     let comp_s = t2.elapsed().as_secs_f64();
     if full {
@@ -77,7 +77,9 @@ pub fn run(full: bool) -> Result<()> {
         render_out.display()
     );
     let scene = Scene::parse(include_str!("../../fit-configs/scenes/cloud.json"))?;
-    let r = render(&scene, &|_| {})?;
+    let bar = super::mie::work_bar("render", 1000);
+    let r = render(&scene, &|done| bar.set_position((done * 1000.0) as u64))?;
+    bar.finish_and_clear();
     write_outputs(render_out, &scene, &r)?;
     let headline = collector_beside(&scene, render_out)?;
     println!(

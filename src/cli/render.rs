@@ -2,11 +2,10 @@
 
 use anyhow::{Context, Result};
 use clap::Args;
-use indicatif::{ProgressBar, ProgressStyle};
 use nephele::render::fast::{render_fast, FastOptions, Finite, Method, Octaves};
 use nephele::render::image::Rendered;
 use nephele::render::output::write_outputs_with;
-use nephele::render::path::render;
+use nephele::render::path::{render_reporting, Progress};
 use nephele::render::scene::Scene;
 use nephele_runtime::transport::{SearchOptions, TransportTables};
 use std::path::PathBuf;
@@ -179,13 +178,20 @@ impl FastArgs {
 
 /// Renders `scene` with `method`, a progress bar on stderr.
 pub fn render_with(scene: &Scene, method: Method, fast: &FastArgs) -> Result<Rendered> {
-    let bar = ProgressBar::new(1000).with_style(
-        ProgressStyle::with_template("render [{bar:30}] {percent:>3}% ({elapsed}, eta {eta})")
-            .expect("static template"),
-    );
+    for w in scene.warnings() {
+        eprintln!("warning: {w}");
+    }
+    let bar = super::mie::work_bar("render", 1000);
     let progress = |done: f64| bar.set_position((done * 1000.0) as u64);
     let r = if method == Method::PathTracer {
-        render(scene, &progress)?
+        // A time budget runs passes: show them, the spp and the noise reached so far.
+        let budget = scene.time_budget_s.is_some();
+        render_reporting(scene, &|p: &Progress| {
+            progress(p.fraction);
+            if budget && p.passes > 0 {
+                bar.set_message(p.summary());
+            }
+        })?
     } else {
         let opts = fast.options(method)?;
         let bytes = fast.table_bytes()?;

@@ -2,7 +2,6 @@
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use indicatif::{ProgressBar, ProgressStyle};
 use nephele::phase::Phase;
 use nephele::slab::checkpoint::Checkpoint;
 use nephele::slab::output::write_tables;
@@ -99,7 +98,9 @@ pub fn run_config(
     plot: bool,
 ) -> Result<()> {
     let t0 = Instant::now();
+    let spin = super::mie::spinner("slab", "the phase function");
     let phase = Phase::build(&cfg.phase)?;
+    spin.finish_and_clear();
     let phase_s = t0.elapsed().as_secs_f64();
     let checkpoint = Checkpoint::open(&out.join("checkpoint"), cfg)?;
     let control = Control {
@@ -108,18 +109,13 @@ pub fn run_config(
         save_every_s: save_every,
     };
     let total = cfg.thicknesses.len() * cfg.mu_l.len();
-    let bar = ProgressBar::new(total as u64).with_style(
-        ProgressStyle::with_template(
-            "slab [{bar:30}] {pos}/{len} slices ({elapsed}, eta {eta}) {msg}",
-        )
-        .expect("static template"),
-    );
+    let bar = super::mie::work_bar("slab", total as u64);
     let t1 = Instant::now();
     let run = run_all(cfg, &phase, &control, &|slice, _, photons, worst| {
         bar.set_position(slice as u64);
         let rate = photons as f64 / t1.elapsed().as_secs_f64().max(1e-9);
         bar.set_message(format!(
-            "slice {}: {photons} photons, worst rel. error {:.2} %, {:.2} M photons/s",
+            "slice {}/{total}: {photons} photons, worst rel. error {:.2} %, {:.2} M photons/s",
             slice + 1,
             100.0 * worst,
             rate / 1e6
@@ -138,7 +134,9 @@ pub fn run_config(
     }
     let timings =
         json!({"phase_s": phase_s, "monte_carlo_s": mc_s, "threads": rayon::current_num_threads()});
+    let spin = super::mie::spinner("slab", "writing the tables");
     write_tables(cfg, &run, Some(&phase), out, plot, timings)?;
+    spin.finish_and_clear();
     checkpoint.remove()?;
     summary(&run, mc_s);
     println!("wrote {}/tables.npz, tables.json", out.display());
@@ -148,6 +146,7 @@ pub fn run_config(
 /// Runs `nephele merge`.
 pub fn merge_shards(args: MergeArgs) -> Result<()> {
     let cfg = load_config(&args.config)?;
+    let spin = super::mie::spinner("merge", "reading the shards");
     let shards = args
         .shards
         .iter()
@@ -156,13 +155,20 @@ pub fn merge_shards(args: MergeArgs) -> Result<()> {
     let run = merge(&cfg, &shards)?;
     // The shards sampled this phase function; its table is stored with the tables where it
     // can be built here (else the compressor builds it from the config).
+    spin.set_message("the phase function");
     let phase = Phase::build(&cfg.phase)
-        .map_err(|e| eprintln!("warning: the phase table is not stored with the tables: {e:#}"))
+        .map_err(|e| {
+            spin.suspend(|| {
+                eprintln!("warning: the phase table is not stored with the tables: {e:#}")
+            })
+        })
         .ok();
     let out = args.out.unwrap_or_else(|| PathBuf::from("outputs/slab"));
     let seconds: f64 = run.done().map(|(r, _)| r.seconds).sum();
     let timings = json!({"monte_carlo_s_summed_over_shards": seconds, "shards": args.shards.len()});
+    spin.set_message("writing the tables");
     write_tables(&cfg, &run, phase.as_ref(), &out, !args.no_plot, timings)?;
+    spin.finish_and_clear();
     summary(&run, seconds);
     println!(
         "merged {} shards into {}/tables.npz, tables.json",

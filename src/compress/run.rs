@@ -118,10 +118,23 @@ pub struct Outcome {
 
 /// Fits, measures and writes everything into `out`.
 pub fn compress(tables: &Path, out: &Path, opt: &Options) -> Result<Outcome> {
+    compress_reporting(tables, out, opt, &|_| {})
+}
+
+/// As [`compress`], calling `stage(what)` as each stage starts (minutes on the default tables:
+/// for a progress display).
+pub fn compress_reporting(
+    tables: &Path,
+    out: &Path,
+    opt: &Options,
+    stage: &dyn Fn(&str),
+) -> Result<Outcome> {
     opt.check()?;
+    stage("reading the tables");
     let tab = SlabTables::load(tables)?;
     ensure!(tab.shape[0] >= 2, "the tables hold no group of orders ≥ 2");
-    let m = measure(&tab, opt)?;
+    let m = measure(&tab, opt, stage)?;
+    stage("writing");
     std::fs::create_dir_all(out).with_context(|| format!("cannot create '{}'", out.display()))?;
     let ntt = if m.joint.is_empty() {
         None
@@ -200,10 +213,12 @@ impl CoverageReport {
 
 /// Fits T and the collector, the reference form and the held-out study, and measures them on
 /// every cell.
-fn measure(tab: &SlabTables, opt: &Options) -> Result<Measured> {
+fn measure(tab: &SlabTables, opt: &Options, stage: &dyn Fn(&str)) -> Result<Measured> {
     let [ng, nt, nl, _, nm, _] = tab.shape;
     let t0 = Instant::now();
+    stage("fitting T");
     let (fits, joint) = fit(tab, opt, &[], &[])?;
+    stage("fitting the collector's c and σ");
     let coll = fit_collectors(tab, opt, &[], &[])?;
     let fit_seconds = t0.elapsed().as_secs_f64();
     let pred = predict_everywhere(tab, &opt.form, &fits);
@@ -214,6 +229,7 @@ fn measure(tab: &SlabTables, opt: &Options) -> Result<Measured> {
     };
     let errors = per_group(&pred);
     let coverage = CoverageReport::of(tab, &pred);
+    stage("the reference form");
     let reference = per_group(&super::bouthors::fit_and_predict(tab)?);
     let reference_params = super::bouthors::n_params(nm, nl) * (ng - 1) * nt;
     let pred_c = predict_collector(tab, &opt.collector, &coll, (&fits, &pred), &Lerp::at);
@@ -231,7 +247,13 @@ fn measure(tab: &SlabTables, opt: &Options) -> Result<Measured> {
             * (ng - 1)
             * opt.collector_q
     };
-    let held_out = opt.held_out.then(|| held_out_study(tab, opt)).transpose()?;
+    let held_out = opt
+        .held_out
+        .then(|| {
+            stage("the held-out study (a second fit)");
+            held_out_study(tab, opt)
+        })
+        .transpose()?;
     let params = opt.form.n_params(nm, nl)
         * if opt.smooth_t == 0 {
             fits.len()

@@ -73,7 +73,8 @@ impl WeightRow {
 /// the angles of `basis` and W the sparse `rows`. Spheres are evaluated in order of size
 /// parameter, in blocks of [`BLOCK`] (each block pays for its largest term count, so sorting
 /// keeps the padding small). Also returns every sphere's efficiencies, from the same
-/// coefficients. `progress` is called with the number of spheres finished so far.
+/// coefficients. `progress` is called with the work finished so far: the Mie terms N summed
+/// over the finished spheres.
 pub fn weighted_intensity<R: AsRef<WeightRow> + Sync>(
     particles: &[Particle],
     rows: &[R],
@@ -95,7 +96,8 @@ pub fn weighted_intensity<R: AsRef<WeightRow> + Sync>(
     };
     let mut eff = vec![Efficiencies::default(); n_p];
     let mut intensity = vec![0.0; CHUNK * n_ang];
-    for (c, idx) in order.chunks(CHUNK).enumerate() {
+    let mut terms_done = 0;
+    for idx in order.chunks(CHUNK) {
         let block_rows = &mut intensity[..idx.len() * n_ang];
         let blocks: Vec<(f64, Vec<Efficiencies>)> = block_rows
             .par_chunks_mut(BLOCK * n_ang)
@@ -111,14 +113,13 @@ pub fn weighted_intensity<R: AsRef<WeightRow> + Sync>(
                 eff[i] = e;
             }
         }
-        work.useful_flops += idx
-            .iter()
-            .map(|&i| 8.0 * (n_terms(particles[i].x) * n_ang) as f64)
-            .sum::<f64>();
+        let terms: usize = idx.iter().map(|&i| n_terms(particles[i].x)).sum();
+        work.useful_flops += 8.0 * (terms * n_ang) as f64;
         let (done, useful) = accumulate(&mut out, rows, idx, block_rows, n_ang);
         work.flops += done;
         work.useful_flops += useful;
-        progress(c * CHUNK + idx.len());
+        terms_done += terms;
+        progress(terms_done);
     }
     (out, eff, work)
 }

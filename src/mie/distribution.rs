@@ -3,6 +3,7 @@
 //! Every distribution is handled through its number density per unit ln d, f(ln d) (for a
 //! density n(d) per unit diameter, f = d · n(d)), on a finite support [ln d_lo, ln d_hi].
 
+use super::limits::short;
 use anyhow::{bail, Result};
 use serde::{Deserialize, Serialize};
 
@@ -43,6 +44,14 @@ pub struct SizeNodes {
     pub weight: Vec<f64>,
 }
 
+/// Smallest diameter a distribution may name, µm: below it the number was almost certainly
+/// meant in metres or mm (docs/mie.md, "Limits").
+pub const D_MIN_UM: f64 = 0.01;
+
+/// Largest log-normal σ (of ln d): the ±5σ sizes then span a factor e^10 ≈ 22 000 already;
+/// cloud droplets have σ ≈ 0.1–0.5, aerosols up to ≈ 0.9 (docs/mie.md, "Limits").
+pub const SIGMA_MAX: f64 = 1.0;
+
 /// Half-width of the explicit product rule in units of σ: z ∈ [−4, 4] (docs/mie.md).
 pub const PRODUCT_RULE_Z: f64 = 4.0;
 
@@ -55,18 +64,20 @@ impl SizeDistribution {
             }
             Ok(())
         };
+        let diameter = |name: &str, d: f64| positive(name, d).and_then(|_| diameter_floor(d));
         match *self {
-            Self::Mono { d_um } => positive("diameter (µm)", d_um),
+            Self::Mono { d_um } => diameter("diameter (µm)", d_um),
             Self::LogNormal { d_median_um, sigma } => {
-                positive("median diameter (µm)", d_median_um)?;
-                positive("sigma (σ of ln d)", sigma)
+                diameter("median diameter (µm)", d_median_um)?;
+                positive("sigma (σ of ln d)", sigma)?;
+                sigma_range(sigma)
             }
             Self::ModifiedGamma {
                 d_mode_um,
                 alpha,
                 gamma,
             } => {
-                positive("mode diameter (µm)", d_mode_um)?;
+                diameter("mode diameter (µm)", d_mode_um)?;
                 positive("gamma-distribution alpha", alpha)?;
                 positive("gamma-distribution gamma", gamma)
             }
@@ -164,6 +175,37 @@ impl SizeDistribution {
             weight: w.iter().map(|v| v / total).collect(),
         }
     }
+}
+
+/// Refuses a diameter below [`D_MIN_UM`], naming the likely slip (metres for µm).
+fn diameter_floor(d_um: f64) -> Result<()> {
+    if d_um >= D_MIN_UM {
+        return Ok(());
+    }
+    let as_m = d_um * 1e6;
+    let hint = if (D_MIN_UM..=1e4).contains(&as_m) {
+        format!(" ({} m is {} µm)", short(d_um), short(as_m))
+    } else {
+        String::new()
+    };
+    bail!(
+        "diameter {} µm is below {D_MIN_UM} µm: diameters are in µm, not metres{hint}",
+        short(d_um)
+    )
+}
+
+/// Refuses a log-normal σ above [`SIGMA_MAX`]: σ is the width of ln d, and the work grows
+/// with the span e^{10σ} of the sizes.
+fn sigma_range(sigma: f64) -> Result<()> {
+    if sigma <= SIGMA_MAX {
+        return Ok(());
+    }
+    bail!(
+        "sigma = {} is outside (0, {SIGMA_MAX}]: it is the standard deviation of ln d (0.25 for a \
+         25 % spread), not a width in µm or per cent; the ±5σ sizes would span a factor {}",
+        short(sigma),
+        short((10.0 * sigma).exp())
+    )
 }
 
 #[cfg(test)]

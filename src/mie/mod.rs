@@ -4,7 +4,8 @@
 //! - [`angular`]: π_n, τ_n and the tabulated angle basis;
 //! - [`batch`]: intensities of many spheres as matrix products;
 //! - [`distribution`], [`index`], [`colour`], [`grid`]: the ingredients of a polydisperse job;
-//! - [`polydisperse`]: the job itself, producing [`polydisperse::PhaseTable`]s.
+//! - [`polydisperse`]: the job itself, producing [`polydisperse::PhaseTable`]s;
+//! - [`limits`]: the ranges a job must lie in, and its memory, checked before it runs.
 
 pub mod angular;
 pub mod batch;
@@ -12,6 +13,7 @@ pub mod colour;
 pub mod distribution;
 pub mod grid;
 pub mod index;
+pub mod limits;
 pub mod output;
 pub mod polydisperse;
 pub mod sphere;

@@ -123,6 +123,37 @@ pub struct PhaseTable {
     pub quadrature_norm: f64,
 }
 
+impl PhaseTable {
+    /// Refuses a table with a non-finite value or a phase function that is zero everywhere
+    /// (an underflow: tiny droplets, far-off units), so that no such table is ever written.
+    /// `phase_rgb` and `g_rgb` are left out: a wavelength grid that gives a channel no weight
+    /// has no such channel, NaN by design ([`srgb_weights`]).
+    pub fn check_values(&self) -> Result<()> {
+        let arrays: [(&str, &[f64]); 4] = [
+            ("phase", &self.phase),
+            ("phase_spectral", &self.phase_spectral),
+            ("phase_rgb_3wl", &self.phase_rgb_3wl),
+            ("cdf", &self.cdf),
+        ];
+        let scalars = [self.g, self.q_sca, self.effective_diameter_um];
+        let bad = arrays
+            .iter()
+            .find(|(_, v)| v.iter().any(|x| !x.is_finite()) || v.iter().all(|&x| x == 0.0))
+            .map(|(name, _)| *name)
+            .or((!self.legendre.iter().all(|x| x.is_finite())).then_some("legendre"))
+            .or((!scalars.iter().all(|x| x.is_finite())).then_some("g, Q_sca or d_eff"))
+            .or((!(self.c_sca_um2 > 0.0 && self.c_sca_um2.is_finite())).then_some("C_sca"));
+        if let Some(name) = bad {
+            bail!(
+                "the Mie table of d = {} µm came out with {name} non-finite or zero: not written \
+                 (diameters are in µm, wavelengths in nm)",
+                self.distribution.nominal_diameter_um()
+            );
+        }
+        Ok(())
+    }
+}
+
 /// Work statistics of a job.
 #[derive(Clone, Copy, Debug, Default, Serialize)]
 pub struct JobStats {
@@ -243,7 +274,9 @@ impl MieJob {
                 .at(l)
                 .context("the 650/510/440 nm LUT needs the index there too")?;
         }
-        grid::validate_angles(&self.angles_deg)
+        grid::validate_angles(&self.angles_deg)?;
+        // After the basic checks: the limits need positive, finite inputs.
+        self.check_limits()
     }
 
     /// Quadrature weights of the wavelength mean (sum 1). The product rule uses the explicit rule's
@@ -262,7 +295,7 @@ impl MieJob {
     }
 
     /// All output wavelengths: the grid, then the three LUT wavelengths.
-    fn row_wavelengths(&self) -> Vec<f64> {
+    pub(super) fn row_wavelengths(&self) -> Vec<f64> {
         self.wavelengths_nm
             .iter()
             .chain(&RGB_WAVELENGTHS_NM)
@@ -272,17 +305,22 @@ impl MieJob {
 
     /// Builds the particle list and one row of number weights per (distribution, λ).
     fn discretise(&self) -> Result<(Vec<Particle>, Vec<Row>)> {
-        let shared = self.index.is_constant()
-            && matches!(self.rule, SizeRule::Converged { .. })
-            && self
-                .distributions
-                .iter()
-                .all(|d| !matches!(d, SizeDistribution::Mono { .. }));
-        if shared {
+        if self.shares_ln_x() {
             self.discretise_shared_ln_x()
         } else {
             self.discretise_per_wavelength()
         }
+    }
+
+    /// Whether one ln-x grid serves every row: a constant index, the converged rule and no
+    /// monodisperse table.
+    pub(super) fn shares_ln_x(&self) -> bool {
+        self.index.is_constant()
+            && matches!(self.rule, SizeRule::Converged { .. })
+            && self
+                .distributions
+                .iter()
+                .all(|d| !matches!(d, SizeDistribution::Mono { .. }))
     }
 
     /// Constant index: one size-parameter grid shared by every row.
@@ -378,23 +416,26 @@ impl MieJob {
         }
     }
 
-    /// Runs the job; `progress(done, total)` reports spheres finished.
+    /// Runs the job; `progress(done, total)` reports the work finished, in Mie terms summed
+    /// over the spheres (a sphere's cost grows with its term count, so the bar's rate and
+    /// estimate hold while the spheres grow from small to large).
     pub fn compute(
         &self,
         progress: &(dyn Fn(usize, usize) + Sync),
     ) -> Result<(Vec<PhaseTable>, JobStats)> {
         self.validate()?;
         let (particles, rows) = self.discretise()?;
-        let n_p = particles.len();
         let mu: Vec<f64> = self
             .angles_deg
             .iter()
             .map(|d| d.to_radians().cos())
             .collect();
         let max_terms = particles.iter().map(|p| n_terms(p.x)).max().unwrap_or(1);
+        let total: usize = particles.iter().map(|p| n_terms(p.x)).sum();
+        progress(0, total);
         let basis = super::angular::AngleBasis::new(&mu, max_terms);
         let (mut out, eff, work) =
-            weighted_intensity(&particles, &rows, &basis, &|done| progress(done, n_p));
+            weighted_intensity(&particles, &rows, &basis, &|done| progress(done, total));
         let eff: Vec<(f64, f64)> = eff.iter().map(|e| (e.q_sca, e.g)).collect();
         let integrals: Vec<RowIntegrals> = rows
             .iter()
@@ -422,6 +463,9 @@ impl MieJob {
                 )
             })
             .collect::<Result<Vec<_>>>()?;
+        for t in &tables {
+            t.check_values()?;
+        }
         Ok((
             tables,
             JobStats {

@@ -10,6 +10,16 @@ use anyhow::{bail, ensure, Context, Result};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
+/// Optical size σ_t × extent (mean free paths across the medium) above which a scene gets a
+/// warning: 10× the largest of the shipped scenes (strato.json, 212), and well past real
+/// clouds (a towering cumulus 10 km across at 0.1 /m is 1000); a σ_t per km written per
+/// metre lands 1000× too high.
+pub const MAX_OPTICAL_SIZE: f64 = 2000.0;
+
+/// The largest optical size among fit-configs/scenes (strato.json: 0.05 /m × 4250 m; held to
+/// it by tests/first_hour_units.rs).
+pub const SHIPPED_MAX_OPTICAL_SIZE: f64 = 212.5;
+
 /// A scene file.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -271,6 +281,63 @@ impl Scene {
             }
         }
         Ok(())
+    }
+
+    /// Legal but implausible values, one sentence each naming the units (the caller prints
+    /// them as warnings; the scene still renders): an optical size far beyond any cloud's (a
+    /// σ_t per km written per metre), a sun below the horizon.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut w = Vec::new();
+        let (extent, tau) = (self.extent_m(), self.optical_size());
+        if tau > MAX_OPTICAL_SIZE {
+            w.push(format!(
+                "σ_t is per metre: sigma_t = {} /m over the medium's {extent:.0} m is {tau:.0} mean \
+                 free paths (real clouds: up to a few hundred; the shipped scenes at most {:.0}) \
+                 — did you mean {} /km, sigma_t = {}?",
+                self.sigma_t,
+                SHIPPED_MAX_OPTICAL_SIZE,
+                self.sigma_t,
+                self.sigma_t / 1e3
+            ));
+        }
+        let z = self.sun.direction[2] / norm(self.sun.direction);
+        if z < 0.0 {
+            w.push(format!(
+                "the sun is {:.0}° below the horizon (sun.direction z = {z:.2}; z is up): with \
+                 no ground in the scene it lights the medium from below; make z positive for a \
+                 sun in the sky",
+                -z.asin().to_degrees()
+            ));
+        }
+        w
+    }
+
+    /// σ_t × the medium's largest extent: mean free paths across it at density 1.
+    pub fn optical_size(&self) -> f64 {
+        self.sigma_t * self.extent_m()
+    }
+
+    /// The medium's largest extent (m): a slab's thickness, the largest side of the blobs' or
+    /// the voxel box's bounding box.
+    fn extent_m(&self) -> f64 {
+        match &self.medium {
+            MediumSpec::Slab { thickness } => *thickness,
+            MediumSpec::Cloud { blobs, .. } => (0..3)
+                .map(|i| {
+                    let lo = blobs.iter().map(|b| b.center[i] - b.radii[i]);
+                    let hi = blobs.iter().map(|b| b.center[i] + b.radii[i]);
+                    hi.fold(f64::MIN, f64::max) - lo.fold(f64::MAX, f64::min)
+                })
+                .fold(0.0, f64::max),
+            MediumSpec::Voxels { size, to_world, .. } => match (size, to_world) {
+                (Some(size), _) => size.iter().copied().fold(0.0, f64::max),
+                // The unit cube's image: its bounding box side along world axis r.
+                (None, Some(m)) => (0..3)
+                    .map(|r| m[r][..3].iter().map(|v| v.abs()).sum::<f64>())
+                    .fold(0.0, f64::max),
+                (None, None) => 0.0,
+            },
+        }
     }
 
     /// A voxel grid's map of the unit cube to the world, from origin and size or to_world.

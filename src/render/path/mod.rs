@@ -19,6 +19,7 @@ use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
 use std::time::Instant;
 use sun_lobe::SunLobe;
 
@@ -34,11 +35,42 @@ fn stride() -> usize {
     2 * GROUP_FIRST.len() * 3 + 1
 }
 
-/// Renders `scene`; `progress(fraction done)` as rows finish. With a time budget, passes of
-/// `spp` samples per pixel follow one another while the next one is predicted to fit (at least
-/// one): each pixel's stream continues across passes, so k passes give the same bits as one
-/// render at k · spp.
+/// What a render has done so far, for a progress display.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Progress {
+    /// Fraction done: of the rows (a fixed spp) or of the time budget.
+    pub fraction: f64,
+    /// Passes finished (with a time budget, passes of the scene's spp follow one another).
+    pub passes: u32,
+    /// Samples per pixel finished.
+    pub spp: u32,
+    /// The noise so far: the relative standard error of a pixel's scattered light,
+    /// √⟨(A − B)²/4⟩ / ⟨(A + B)/2⟩ over every pixel and channel, A and B the means of its even
+    /// and odd samples (the reference noise `nephele compare` reports); none before both
+    /// halves have samples.
+    pub noise: Option<f64>,
+}
+
+impl Progress {
+    /// "pass 3, 24 spp, pixel noise 4.1 %".
+    pub fn summary(&self) -> String {
+        let noise = self.noise.map_or(String::new(), |n| {
+            format!(", pixel noise {:.1} %", 100.0 * n)
+        });
+        format!("pass {}, {} spp{noise}", self.passes, self.spp)
+    }
+}
+
+/// Renders `scene`; `progress(fraction done)` as rows finish. See [`render_reporting`].
 pub fn render(scene: &Scene, progress: &(dyn Fn(f64) + Sync)) -> Result<Rendered> {
+    render_reporting(scene, &|p| progress(p.fraction))
+}
+
+/// Renders `scene`; `progress` as rows finish, with the passes, spp and noise so far. With a
+/// time budget, passes of `spp` samples per pixel follow one another while the next one is
+/// predicted to fit (at least one): each pixel's stream continues across passes, so k passes
+/// give the same bits as one render at k · spp.
+pub fn render_reporting(scene: &Scene, progress: &(dyn Fn(&Progress) + Sync)) -> Result<Rendered> {
     let medium = scene.build_medium()?;
     let models = Phase::build_channels(&scene.phase)?;
     let cam = Pinhole::new(&scene.camera);
@@ -50,12 +82,15 @@ pub fn render(scene: &Scene, progress: &(dyn Fn(f64) + Sync)) -> Result<Rendered
         .collect();
     let rows_done = AtomicUsize::new(0);
     let t0 = Instant::now();
+    let state = Mutex::new(Progress::default());
     let report = || {
         let rows = rows_done.fetch_add(1, Ordering::Relaxed) + 1;
-        progress(match scene.time_budget_s {
+        let mut p = state.lock().unwrap_or_else(|e| e.into_inner());
+        p.fraction = match scene.time_budget_s {
             Some(budget) => (t0.elapsed().as_secs_f64() / budget).min(1.0),
             None => rows as f64 / h as f64,
-        });
+        };
+        progress(&p);
     };
     let mut passes = 0u32;
     Phase::with_all(&models, |phases| {
@@ -88,7 +123,19 @@ pub fn render(scene: &Scene, progress: &(dyn Fn(f64) + Sync)) -> Result<Rendered
             let Some(budget) = scene.time_budget_s else {
                 break;
             };
+            // Cheap beside a pass (a few adds per pixel against spp paths): shown between passes.
+            let spp = scene.spp * passes;
+            let noise = noise_so_far(scene, &sums, spp);
             let now = t0.elapsed().as_secs_f64();
+            let mut p = state.lock().unwrap_or_else(|e| e.into_inner());
+            *p = Progress {
+                fraction: (now / budget).min(1.0),
+                passes,
+                spp,
+                noise,
+            };
+            progress(&p);
+            drop(p);
             if now + (now - pass_start) > budget || passes >= max_passes(scene.spp) {
                 break;
             }
@@ -96,6 +143,34 @@ pub fn render(scene: &Scene, progress: &(dyn Fn(f64) + Sync)) -> Result<Rendered
     });
     let spp = scene.spp * passes;
     Ok(gather(scene, &cam, &sums, spp, t0.elapsed().as_secs_f64()))
+}
+
+/// [`Progress::noise`] from the per-pixel sums of `spp` samples (two halves each); none below
+/// two samples or without light.
+fn noise_so_far(scene: &Scene, sums: &[f64], spp: u32) -> Option<f64> {
+    if spp < 2 {
+        return None;
+    }
+    let (ng, stride) = (GROUP_FIRST.len(), stride());
+    let counts = [spp.div_ceil(2) as f64, (spp / 2) as f64];
+    let (sun, sky) = (scene.sun.irradiance, scene.sky);
+    let (mut var, mut mean) = (0.0, 0.0);
+    for both in sums.chunks(2 * stride) {
+        for c in 0..3 {
+            let half = |k: usize| {
+                let part = &both[k * stride..(k + 1) * stride];
+                let light: f64 = (0..ng)
+                    .map(|g| part[g * 3 + c] * sun[c] + part[(ng + g) * 3 + c] * sky[c])
+                    .sum();
+                light / counts[k]
+            };
+            let (a, b) = (half(0), half(1));
+            var += 0.25 * (a - b) * (a - b);
+            mean += 0.5 * (a + b);
+        }
+    }
+    let n = (3 * sums.len() / (2 * stride)) as f64; // pixels × channels
+    (mean > 0.0).then(|| (var / n).sqrt() / (mean / n))
 }
 
 /// The estimator's view of `scene` (medium and phase functions built): the sun's irradiance
