@@ -15,11 +15,12 @@ mod sphere;
 mod transport;
 
 use anyhow::Result;
-use clap::{Parser, Subcommand};
+use clap::{ArgMatches, Parser, Subcommand};
+use std::process::ExitCode;
 
 /// nephele — light scattering by water droplets, from Mie theory to renderer-ready tables.
 ///
-/// Without a subcommand, `nephele` runs the main job on built-in configs (~4 min on 2 cores):
+/// Without a subcommand, `nephele` runs the main job on built-in configs (~5 min on 2 cores):
 /// Mie tables and phase-model fits (→ outputs/mie, outputs/fit), quick slab tables of 10 µm
 /// droplets (→ outputs/slab-quick), their compression (→ outputs/transport/quick), the
 /// path-traced default cloud (→ outputs/render/cloud) and the same cloud by the collector
@@ -43,24 +44,34 @@ pub struct Cli {
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Polydisperse, spectral Mie phase functions of water droplets (phase.npz + phase.json).
+    #[command(allow_negative_numbers = true)]
     Mie(mie::MieArgs),
     /// Fit HG, two-term HG, Cornette–Shanks, Draine and HG+Draine to Mie tables; diameter curves.
+    #[command(allow_negative_numbers = true)]
     Fit(fit::FitArgs),
     /// Slab Monte Carlo: the canonical transport tables ⟨T, c, σ⟩ per order group (docs/slab.md).
+    #[command(allow_negative_numbers = true)]
     Slab(slab::SlabArgs),
     /// Fit the compressed form (docs/compress.md) to a slab run's tables and report its error per group.
+    #[command(allow_negative_numbers = true)]
     Compress(compress::CompressArgs),
     /// Evaluate compressed transport tables (transport.ntt) at one point: T per order group, as JSON.
+    #[command(allow_negative_numbers = true)]
     Transport(transport::TransportArgs),
     /// Render a scene (slab, cloud, voxels) with the path tracer or a fast method (collector, single, octaves): image and per-order AOVs.
+    #[command(allow_negative_numbers = true)]
     Render(render::RenderArgs),
     /// Compare renders with a path-traced reference per order group, beside its noise (report.json, figures).
+    #[command(allow_negative_numbers = true)]
     Compare(compare::CompareArgs),
     /// Merge the shards of a slab run (`nephele slab --shard K/N`) into its tables.
+    #[command(allow_negative_numbers = true)]
     Merge(slab::MergeArgs),
     /// Tabulate and sample a phase model of nephele-runtime (or a Mie table); renderer LUTs.
+    #[command(allow_negative_numbers = true)]
     Phase(phase::PhaseArgs),
     /// One sphere: Q_ext, Q_sca, Q_back, g and S1, S2 at given angles, as JSON on stdout.
+    #[command(allow_negative_numbers = true)]
     Sphere(sphere::SphereArgs),
 }
 
@@ -83,8 +94,76 @@ fn names<T: Copy + Send + Sync + 'static>(
     })
 }
 
-/// Runs the parsed command.
-pub fn run(cli: Cli) -> Result<()> {
+/// A parse error as one line, like every other error (`error: …`), with where to look;
+/// `--help` and `--version` print as clap prints them.
+pub fn parse_error(e: clap::Error) -> ExitCode {
+    use clap::error::ErrorKind;
+    if matches!(
+        e.kind(),
+        ErrorKind::DisplayHelp
+            | ErrorKind::DisplayVersion
+            | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+    ) {
+        let _ = e.print();
+        return ExitCode::from(e.exit_code() as u8);
+    }
+    let text = e.render().to_string();
+    let first = text.lines().next().unwrap_or("").trim_start_matches("error: ");
+    let tip = text
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("tip: "))
+        .map_or(String::new(), |t| format!("; {t}"));
+    eprintln!("error: {first}{tip} (see --help)");
+    ExitCode::from(2)
+}
+
+/// The bytes of transport tables: the file's, or the embedded Mie 10 µm ones.
+fn table_bytes(path: Option<&std::path::Path>) -> Result<std::borrow::Cow<'static, [u8]>> {
+    use anyhow::Context;
+    Ok(match path {
+        Some(p) => std::fs::read(p)
+            .with_context(|| format!("cannot read tables '{}'", p.display()))?
+            .into(),
+        None => nephele_runtime::embedded::MIE_10UM.into(),
+    })
+}
+
+/// A finite number > 0 (clap parser: negative values reach it and get the range).
+fn positive_f64(s: &str) -> std::result::Result<f64, String> {
+    let v: f64 = s.parse().map_err(|e| format!("{e}"))?;
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("{v} is not > 0"))
+    }
+}
+
+/// Whether the user gave `id` on the command line (not a default).
+fn given(m: &ArgMatches, id: &str) -> bool {
+    m.try_contains_id(id).unwrap_or(false)
+        && m.value_source(id) == Some(clap::parser::ValueSource::CommandLine)
+}
+
+/// Refuses the flags among `ids` that were given, where they `do not apply …` (the reason,
+/// e.g. "to --method collector (path tracer only)").
+fn refuse_unused(m: &ArgMatches, ids: &[&str], reason: &str) -> Result<()> {
+    let used: Vec<String> = ids
+        .iter()
+        .filter(|id| given(m, id))
+        .map(|id| format!("--{}", id.replace('_', "-")))
+        .collect();
+    anyhow::ensure!(
+        used.is_empty(),
+        "{} {} not apply {reason}",
+        used.join(", "),
+        if used.len() == 1 { "does" } else { "do" }
+    );
+    Ok(())
+}
+
+/// Runs the parsed command; `matches` tell what was given on the command line.
+pub fn run(cli: Cli, matches: &ArgMatches) -> Result<()> {
+    let sub = matches.subcommand().map_or(matches, |(_, m)| m);
     if let Some(n) = cli.threads {
         anyhow::ensure!(n >= 1, "--threads must be at least 1");
         rayon::ThreadPoolBuilder::new()
@@ -104,7 +183,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Merge(args)) => slab::merge_shards(args),
         Some(Command::Compress(args)) => compress::run(args),
         Some(Command::Transport(args)) => transport::run(args),
-        Some(Command::Render(args)) => render::run(args),
+        Some(Command::Render(args)) => render::run(args, sub),
         Some(Command::Compare(args)) => compare::run(args),
         None => pipeline::run(cli.full),
     }

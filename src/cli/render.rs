@@ -1,7 +1,7 @@
 //! `nephele render`: renders a scene with the ground-truth path tracer or a fast method.
 
-use anyhow::{Context, Result};
-use clap::Args;
+use anyhow::Result;
+use clap::{ArgMatches, Args};
 use nephele::render::fast::{render_fast, FastOptions, Finite, Method, Octaves};
 use nephele::render::image::Rendered;
 use nephele::render::output::write_outputs_with;
@@ -27,19 +27,20 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value = "path-tracer")]
     pub method: Method,
     /// Path tracer: samples per pixel, overriding the scene's (per pass with a time budget).
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     pub spp: Option<u32>,
     /// Path tracer: wall-clock budget in seconds, overriding the scene's: passes of spp
     /// samples per pixel while the next one fits.
-    #[arg(long, value_name = "SECONDS")]
+    #[arg(long, value_name = "SECONDS", value_parser = super::positive_f64)]
     pub time_budget: Option<f64>,
     /// Path tracer: most steps of the sun-lobe walks and directions of their MIS window
     /// (variance reduction for forward peaks, docs/render.md), overriding the scene's (default
     /// 16): 0 is plain next-event estimation, up to 32.
-    #[arg(long, value_name = "K")]
-    pub sun_lobe_steps: Option<usize>,
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u64).range(0..=32))]
+    pub sun_lobe_steps: Option<u64>,
     /// Image width and height in pixels, overriding the scene's camera.
-    #[arg(long, value_names = ["W", "H"], num_args = 2)]
+    #[arg(long, value_names = ["W", "H"], num_args = 2,
+          value_parser = clap::value_parser!(u32).range(1..=16384))]
     pub size: Option<Vec<u32>>,
     /// Exposure K of beauty.png: 1 − e^{−K x} of the linear radiance x (render.json records the
     /// one used) [default: the 90th percentile of the cloud's luminance maps to 0.75].
@@ -167,12 +168,7 @@ impl FastArgs {
 
     /// The tables' bytes: the file's, or the embedded ones.
     pub fn table_bytes(&self) -> Result<std::borrow::Cow<'static, [u8]>> {
-        Ok(match &self.tables {
-            Some(p) => std::fs::read(p)
-                .with_context(|| format!("cannot read tables '{}'", p.display()))?
-                .into(),
-            None => nephele_runtime::embedded::MIE_10UM.into(),
-        })
+        super::table_bytes(self.tables.as_deref())
     }
 }
 
@@ -209,8 +205,64 @@ pub fn render_with(scene: &Scene, method: Method, fast: &FastArgs) -> Result<Ren
     Ok(r)
 }
 
-/// Runs `nephele render`.
-pub fn run(args: RenderArgs) -> Result<()> {
+/// The flags of one method only, by clap id.
+const PATH_TRACER_ONLY: [&str; 3] = ["spp", "time_budget", "sun_lobe_steps"];
+const FAST_ONLY: [&str; 7] = [
+    "tables",
+    "allow_table_mismatch",
+    "map_resolution",
+    "planes",
+    "march_step",
+    "surface_density",
+    "rays",
+];
+const COLLECTOR_ONLY: [&str; 8] = [
+    "iterations",
+    "tolerance",
+    "no_step_clamp",
+    "no_filter",
+    "thickness_scale",
+    "correction",
+    "leakage_scale",
+    "leakage_delay",
+];
+
+/// Refuses the flags that `method` does not take (docs/render.md: a flag that does not apply
+/// is an error, never ignored).
+fn refuse_flags_of_other_methods(m: &ArgMatches, method: Method, fast: &FastArgs) -> Result<()> {
+    let name = method_name(method);
+    let reason = |only: &str| format!("to --method {name} ({only} only)");
+    if method != Method::PathTracer {
+        super::refuse_unused(m, &PATH_TRACER_ONLY, &reason("path-tracer"))?;
+    } else {
+        super::refuse_unused(m, &FAST_ONLY, &reason("collector, single and octaves"))?;
+    }
+    if method != Method::Collector {
+        super::refuse_unused(m, &COLLECTOR_ONLY, &reason("collector"))?;
+    } else if !matches!(fast.correction, Correction::Leakage | Correction::Both) {
+        super::refuse_unused(
+            m,
+            &["leakage_scale", "leakage_delay"],
+            "without the leakage correction (--correction leakage or both)",
+        )?;
+    }
+    if method != Method::Octaves {
+        super::refuse_unused(m, &["octaves"], &reason("octaves"))?;
+    }
+    Ok(())
+}
+
+/// The method's command-line name.
+fn method_name(method: Method) -> String {
+    use clap::ValueEnum;
+    method
+        .to_possible_value()
+        .map_or("?".into(), |v| v.get_name().to_string())
+}
+
+/// Runs `nephele render`; `m` tells which flags were given.
+pub fn run(args: RenderArgs, m: &ArgMatches) -> Result<()> {
+    refuse_flags_of_other_methods(m, args.method, &args.fast)?;
     let mut scene = Scene::load(&args.scene)?;
     if let Some(spp) = args.spp {
         scene.spp = spp;
@@ -219,7 +271,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         scene.time_budget_s = Some(budget);
     }
     if let Some(k) = args.sun_lobe_steps {
-        scene.sun_lobe_steps = k;
+        scene.sun_lobe_steps = k as usize;
     }
     if let Some(s) = &args.size {
         scene.camera.width = s[0];
@@ -257,26 +309,38 @@ pub fn run(args: RenderArgs) -> Result<()> {
             stages["pixels"].as_f64().unwrap_or(0.0),
             out.display()
         );
-        if let Some(groups) = r.details["groups"].as_array() {
-            for g in groups {
-                let n = g["searches"].as_f64().unwrap_or(0.0).max(1.0);
-                if g["searches"].as_u64().unwrap_or(0) == 0 || r.method != "collector" {
-                    continue;
-                }
-                println!(
-                    "  orders {:>2}+: {:.2} reads per search, {:.1} % converged, clamped t {:.1} % μ_L {:.1} % d {:.1} %, d held by the view {:.1} %, no light {:.1} % (dark {:.2} %)",
-                    g["first_order"],
-                    g["reads"].as_f64().unwrap_or(0.0) / (n - g["empty"].as_f64().unwrap_or(0.0)).max(1.0),
-                    100.0 * g["converged"].as_f64().unwrap_or(0.0) / n,
-                    100.0 * g["clamped_thickness"].as_f64().unwrap_or(0.0) / n,
-                    100.0 * g["clamped_mu_l"].as_f64().unwrap_or(0.0) / n,
-                    100.0 * g["clamped_depth"].as_f64().unwrap_or(0.0) / n,
-                    100.0 * g["held_by_view"].as_f64().unwrap_or(0.0) / n,
-                    100.0 * g["empty"].as_f64().unwrap_or(0.0) / n,
-                    100.0 * g["dark"].as_f64().unwrap_or(0.0) / n,
-                );
-            }
+        if r.method == "collector" {
+            print_search_stats(&r.details["groups"]);
         }
     }
     Ok(())
+}
+
+/// The collector search's statistics per order group, in words (render.json has the counts).
+fn print_search_stats(groups: &serde_json::Value) {
+    let Some(groups) = groups.as_array() else {
+        return;
+    };
+    println!(
+        "  collector search per order group (shares of the pixels searched; docs/collector.md):"
+    );
+    let f = |g: &serde_json::Value, k: &str| g[k].as_f64().unwrap_or(0.0);
+    for g in groups.iter().filter(|g| f(g, "searches") > 0.0) {
+        let n = f(g, "searches");
+        let pct = |k: &str| 100.0 * f(g, k) / n;
+        println!(
+            "  orders {:>2}+: {:.2} table reads a pixel, {:.1} % converged; held at the tables' \
+             edge: thickness {:.1} %, sun angle {:.1} %, depth {:.1} %; depth set by the medium \
+             behind the view point {:.1} %; no lit surface found {:.1} % (of which dark {:.2} %)",
+            g["first_order"],
+            f(g, "reads") / (n - f(g, "empty")).max(1.0),
+            pct("converged"),
+            pct("clamped_thickness"),
+            pct("clamped_mu_l"),
+            pct("clamped_depth"),
+            pct("held_by_view"),
+            pct("empty"),
+            pct("dark"),
+        );
+    }
 }

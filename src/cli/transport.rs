@@ -1,6 +1,6 @@
 //! `nephele transport`: the compressed tables evaluated at one point, as JSON.
 
-use anyhow::{ensure, Context, Result};
+use anyhow::{ensure, Result};
 use clap::Args;
 use nephele_runtime::transport::{SlabPoint, Transport, TransportTables};
 use std::path::PathBuf;
@@ -8,14 +8,15 @@ use std::path::PathBuf;
 /// Options of `nephele transport`.
 #[derive(Args, Debug)]
 pub struct TransportArgs {
-    /// transport.ntt of `nephele compress`.
-    #[arg(long)]
-    pub tables: PathBuf,
+    /// transport.ntt of `nephele compress` [default: the embedded Mie 10 µm tables, as
+    /// `nephele render` uses].
+    #[arg(long, value_name = "FILE")]
+    pub tables: Option<PathBuf>,
     /// Slab thickness t (mean free paths).
     #[arg(long)]
     pub t: f32,
     /// Sun cosine μ_L in (0, 1].
-    #[arg(long = "mu-l")]
+    #[arg(long = "mu-l", allow_hyphen_values = true)]
     pub mu_l: f32,
     /// Depth of the viewpoint below the lit face (mfp), in [0, t].
     #[arg(long)]
@@ -38,10 +39,11 @@ pub fn run(a: TransportArgs) -> Result<()> {
     ensure!((0.0..=a.t).contains(&a.depth), "--depth must be in [0, t]");
     ensure!((-1.0..=1.0).contains(&a.mu_v), "--mu-v must be in [-1, 1]");
     ensure!(a.psi.is_finite(), "--psi must be a number of degrees");
-    let bytes = std::fs::read(&a.tables)
-        .with_context(|| format!("cannot read '{}'", a.tables.display()))?;
-    let tab = TransportTables::from_bytes(&bytes)
-        .map_err(|e| anyhow::anyhow!("'{}': {e}", a.tables.display()))?;
+    let bytes = super::table_bytes(a.tables.as_deref())?;
+    let tab = TransportTables::from_bytes(&bytes).map_err(|e| {
+        let name = a.tables.as_ref().map_or("(embedded)".into(), |p| format!("'{}'", p.display()));
+        anyhow::anyhow!("transport tables {name}: {e}")
+    })?;
     let at = SlabPoint {
         depth: a.depth,
         thickness: a.t,
