@@ -94,3 +94,52 @@ fn a_phase_table_that_is_not_an_npz_says_so() {
         Some(&out),
     );
 }
+
+#[test]
+fn mie_and_phase_refuse_what_they_would_ignore() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let o = out.to_str().unwrap();
+    let mie = |extra: &[&str], fix: &str| {
+        let mut args = vec!["mie", "--out", o];
+        args.extend_from_slice(extra);
+        refuses(&args, fix, Some(&out));
+    };
+    mie(
+        &["--distribution", "mono", "--sigma", "0.3"],
+        "--sigma (sigma) applies to the log-normal distribution only",
+    );
+    mie(
+        &["--distribution", "gamma:6:1", "--sigma", "0.3"],
+        "applies to the log-normal distribution only, not to 'gamma:6:1'",
+    );
+    mie(
+        &["--sizes", "9", "--x-step", "0.02"],
+        "--x-step sets the converged size rule, which --sizes does not use",
+    );
+    mie(
+        &["--distribution", "mono", "--sizes", "9"],
+        "which a mono distribution (one size) does not use",
+    );
+    refuses(
+        &["phase", "--model", "hg", "--g", "0.5", "--seed", "3", "--out", o],
+        "--seed applies to --samples",
+        Some(&out),
+    );
+}
+
+#[test]
+fn a_bad_blob_names_the_key_the_scene_uses() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(scene("cloud.json")).unwrap();
+    let bad = text.replacen("\"radii\": [500, 450, 380]", "\"radii\": [500, -450, 380]", 1);
+    assert_ne!(bad, text, "cloud.json changed: update this test");
+    let path = dir.path().join("bad.json");
+    std::fs::write(&path, bad).unwrap();
+    let out = dir.path().join("out");
+    refuses(
+        &["render", "--scene", path.to_str().unwrap(), "--out", out.to_str().unwrap()],
+        "medium.blobs[0].radii must be three positive numbers (m)",
+        Some(&out),
+    );
+}

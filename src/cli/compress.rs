@@ -57,7 +57,7 @@ pub struct CompressArgs {
 
 /// Compresses with a spinner naming the stage (a minute and a half on the default tables).
 pub(super) fn compress_with_spinner(tables: &Path, out: &Path, opt: &Options) -> Result<Outcome> {
-    let bar = super::mie::spinner("compress", "");
+    let bar = super::progress::spinner("compress", "");
     let o = compress_reporting(tables, out, opt, &|stage| {
         bar.set_message(stage.to_string())
     });

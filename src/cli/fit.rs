@@ -100,7 +100,7 @@ fn run_file(file: &FitFile, out: &Path, mie_out: &Path, plot: bool) -> Result<()
     let t0 = Instant::now();
     let (tables, stats, mie_s) = compute_with_bar(&job)?;
     let t1 = Instant::now();
-    let bar = super::mie::work_bar("fit", 0);
+    let bar = super::progress::work_bar("fit", 0);
     let (report, _targets) = nephele::fit::run(&file.fit, &tables, &|done, total| {
         bar.set_length(total as u64);
         bar.set_position(done as u64);
@@ -112,7 +112,7 @@ fn run_file(file: &FitFile, out: &Path, mie_out: &Path, plot: bool) -> Result<()
     let timings =
         json!({ "mie_s": mie_s, "fit_s": fit_s, "threads": rayon::current_num_threads() });
     let config = serde_json::to_value(file)?;
-    let spin = super::mie::spinner("fit", "writing the fits and figures");
+    let spin = super::progress::spinner("fit", "writing the fits and figures");
     write_fits(&config, &file.fit, &tables, &report, timings, out, plot)?;
     // The Mie tables of the figure diameters, as `nephele mie` writes them.
     let mut shown: Vec<PhaseTable> = Vec::new();

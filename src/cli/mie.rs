@@ -2,7 +2,6 @@
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use indicatif::{ProgressBar, ProgressFinish, ProgressStyle};
 use nephele::io::{plot, AtomicFiles};
 use nephele::mie::colour::Illuminant;
 use nephele::mie::distribution::SizeDistribution;
@@ -135,8 +134,44 @@ impl MieArgs {
         })
     }
 
+    /// Refuses options that the job would ignore (docs/phase.md: a flag or key a command does
+    /// not take is an error): σ belongs to the log-normal distribution, the converged rule's
+    /// steps not to `sizes` (the product rule) nor to one size (`mono`).
+    fn refuse_unused(&self) -> Result<()> {
+        let kind = self.distribution.as_deref().unwrap_or("lognormal");
+        let lognormal = kind == "lognormal";
+        anyhow::ensure!(
+            lognormal || self.sigma.is_none(),
+            "--sigma (sigma) applies to the log-normal distribution only, not to '{kind}'"
+        );
+        let steps: Vec<&str> = [
+            ("--ln-step", self.ln_step.is_some()),
+            ("--x-step", self.x_step.is_some()),
+            ("--z-max", self.z_max.is_some()),
+        ]
+        .iter()
+        .filter(|(_, given)| *given)
+        .map(|(name, _)| *name)
+        .collect();
+        let rule_of = |what: &str| {
+            format!(
+                "{} set{} the converged size rule, which {what} does not use",
+                steps.join(", "),
+                if steps.len() == 1 { "s" } else { "" }
+            )
+        };
+        anyhow::ensure!(steps.is_empty() || self.sizes.is_none(), "{}", rule_of("--sizes"));
+        anyhow::ensure!(steps.is_empty() || kind != "mono", "{}", rule_of("a mono distribution"));
+        anyhow::ensure!(
+            self.sizes.is_none() || kind != "mono",
+            "--sizes (sizes) sets the size quadrature, which a mono distribution (one size) does not use"
+        );
+        Ok(())
+    }
+
     /// The typed job these options describe.
     pub(super) fn job(&self) -> Result<MieJob> {
+        self.refuse_unused()?;
         let diameters = parse_list(self.diameter.as_deref().unwrap_or("10"), "--diameter")?;
         let sigma = self.sigma.unwrap_or(0.25);
         let distributions = diameters
@@ -286,7 +321,7 @@ pub(super) fn compute_with_bar(job: &MieJob) -> Result<(Vec<PhaseTable>, JobStat
     if let Some(bytes) = available_memory() {
         job.check_memory(bytes)?;
     }
-    let bar = work_bar("Mie", 0);
+    let bar = super::progress::work_bar("Mie", 0);
     bar.set_message(format!("{} spheres", short(job.footprint().spheres)));
     let t0 = Instant::now();
     // Positions count Mie terms: a sphere's cost grows with its size, so spheres alone would
@@ -297,34 +332,6 @@ pub(super) fn compute_with_bar(job: &MieJob) -> Result<(Vec<PhaseTable>, JobStat
     })?;
     bar.finish_and_clear();
     Ok((tables, stats, t0.elapsed().as_secs_f64()))
-}
-
-/// A bar on stderr over `len` units of work: "PREFIX [███░░░] 42% MSG (elapsed, eta)". Like
-/// every bar here it is hidden when stderr is not a terminal, so scripts and tests see only
-/// the lines they expect.
-pub(super) fn work_bar(prefix: &str, len: u64) -> ProgressBar {
-    let style = ProgressStyle::with_template(
-        "{prefix} [{bar:30}] {percent:>3}% {msg} ({elapsed}, eta {eta})",
-    )
-    .expect("static template");
-    ProgressBar::new(len)
-        .with_style(style)
-        .with_prefix(prefix.to_string())
-        .with_finish(ProgressFinish::AndClear)
-}
-
-/// A spinner on stderr for a step of unknown length: "⠋ PREFIX: MSG (elapsed)".
-pub(super) fn spinner(prefix: &str, msg: &str) -> ProgressBar {
-    let style = ProgressStyle::with_template("{spinner} {prefix}: {msg} ({elapsed})")
-        .expect("static template");
-    // Cleared when dropped: an error line then stands alone.
-    let bar = ProgressBar::new_spinner()
-        .with_style(style)
-        .with_prefix(prefix.to_string())
-        .with_finish(ProgressFinish::AndClear)
-        .with_message(msg.to_string());
-    bar.enable_steady_tick(std::time::Duration::from_millis(200));
-    bar
 }
 
 /// Bytes of memory available to a new allocation (Linux's MemAvailable), if known.

@@ -9,6 +9,7 @@ mod fit;
 mod mie;
 mod phase;
 mod pipeline;
+mod progress;
 mod render;
 mod slab;
 mod sphere;

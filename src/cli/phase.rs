@@ -71,9 +71,9 @@ pub struct PhaseArgs {
     /// Also draw this many sampled cosines (f64 sampler) into samples_mu.
     #[arg(long, default_value_t = 0)]
     samples: usize,
-    /// Seed of the samples.
-    #[arg(long, default_value_t = 1)]
-    seed: u64,
+    /// Seed of the samples (with --samples) [default: 1].
+    #[arg(long)]
+    seed: Option<u64>,
     /// Entries of the renderer LUTs (uniform in θ, and inverse CDF uniform in ξ).
     #[arg(long, default_value_t = 1024)]
     lut: usize,
@@ -121,6 +121,11 @@ pub fn run(args: PhaseArgs) -> Result<()> {
     if args.lut < 2 {
         bail!("--lut must be at least 2");
     }
+    anyhow::ensure!(
+        args.seed.is_none() || args.samples > 0,
+        "--seed applies to --samples (the drawn cosines), and none were asked for"
+    );
+    let seed = args.seed.unwrap_or(1);
     let table;
     let (model, params): (Box<dyn PhaseFunction<f64> + '_>, serde_json::Value) =
         if args.model == Model::Tabulated {
@@ -149,7 +154,7 @@ pub fn run(args: PhaseArgs) -> Result<()> {
         .map(|d| model.eval(d.to_radians().cos()))
         .collect();
     let icdf = nephele::phase::lut::inverse_cdf(model.as_ref(), args.lut);
-    let mut rng = Xoshiro256PlusPlus::seed_from_u64(args.seed);
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
     let samples: Vec<f64> = (0..args.samples)
         .map(|_| model.sample_mu(rng.random::<f64>()))
         .collect();
@@ -163,7 +168,7 @@ pub fn run(args: PhaseArgs) -> Result<()> {
         .add("samples_mu", &[samples.len()], &samples);
     let sidecar = json!({
         "tool": "nephele", "version": nephele::VERSION, "model": args.model, "params": params,
-        "mean_cosine": model.mean_cosine(), "samples": args.samples, "seed": args.seed,
+        "mean_cosine": model.mean_cosine(), "samples": args.samples, "seed": seed,
         "conventions": {
             "phase": "p(mu), normalised over the sphere, 1/sr; mu = cos(theta), theta between incident and scattered propagation directions",
             "lut_phase": "p at lut_theta_deg, uniform in theta from 0 to 180 degrees",

@@ -77,7 +77,7 @@ pub fn run(full: bool) -> Result<()> {
         render_out.display()
     );
     let scene = Scene::parse(include_str!("../../fit-configs/scenes/cloud.json"))?;
-    let bar = super::mie::work_bar("render", 1000);
+    let bar = super::progress::work_bar("render", 1000);
     let r = render(&scene, &|done| bar.set_position((done * 1000.0) as u64))?;
     bar.finish_and_clear();
     write_outputs(render_out, &scene, &r)?;

@@ -177,7 +177,7 @@ pub fn render_with(scene: &Scene, method: Method, fast: &FastArgs) -> Result<Ren
     for w in scene.warnings() {
         eprintln!("warning: {w}");
     }
-    let bar = super::mie::work_bar("render", 1000);
+    let bar = super::progress::work_bar("render", 1000);
     let progress = |done: f64| bar.set_position((done * 1000.0) as u64);
     let r = if method == Method::PathTracer {
         // A time budget runs passes: show them, the spp and the noise reached so far.

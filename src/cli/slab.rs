@@ -98,7 +98,7 @@ pub fn run_config(
     plot: bool,
 ) -> Result<()> {
     let t0 = Instant::now();
-    let spin = super::mie::spinner("slab", "the phase function");
+    let spin = super::progress::spinner("slab", "the phase function");
     let phase = Phase::build(&cfg.phase)?;
     spin.finish_and_clear();
     let phase_s = t0.elapsed().as_secs_f64();
@@ -109,7 +109,7 @@ pub fn run_config(
         save_every_s: save_every,
     };
     let total = cfg.thicknesses.len() * cfg.mu_l.len();
-    let bar = super::mie::work_bar("slab", total as u64);
+    let bar = super::progress::work_bar("slab", total as u64);
     let t1 = Instant::now();
     let run = run_all(cfg, &phase, &control, &|slice, _, photons, worst| {
         bar.set_position(slice as u64);
@@ -134,7 +134,7 @@ pub fn run_config(
     }
     let timings =
         json!({"phase_s": phase_s, "monte_carlo_s": mc_s, "threads": rayon::current_num_threads()});
-    let spin = super::mie::spinner("slab", "writing the tables");
+    let spin = super::progress::spinner("slab", "writing the tables");
     write_tables(cfg, &run, Some(&phase), out, plot, timings)?;
     spin.finish_and_clear();
     checkpoint.remove()?;
@@ -146,7 +146,7 @@ pub fn run_config(
 /// Runs `nephele merge`.
 pub fn merge_shards(args: MergeArgs) -> Result<()> {
     let cfg = load_config(&args.config)?;
-    let spin = super::mie::spinner("merge", "reading the shards");
+    let spin = super::progress::spinner("merge", "reading the shards");
     let shards = args
         .shards
         .iter()

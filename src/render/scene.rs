@@ -259,9 +259,14 @@ impl Scene {
                     "medium.blobs must hold at least one ellipsoid"
                 );
                 for (i, b) in blobs.iter().enumerate() {
-                    if !(finite(&b.center) && b.radii.iter().all(|&r| r > 0.0 && r.is_finite())) {
-                        bail!("medium.blobs[{i}]: centre finite and radii positive");
-                    }
+                    ensure!(
+                        finite(&b.center),
+                        "medium.blobs[{i}].center must be three finite numbers (m)"
+                    );
+                    ensure!(
+                        b.radii.iter().all(|&r| r > 0.0 && r.is_finite()),
+                        "medium.blobs[{i}].radii must be three positive numbers (m)"
+                    );
                 }
                 ensure!(
                     *edge > 0.0 && edge.is_finite(),
