@@ -37,16 +37,6 @@ pub fn run(args: CompareArgs) -> Result<()> {
     Ok(())
 }
 
-/// Seconds with three significant digits (0.570 s, 12.3 s, 135 s): a fast render's 0.57 s
-/// must not read "1 s".
-pub fn seconds(s: f64) -> String {
-    if !s.is_finite() || s <= 0.0 {
-        return "? s".into(); // render.json without its seconds
-    }
-    let decimals = (2 - s.log10().floor() as i32).clamp(0, 6) as usize;
-    format!("{s:.decimals$} s")
-}
-
 /// The table on stdout: a legend, then per candidate and quantity, over the opaque pixels,
 /// then the regions of orders ≥ 2.
 pub fn print_table(report: &Report) {
@@ -56,7 +46,7 @@ pub fn print_table(report: &Report) {
         report.reference,
         report.reference_method,
         report.reference_spp,
-        seconds(report.reference_seconds),
+        super::seconds(report.reference_seconds),
         report.exposure
     );
     for c in &report.candidates {
@@ -64,7 +54,7 @@ pub fn print_table(report: &Report) {
             "\n{} ({}): {} a frame, beauty PSNR {:.1} dB",
             c.dir,
             c.method,
-            seconds(c.seconds),
+            super::seconds(c.seconds),
             c.psnr_db
         );
         println!(

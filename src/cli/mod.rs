@@ -129,6 +129,16 @@ fn table_bytes(path: Option<&std::path::Path>) -> Result<std::borrow::Cow<'stati
     })
 }
 
+/// Seconds with three significant digits (0.570 s, 12.3 s, 135 s): a fast render's 0.57 s
+/// must not read "1 s".
+pub(crate) fn seconds(s: f64) -> String {
+    if !s.is_finite() || s <= 0.0 {
+        return "? s".into(); // render.json without its seconds
+    }
+    let decimals = (2 - s.log10().floor() as i32).clamp(0, 6) as usize;
+    format!("{s:.decimals$} s")
+}
+
 /// A finite number > 0 (clap parser: negative values reach it and get the range).
 fn positive_f64(s: &str) -> std::result::Result<f64, String> {
     let v: f64 = s.parse().map_err(|e| format!("{e}"))?;

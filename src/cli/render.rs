@@ -178,7 +178,15 @@ pub fn render_with(scene: &Scene, method: Method, fast: &FastArgs) -> Result<Ren
         eprintln!("warning: {w}");
     }
     let bar = super::progress::work_bar("render", 1000);
-    let progress = |done: f64| bar.set_position((done * 1000.0) as u64);
+    // Before the first row: a Mie phase table is computed (seconds), the medium and maps built.
+    bar.set_message("preparing the phase function and the medium");
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    let progress = |done: f64| {
+        if bar.position() == 0 && done > 0.0 {
+            bar.set_message("");
+        }
+        bar.set_position((done * 1000.0) as u64)
+    };
     let r = if method == Method::PathTracer {
         // A time budget runs passes: show them, the spp and the noise reached so far.
         let budget = scene.time_budget_s.is_some();
@@ -283,14 +291,14 @@ pub fn run(args: RenderArgs, m: &ArgMatches) -> Result<()> {
     write_outputs_with(&out, &scene, &r, args.exposure)?;
     if args.method == Method::PathTracer {
         println!(
-            "{}×{} pixels, {} spp: {} camera paths in {:.1} s ({:.0} paths/s); wrote {}/beauty.png, \
+            "{}×{} pixels, {} spp: {} camera paths in {} ({:.0} paths/s); wrote {}/beauty.png, \
              beauty.exr, beauty.npy, groups.npy, halves.npy, unscattered.npy, transmittance.npy, \
              opacity.npy, render.json",
             r.width,
             r.height,
             r.spp,
             r.paths,
-            r.seconds,
+            super::seconds(r.seconds),
             r.paths as f64 / r.seconds.max(1e-9),
             out.display()
         );
