@@ -59,6 +59,16 @@ fn flags_of_another_method_are_refused() {
         &["--method", "collector", "--correction", "none", "--leakage-scale", "2"],
         "--leakage-scale does not apply without the leakage correction",
     );
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    refuses(
+        &[
+            "compress", "--tables", "none.npz", "--out", out.to_str().unwrap(),
+            "--collector-smooth-t", "0", "--collector-legendre", "4",
+        ],
+        "--collector-legendre does not apply with --collector-smooth-t 0",
+        Some(&out),
+    );
 }
 
 #[test]

@@ -65,8 +65,15 @@ pub(super) fn compress_with_spinner(tables: &Path, out: &Path, opt: &Options) ->
     o
 }
 
-/// Runs `nephele compress`.
-pub fn run(args: CompressArgs) -> Result<()> {
+/// Runs `nephele compress`; `m` tells which flags were given.
+pub fn run(args: CompressArgs, m: &clap::ArgMatches) -> Result<()> {
+    if args.collector_smooth_t == 0 {
+        super::refuse_unused(
+            m,
+            &["collector_legendre", "collector_harmonics", "collector_theta_nodes"],
+            "with --collector-smooth-t 0 (no collector form is fitted)",
+        )?;
+    }
     let opt = Options {
         form: LogAdditive {
             legendre: args.legendre,

@@ -192,7 +192,7 @@ pub fn run(cli: Cli, matches: &ArgMatches) -> Result<()> {
         Some(Command::Fit(args)) => fit::run(args),
         Some(Command::Slab(args)) => slab::run(args),
         Some(Command::Merge(args)) => slab::merge_shards(args),
-        Some(Command::Compress(args)) => compress::run(args),
+        Some(Command::Compress(args)) => compress::run(args, sub),
         Some(Command::Transport(args)) => transport::run(args),
         Some(Command::Render(args)) => render::run(args, sub),
         Some(Command::Compare(args)) => compare::run(args),
