@@ -225,7 +225,10 @@ fn compare_measures_the_references_noise() {
         for (i, name) in names.iter().enumerate() {
             let s = q(0, name);
             let ratio = s.rel_rmse / s.reference_noise;
-            println!("pair {pair} {name}: RMSE {:.4} noise {:.4} ratio {ratio:.3}", s.rel_rmse, s.reference_noise);
+            println!(
+                "pair {pair} {name}: RMSE {:.4} noise {:.4} ratio {ratio:.3}",
+                s.rel_rmse, s.reference_noise
+            );
             ratios[i] += ratio / 4.0;
             assert!(
                 s.bias.abs() < 4.0 * s.bias_noise * 2f64.sqrt(),
@@ -237,7 +240,10 @@ fn compare_measures_the_references_noise() {
         }
     }
     for (name, ratio) in names.iter().zip(ratios) {
-        assert!((ratio - 2f64.sqrt()).abs() < 0.2, "{name}: mean ratio {ratio}");
+        assert!(
+            (ratio - 2f64.sqrt()).abs() < 0.2,
+            "{name}: mean ratio {ratio}"
+        );
     }
     assert!(
         dir.path().join("cmp/panel.png").exists() && dir.path().join("cmp/report.json").exists()

@@ -31,7 +31,17 @@ fn negative_numbers_are_parsed_then_refused_with_their_range() {
     render_refuses(&["--time-budget", "-5"], "-5 is not > 0");
     render_refuses(&["--spp", "0"], "0 is not in 1..=1000000");
     render_refuses(&["--sun-lobe-steps", "40"], "40 is not in 0..=32");
-    let t = ["transport", "--t", "4", "--depth", "1", "--mu-v", "0.5", "--psi", "0"];
+    let t = [
+        "transport",
+        "--t",
+        "4",
+        "--depth",
+        "1",
+        "--mu-v",
+        "0.5",
+        "--psi",
+        "0",
+    ];
     let mut args = t.to_vec();
     args.extend(["--mu-l", "-0.5"]);
     refuses(&args, "--mu-l must be in (0, 1]", None);
@@ -56,15 +66,29 @@ fn flags_of_another_method_are_refused() {
         "--iterations does not apply to --method single (collector only)",
     );
     render_refuses(
-        &["--method", "collector", "--correction", "none", "--leakage-scale", "2"],
+        &[
+            "--method",
+            "collector",
+            "--correction",
+            "none",
+            "--leakage-scale",
+            "2",
+        ],
         "--leakage-scale does not apply without the leakage correction",
     );
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
     refuses(
         &[
-            "compress", "--tables", "none.npz", "--out", out.to_str().unwrap(),
-            "--collector-smooth-t", "0", "--collector-legendre", "4",
+            "compress",
+            "--tables",
+            "none.npz",
+            "--out",
+            out.to_str().unwrap(),
+            "--collector-smooth-t",
+            "0",
+            "--collector-legendre",
+            "4",
         ],
         "--collector-legendre does not apply with --collector-smooth-t 0",
         Some(&out),
@@ -82,7 +106,17 @@ fn a_parse_error_is_one_line_and_help_still_prints() {
 #[test]
 fn transport_uses_the_embedded_tables_like_render() {
     let o = succeeds(&[
-        "transport", "--t", "4", "--mu-l", "0.8", "--depth", "1", "--mu-v", "0.5", "--psi", "0",
+        "transport",
+        "--t",
+        "4",
+        "--mu-l",
+        "0.8",
+        "--depth",
+        "1",
+        "--mu-v",
+        "0.5",
+        "--psi",
+        "0",
     ]);
     let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let t2 = json["groups"][0]["T"].as_f64().unwrap();
@@ -97,7 +131,12 @@ fn a_phase_table_that_is_not_an_npz_says_so() {
     let out = dir.path().join("out");
     refuses(
         &[
-            "phase", "--model", "tabulated", "--table", json.to_str().unwrap(), "--out",
+            "phase",
+            "--model",
+            "tabulated",
+            "--table",
+            json.to_str().unwrap(),
+            "--out",
             out.to_str().unwrap(),
         ],
         "is not an .npz archive",
@@ -132,7 +171,9 @@ fn mie_and_phase_refuse_what_they_would_ignore() {
         "which a mono distribution (one size) does not use",
     );
     refuses(
-        &["phase", "--model", "hg", "--g", "0.5", "--seed", "3", "--out", o],
+        &[
+            "phase", "--model", "hg", "--g", "0.5", "--seed", "3", "--out", o,
+        ],
         "--seed applies to --samples",
         Some(&out),
     );
@@ -142,13 +183,23 @@ fn mie_and_phase_refuse_what_they_would_ignore() {
 fn a_bad_blob_names_the_key_the_scene_uses() {
     let dir = tempfile::tempdir().unwrap();
     let text = std::fs::read_to_string(scene("cloud.json")).unwrap();
-    let bad = text.replacen("\"radii\": [500, 450, 380]", "\"radii\": [500, -450, 380]", 1);
+    let bad = text.replacen(
+        "\"radii\": [500, 450, 380]",
+        "\"radii\": [500, -450, 380]",
+        1,
+    );
     assert_ne!(bad, text, "cloud.json changed: update this test");
     let path = dir.path().join("bad.json");
     std::fs::write(&path, bad).unwrap();
     let out = dir.path().join("out");
     refuses(
-        &["render", "--scene", path.to_str().unwrap(), "--out", out.to_str().unwrap()],
+        &[
+            "render",
+            "--scene",
+            path.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ],
         "medium.blobs[0].radii must be three positive numbers (m)",
         Some(&out),
     );

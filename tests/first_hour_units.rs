@@ -163,7 +163,10 @@ fn no_shipped_scene_warns() {
     }
     assert!(n >= 10, "only {n} scenes");
     // The warning quotes the shipped scenes' largest optical size: it must be the true one.
-    assert!((largest - SHIPPED_MAX_OPTICAL_SIZE).abs() < 1e-9, "{largest}");
+    assert!(
+        (largest - SHIPPED_MAX_OPTICAL_SIZE).abs() < 1e-9,
+        "{largest}"
+    );
 }
 
 /// √⟨(A − B)²/4⟩ / ⟨(A + B)/2⟩ of the scattered light from a render's halves

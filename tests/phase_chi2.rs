@@ -125,10 +125,25 @@ fn single_lobe_samplers_run_from_back_to_forward() {
         if name.starts_with("two-term") || name.starts_with("HG+Draine") {
             continue;
         }
-        let mu64: Vec<f64> = (0..=4096).map(|k| p64.sample_mu(k as f64 / 4096.0)).collect();
-        let mu32: Vec<f32> = (0..=4096).map(|k| p32.sample_mu(k as f32 / 4096.0)).collect();
-        assert!(mu64[0] < -0.999 && mu64[4096] > 0.999, "{name}: {} → {}", mu64[0], mu64[4096]);
-        assert!(mu64.windows(2).all(|w| w[1] >= w[0] - 1e-12), "{name} (f64) decreases");
-        assert!(mu32.windows(2).all(|w| w[1] >= w[0] - 1e-6), "{name} (f32) decreases");
+        let mu64: Vec<f64> = (0..=4096)
+            .map(|k| p64.sample_mu(k as f64 / 4096.0))
+            .collect();
+        let mu32: Vec<f32> = (0..=4096)
+            .map(|k| p32.sample_mu(k as f32 / 4096.0))
+            .collect();
+        assert!(
+            mu64[0] < -0.999 && mu64[4096] > 0.999,
+            "{name}: {} → {}",
+            mu64[0],
+            mu64[4096]
+        );
+        assert!(
+            mu64.windows(2).all(|w| w[1] >= w[0] - 1e-12),
+            "{name} (f64) decreases"
+        );
+        assert!(
+            mu32.windows(2).all(|w| w[1] >= w[0] - 1e-6),
+            "{name} (f32) decreases"
+        );
     }
 }

@@ -78,7 +78,15 @@ fn model(name: &str, flags: &str, mie: &Path) -> Box<dyn Fn(f64) -> f64> {
 fn lut(dir: &Path, name: &str, flags: &str, n: usize) -> Vec<f64> {
     let out = dir.join(format!("{name}-{n}"));
     let n_s = n.to_string();
-    let mut args = vec!["phase", "--model", name, "--lut", &n_s, "--out", out.to_str().unwrap()];
+    let mut args = vec![
+        "phase",
+        "--model",
+        name,
+        "--lut",
+        &n_s,
+        "--out",
+        out.to_str().unwrap(),
+    ];
     args.extend(flags.split_whitespace());
     succeeds(&args);
     let icdf = read(&out.join("phase.npz"), "icdf_mu");
@@ -91,7 +99,14 @@ fn every_models_lut_runs_from_back_to_forward_and_samples_its_pdf() {
     let dir = tempfile::tempdir().unwrap();
     let mie = dir.path().join("mie");
     succeeds(&[
-        "mie", "--diameter", "5", "--sizes", "9", "--wavelengths", "550:550:1", "--out",
+        "mie",
+        "--diameter",
+        "5",
+        "--sizes",
+        "9",
+        "--wavelengths",
+        "550:550:1",
+        "--out",
         mie.to_str().unwrap(),
     ]);
     let mie_npz = mie.join("phase.npz");

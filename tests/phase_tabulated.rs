@@ -95,7 +95,12 @@ fn the_tabulated_sampler_runs_from_back_to_forward() {
     let table = TabulatedTable::<f64>::from_phase(&t.theta_deg, &t.phase).unwrap();
     let p = table.view();
     let mu: Vec<f64> = (0..=4096).map(|k| p.sample_mu(k as f64 / 4096.0)).collect();
-    assert!(mu[0] < -0.999 && mu[4096] > 0.999, "{} → {}", mu[0], mu[4096]);
+    assert!(
+        mu[0] < -0.999 && mu[4096] > 0.999,
+        "{} → {}",
+        mu[0],
+        mu[4096]
+    );
     assert!(mu.windows(2).all(|w| w[1] >= w[0]), "decreases");
 }
 

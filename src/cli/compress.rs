@@ -70,7 +70,11 @@ pub fn run(args: CompressArgs, m: &clap::ArgMatches) -> Result<()> {
     if args.collector_smooth_t == 0 {
         super::refuse_unused(
             m,
-            &["collector_legendre", "collector_harmonics", "collector_theta_nodes"],
+            &[
+                "collector_legendre",
+                "collector_harmonics",
+                "collector_theta_nodes",
+            ],
             "with --collector-smooth-t 0 (no collector form is fitted)",
         )?;
     }

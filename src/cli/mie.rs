@@ -160,8 +160,16 @@ impl MieArgs {
                 if steps.len() == 1 { "s" } else { "" }
             )
         };
-        anyhow::ensure!(steps.is_empty() || self.sizes.is_none(), "{}", rule_of("--sizes"));
-        anyhow::ensure!(steps.is_empty() || kind != "mono", "{}", rule_of("a mono distribution"));
+        anyhow::ensure!(
+            steps.is_empty() || self.sizes.is_none(),
+            "{}",
+            rule_of("--sizes")
+        );
+        anyhow::ensure!(
+            steps.is_empty() || kind != "mono",
+            "{}",
+            rule_of("a mono distribution")
+        );
         anyhow::ensure!(
             self.sizes.is_none() || kind != "mono",
             "--sizes (sizes) sets the size quadrature, which a mono distribution (one size) does not use"

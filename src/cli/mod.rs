@@ -109,7 +109,11 @@ pub fn parse_error(e: clap::Error) -> ExitCode {
         return ExitCode::from(e.exit_code() as u8);
     }
     let text = e.render().to_string();
-    let first = text.lines().next().unwrap_or("").trim_start_matches("error: ");
+    let first = text
+        .lines()
+        .next()
+        .unwrap_or("")
+        .trim_start_matches("error: ");
     let tip = text
         .lines()
         .find_map(|l| l.trim().strip_prefix("tip: "))

@@ -41,7 +41,10 @@ pub fn run(a: TransportArgs) -> Result<()> {
     ensure!(a.psi.is_finite(), "--psi must be a number of degrees");
     let bytes = super::table_bytes(a.tables.as_deref())?;
     let tab = TransportTables::from_bytes(&bytes).map_err(|e| {
-        let name = a.tables.as_ref().map_or("(embedded)".into(), |p| format!("'{}'", p.display()));
+        let name = a
+            .tables
+            .as_ref()
+            .map_or("(embedded)".into(), |p| format!("'{}'", p.display()));
         anyhow::anyhow!("transport tables {name}: {e}")
     })?;
     let at = SlabPoint {

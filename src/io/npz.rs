@@ -23,7 +23,8 @@ pub fn read_arrays(path: &Path, names: &[&str]) -> Result<Vec<Vec<f64>>> {
 /// are `PK`): "invalid Zip archive" does not tell a user they passed the JSON sidecar.
 fn open(path: &Path) -> Result<npyz::npz::NpzArchive<std::io::BufReader<std::fs::File>>> {
     let mut head = [0u8; 2];
-    let file = std::fs::File::open(path).with_context(|| format!("cannot open '{}'", path.display()))?;
+    let file =
+        std::fs::File::open(path).with_context(|| format!("cannot open '{}'", path.display()))?;
     let is_zip = std::io::Read::read_exact(&mut &file, &mut head).is_ok() && head == *b"PK";
     anyhow::ensure!(
         is_zip,

@@ -19,7 +19,9 @@ use std::f64::consts::PI;
 pub fn inverse_cdf(model: &dyn PhaseFunction<f64>, n: usize) -> Vec<f64> {
     let xi = |i: usize| i as f64 / (n - 1) as f64;
     let mut table: Vec<f64> = if sampler_increases(model, 8 * n) {
-        (0..n).map(|i| model.sample_mu(xi(i)).clamp(-1.0, 1.0)).collect()
+        (0..n)
+            .map(|i| model.sample_mu(xi(i)).clamp(-1.0, 1.0))
+            .collect()
     } else {
         let cdf = ThetaCdf::new(model);
         (0..n).map(|i| cdf.mu_at(xi(i))).collect()
@@ -32,7 +34,9 @@ pub fn inverse_cdf(model: &dyn PhaseFunction<f64>, n: usize) -> Vec<f64> {
 /// Whether ξ ↦ `sample_mu(ξ)` is non-decreasing on m + 1 even steps (to rounding), i.e. the
 /// sampler is the inverse CDF itself.
 fn sampler_increases(model: &dyn PhaseFunction<f64>, m: usize) -> bool {
-    let mu: Vec<f64> = (0..=m).map(|k| model.sample_mu(k as f64 / m as f64)).collect();
+    let mu: Vec<f64> = (0..=m)
+        .map(|k| model.sample_mu(k as f64 / m as f64))
+        .collect();
     mu.windows(2).all(|w| w[1] >= w[0] - 1e-12)
 }
 
@@ -83,7 +87,11 @@ impl<'a> ThetaCdf<'a> {
             return 1.0;
         }
         let target = 1.0 - xi;
-        let k = self.c.partition_point(|v| *v <= target).clamp(1, self.c.len() - 1) - 1;
+        let k = self
+            .c
+            .partition_point(|v| *v <= target)
+            .clamp(1, self.c.len() - 1)
+            - 1;
         let (mut lo, mut hi) = (self.theta[k], self.theta[k + 1]);
         for _ in 0..60 {
             let mid = 0.5 * (lo + hi);
@@ -116,11 +124,16 @@ mod tests {
         assert!(t.windows(2).all(|p| p[1] >= p[0]));
         let hg_cdf = |g: f64, mu: f64| {
             // The HG CDF in closed form: F(μ) = (1 − g²)/(2g) [1/√(1 + g² − 2gμ) − 1/(1 + g)].
-            (1.0 - g * g) / (2.0 * g) * (1.0 / (1.0 + g * g - 2.0 * g * mu).sqrt() - 1.0 / (1.0 + g))
+            (1.0 - g * g) / (2.0 * g)
+                * (1.0 / (1.0 + g * g - 2.0 * g * mu).sqrt() - 1.0 / (1.0 + g))
         };
         for (i, mu) in t.iter().enumerate() {
             let f = w * hg_cdf(g1, *mu) + (1.0 - w) * hg_cdf(g2, *mu);
-            assert!((f - i as f64 / 64.0).abs() < 1e-9, "ξ = {}: F(μ) = {f}", i as f64 / 64.0);
+            assert!(
+                (f - i as f64 / 64.0).abs() < 1e-9,
+                "ξ = {}: F(μ) = {f}",
+                i as f64 / 64.0
+            );
         }
     }
 }

@@ -47,9 +47,16 @@ pub fn refuses(args: &[&str], names_fix: &str, out: Option<&Path>) -> String {
         err.lines().count() == 1 && err.starts_with("error: "),
         "{args:?}: not one error line: {err}"
     );
-    assert!(err.contains(names_fix), "{args:?}: {err:?} lacks {names_fix:?}");
+    assert!(
+        err.contains(names_fix),
+        "{args:?}: {err:?} lacks {names_fix:?}"
+    );
     if let Some(dir) = out {
-        assert!(files_in(dir).is_empty(), "{args:?} left files: {:?}", files_in(dir));
+        assert!(
+            files_in(dir).is_empty(),
+            "{args:?} left files: {:?}",
+            files_in(dir)
+        );
     }
     err
 }
