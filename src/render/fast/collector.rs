@@ -179,9 +179,10 @@ impl Frame<'_> {
             return;
         }
         let at = sky.view_slab(transmittance);
-        px.sky[0] = self.scene.albedo * sky.view_radiance(0, transmittance);
+        sky.view_radiances(transmittance, &at, &mut px.sky);
+        px.sky[0] *= self.scene.albedo;
         for g in 0..self.groups() {
-            px.sky[g + 1] = self.absorbed(g, &at) * sky.view_radiance(g + 1, transmittance);
+            px.sky[g + 1] *= self.absorbed(g, &at);
         }
     }
 

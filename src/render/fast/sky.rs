@@ -99,15 +99,17 @@ impl SkyTable {
         }
     }
 
-    /// L/L_sky of group `g` (0: order 1) seen along a view ray of transmittance
-    /// `transmittance`, from its [`Self::view_slab`]. Where τ lies outside the tables' range,
-    /// S at the nearest thickness is scaled by the ray's opacity over that slab's, so that
-    /// thin matter scatters in proportion to what it holds.
-    pub fn view_radiance(&self, g: usize, transmittance: f64) -> f64 {
-        let at = self.view_slab(transmittance);
+    /// L/L_sky of every group (index 0: order 1, g ≥ 1: the tables' group g − 1) seen along a
+    /// view ray of transmittance `transmittance`, into `out`, from the ray's `at =`
+    /// [`Self::view_slab`]. Where τ lies outside the tables' range, S at the nearest thickness
+    /// is scaled by the ray's opacity over that slab's, so that thin matter scatters in
+    /// proportion to what it holds.
+    pub fn view_radiances(&self, transmittance: f64, at: &SlabPoint<f32>, out: &mut [f64]) {
         let t = f64::from(at.thickness);
         let opacity = (1.0 - transmittance) / -(-t).exp_m1();
-        opacity * self.radiance(g, &at)
+        for (g, v) in out.iter_mut().enumerate().take(self.groups) {
+            *v = opacity * self.radiance(g, at);
+        }
     }
 
     fn lookup(&self, g: usize, d: f64, t: f64, mu_v: f64) -> f64 {
@@ -188,9 +190,8 @@ fn order1(tables: &TransportTables, d: f64, t: f64, mu_v: f64) -> f64 {
             for k in 0..AZ {
                 let phi = (k as f64 + 0.5) * 2.0 * PI / AZ as f64;
                 let (sp, cp) = phi.sin_cos();
-                let s: Vec<f64> = (0..3)
-                    .map(|i| ct * star[i] + st * (cp * e1[i] + sp * e2[i]))
-                    .collect();
+                let s: [f64; 3] =
+                    std::array::from_fn(|i| ct * star[i] + st * (cp * e1[i] + sp * e2[i]));
                 if s[2] <= 0.0 {
                     continue;
                 }
