@@ -7,7 +7,7 @@ use nephele::render::image::Rendered;
 use nephele::render::output::write_outputs_with;
 use nephele::render::path::{render_reporting, Progress};
 use nephele::render::scene::Scene;
-use nephele_runtime::transport::{SearchOptions, TransportTables};
+use nephele_runtime::transport::SearchOptions;
 use std::path::PathBuf;
 
 /// Options of `nephele render`.
@@ -165,11 +165,6 @@ impl FastArgs {
         o.validate()?;
         Ok(o)
     }
-
-    /// The tables' bytes: the file's, or the embedded ones.
-    pub fn table_bytes(&self) -> Result<std::borrow::Cow<'static, [u8]>> {
-        super::table_bytes(self.tables.as_deref())
-    }
 }
 
 /// Renders `scene` with `method`, a progress bar on stderr.
@@ -198,16 +193,9 @@ pub fn render_with(scene: &Scene, method: Method, fast: &FastArgs) -> Result<Ren
         })?
     } else {
         let opts = fast.options(method)?;
-        let bytes = fast.table_bytes()?;
-        let tables = TransportTables::from_bytes(&bytes).map_err(|e| {
-            anyhow::anyhow!(
-                "transport tables {}: {e}",
-                fast.tables
-                    .as_ref()
-                    .map_or("(embedded)".into(), |p| format!("'{}'", p.display()))
-            )
-        })?;
-        render_fast(scene, &tables, &opts, &progress)?
+        super::with_tables(fast.tables.as_deref(), |tables| {
+            render_fast(scene, tables, &opts, &progress)
+        })?
     };
     bar.finish_and_clear();
     Ok(r)

@@ -39,14 +39,11 @@ pub fn run(a: TransportArgs) -> Result<()> {
     ensure!((0.0..=a.t).contains(&a.depth), "--depth must be in [0, t]");
     ensure!((-1.0..=1.0).contains(&a.mu_v), "--mu-v must be in [-1, 1]");
     ensure!(a.psi.is_finite(), "--psi must be a number of degrees");
-    let bytes = super::table_bytes(a.tables.as_deref())?;
-    let tab = TransportTables::from_bytes(&bytes).map_err(|e| {
-        let name = a
-            .tables
-            .as_ref()
-            .map_or("(embedded)".into(), |p| format!("'{}'", p.display()));
-        anyhow::anyhow!("transport tables {name}: {e}")
-    })?;
+    super::with_tables(a.tables.as_deref(), |tab| answer(&a, tab))
+}
+
+/// T of every group at `a`'s point, as JSON on stdout.
+fn answer(a: &TransportArgs, tab: &TransportTables) -> Result<()> {
     let at = SlabPoint {
         depth: a.depth,
         thickness: a.t,
