@@ -88,12 +88,15 @@ fn the_writer_refuses_bad_arrays() {
 #[test]
 fn foreign_and_damaged_inputs_are_named() {
     let bytes = sample();
-    let mut v2 = bytes.clone();
-    v2[8] = 2;
+    let mut v3 = bytes.clone();
+    v3[8] = 3;
     assert_eq!(
-        Container::from_bytes(&v2).unwrap_err(),
-        FormatError::UnsupportedVersion(2)
+        Container::from_bytes(&v3).unwrap_err(),
+        FormatError::UnsupportedVersion(3)
     );
+    assert!(FormatError::UnsupportedVersion(3)
+        .to_string()
+        .contains("version 3"));
     let mut magic = bytes.clone();
     magic[0] = b'X';
     assert_eq!(

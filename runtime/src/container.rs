@@ -8,7 +8,7 @@
 //! ```text
 //! offset  size  field
 //!      0     8  magic  "NEPHTT\r\n"
-//!      8     4  u32    version (1)
+//!      8     4  u32    version (2; 1 still loads)
 //!     12     4  u32    number of arrays n (≤ MAX_ARRAYS)
 //!     16  48·n  directory, one entry per array:
 //!                 16 B  name, ASCII, NUL-padded (at least one byte, no NUL inside)
@@ -22,8 +22,11 @@
 
 /// The first 8 bytes of every container ("\r\n" catches text-mode mangling, as PNG does).
 pub const MAGIC: [u8; 8] = *b"NEPHTT\r\n";
-/// The version this reader understands.
-pub const VERSION: u32 = 1;
+/// The version this writer writes. Version 2 stores the transport parameters feature-major
+/// ([`crate::transport::TransportTables`]); version 1 files, group-major, still load.
+pub const VERSION: u32 = 2;
+/// The oldest version this reader loads.
+pub const OLDEST_VERSION: u32 = 1;
 /// Most arrays one container may hold.
 pub const MAX_ARRAYS: usize = 4096;
 /// Bytes of one directory entry.
@@ -62,7 +65,7 @@ impl core::fmt::Display for FormatError {
             FormatError::UnsupportedVersion(v) => {
                 write!(
                     f,
-                    "transport tables version {v} (this reader knows {VERSION})"
+                    "transport tables version {v} (this reader knows {OLDEST_VERSION} to {VERSION})"
                 )
             }
             FormatError::BadChecksum => write!(f, "transport tables checksum mismatch (corrupt)"),
@@ -146,7 +149,7 @@ impl<'a> Container<'a> {
             return Err(FormatError::BadMagic);
         }
         let version = u32_at(bytes, 8).ok_or(FormatError::Truncated)?;
-        if version != VERSION {
+        if !(OLDEST_VERSION..=VERSION).contains(&version) {
             return Err(FormatError::UnsupportedVersion(version));
         }
         let body = bytes.len() - 4;
@@ -170,6 +173,11 @@ impl<'a> Container<'a> {
     /// Number of arrays.
     pub fn len(&self) -> usize {
         self.arrays
+    }
+
+    /// The file's version ([`OLDEST_VERSION`] ..= [`VERSION`]).
+    pub fn version(&self) -> u32 {
+        u32_at(self.bytes, 8).unwrap_or(VERSION)
     }
 
     /// Whether it holds no array.

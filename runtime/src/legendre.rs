@@ -36,13 +36,41 @@ impl<F: Real> Iterator for Legendre<F> {
         let next = if n == 0 {
             self.x
         } else {
-            (F::of((2 * n + 1) as f64) * self.x * self.cur - F::of(n as f64) * self.prev)
-                / F::of((n + 1) as f64)
+            // (2n + 1)/(n + 1) and n/(n + 1) as constants: no division on the recurrence's
+            // dependent chain (the runtime steps through it on every evaluation).
+            let (a, b) = bonnet(n);
+            F::of(a) * self.x * self.cur - F::of(b) * self.prev
         };
         (self.prev, self.cur, self.n) = (self.cur, next, n + 1);
         Some(p)
     }
 }
+
+/// (2n + 1)/(n + 1) and n/(n + 1): Bonnet's recurrence as P_{n+1} = a x P_n − b P_{n−1}.
+#[inline(always)]
+fn bonnet(n: usize) -> (f64, f64) {
+    match BONNET.get(n) {
+        Some(&ab) => ab,
+        None => (
+            (2 * n + 1) as f64 / (n + 1) as f64,
+            n as f64 / (n + 1) as f64,
+        ),
+    }
+}
+
+/// [`bonnet`] for n < 64.
+const BONNET: [(f64, f64); 64] = {
+    let mut t = [(0.0, 0.0); 64];
+    let mut n = 0;
+    while n < 64 {
+        t[n] = (
+            (2 * n + 1) as f64 / (n + 1) as f64,
+            n as f64 / (n + 1) as f64,
+        );
+        n += 1;
+    }
+    t
+};
 
 #[cfg(test)]
 mod tests {

@@ -5,9 +5,10 @@
 use super::collector::CollectorFit;
 use super::joint::JointFit;
 use super::LogAdditive;
-use crate::io::container::{container_bytes, Array};
+use crate::io::container::{container_bytes, versioned_container_bytes, Array};
 use crate::slab::SlabTables;
 use anyhow::{ensure, Result};
+use nephele_runtime::container::{Container, VERSION};
 use nephele_runtime::fitting::{names, pack_u_range, CollectorForm, Statistic};
 
 /// Angles (degrees) at which an analytic phase function is stored: 0.02° steps to 5° (a
@@ -61,7 +62,9 @@ pub fn ntt_bytes(
     let mu_v = f32s(&mut (0..nm).map(|m| tab.mu_v(m)));
     let thickness = f32s(&mut tab.thickness.iter().copied());
     let ln_t = f32s(&mut fits.iter().flat_map(|f| [f.ln_t_range.0, f.ln_t_range.1]));
-    let beta = f32s(&mut fits.iter().flat_map(|f| f.beta.iter().copied()));
+    let g = fits.len();
+    let p = form.n_params(nm, nl);
+    let beta = feature_major(&fits.iter().map(|f| &f.beta[..]).collect::<Vec<_>>(), p, q)?;
     // An empty range (no fitted cell) stays empty.
     let u_range: Vec<f32> = fits
         .iter()
@@ -79,8 +82,6 @@ pub fn ntt_bytes(
     );
     let theta32 = f32s(&mut theta.iter().copied());
     let phase32 = f32s(&mut phase.iter().copied());
-    let g = fits.len();
-    let p = form.n_params(nm, nl);
     let mut arrays: Vec<(&str, Vec<usize>, Vec<f32>)> = vec![
         (names::FORM, vec![6], form_v),
         (names::GROUP_FIRST, vec![g], first),
@@ -88,7 +89,7 @@ pub fn ntt_bytes(
         (names::MU_V_NODES, vec![nm], mu_v),
         (names::THICKNESS, vec![nt], thickness),
         (names::LN_T_RANGE, vec![g, 2], ln_t),
-        (names::BETA, vec![g, p, q], beta),
+        (names::BETA, vec![p, g, q], beta),
         (names::U_RANGE, vec![g, nt, nl * nm], u_range),
         (names::T_CEILING, vec![g, nt, nl], ceiling),
         (names::PHASE_THETA, vec![theta32.len()], theta32),
@@ -106,8 +107,9 @@ pub fn ntt_bytes(
         let sizes = [cf.legendre, cf.harmonics, cf.theta_nodes, cq].map(|x| x as f32);
         arrays.push((names::COLLECTOR_FORM, vec![4], sizes.to_vec()));
         for (s, (stat, name)) in Statistic::ALL.iter().zip(names::COLLECTOR_BETA).enumerate() {
-            let values = f32s(&mut coll.iter().flat_map(|c| c.beta[s].iter().copied()));
-            arrays.push((name, vec![g, cf.n_params(*stat, nm, nl), cq], values));
+            let ps = cf.n_params(*stat, nm, nl);
+            let per_group: Vec<&[f64]> = coll.iter().map(|c| &c.beta[s][..]).collect();
+            arrays.push((name, vec![ps, g, cq], feature_major(&per_group, ps, cq)?));
         }
     }
     let views: Vec<Array> = arrays
@@ -115,4 +117,60 @@ pub fn ntt_bytes(
         .map(|(name, dims, values)| Array { name, dims, values })
         .collect();
     container_bytes(&views)
+}
+
+/// Per-group parameters ([P, Q] each) as one feature-major [P, G, Q] f32 array: one
+/// feature's coefficients for every group together, as the runtime sums them.
+fn feature_major(per_group: &[&[f64]], p: usize, q: usize) -> Result<Vec<f32>> {
+    ensure!(
+        per_group.iter().all(|b| b.len() == p * q),
+        "parameters of {} values, expected {p} × {q}",
+        per_group
+            .iter()
+            .map(|b| b.len())
+            .find(|&n| n != p * q)
+            .unwrap_or(0)
+    );
+    let mut out = Vec::with_capacity(p * per_group.len() * q);
+    for i in 0..p {
+        for b in per_group {
+            out.extend(b[i * q..(i + 1) * q].iter().map(|&x| x as f32));
+        }
+    }
+    Ok(out)
+}
+
+/// The tables `bytes` (any version the runtime loads) rewritten in the layout of `version`
+/// (1: β group-major [G, P, Q]; 2, the current: feature-major [P, G, Q]); every other array
+/// as it is. `nephele transport --upgrade` writes version 2 from older files.
+pub fn relayout(bytes: &[u8], version: u32) -> Result<Vec<u8>> {
+    ensure!(
+        (1..=VERSION).contains(&version),
+        "no transport tables layout of version {version} (1 to {VERSION})"
+    );
+    let c = Container::from_bytes(bytes).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let major = |v: u32| v >= 2;
+    let mut arrays: Vec<(String, Vec<usize>, Vec<f32>)> = Vec::with_capacity(c.len());
+    for i in 0..c.len() {
+        let a = c.array(i).expect("a validated container's array");
+        let mut dims = a.dims[..a.rank].to_vec();
+        let mut values: Vec<f32> = a.iter().collect();
+        let is_beta = a.name == names::BETA || names::COLLECTOR_BETA.contains(&a.name);
+        if is_beta && a.rank == 3 && major(c.version()) != major(version) {
+            let (d0, d1, q) = (dims[0], dims[1], dims[2]);
+            let old = std::mem::take(&mut values);
+            for i in 0..d1 {
+                for k in 0..d0 {
+                    values.extend_from_slice(&old[(k * d1 + i) * q..(k * d1 + i + 1) * q]);
+                }
+            }
+            dims = vec![d1, d0, q];
+        }
+        arrays.push((a.name.to_string(), dims, values));
+    }
+    let views: Vec<Array> = arrays
+        .iter()
+        .map(|(name, dims, values)| Array { name, dims, values })
+        .collect();
+    versioned_container_bytes(&views, version)
 }

@@ -235,11 +235,8 @@ impl LogAdditive {
             F::of(LN_F1_FLOOR)
         };
         let mut col = 0;
-        let both = |f: &mut dyn FnMut(usize, F, usize), col: usize, val: F, j: usize| {
-            on_nodes(c, nm, col, val, &mut |col, v| f(col, v, j))
-        };
         for j in 0..self.legendre.min(MAX_LEGENDRE) {
-            both(&mut f, col, F::of(1.0), j);
+            on_nodes(c, nm, col, F::of(1.0), &mut |col, v| f(col, v, j));
             col += nm + nl;
         }
         if self.pairs {
@@ -265,10 +262,21 @@ impl LogAdditive {
             .clamp_to(F::of(0.0), one)
             .sqrt();
         let mut s_k = one;
+        // cos kψ by Chebyshev's recurrence cos (k+1)ψ = 2 cos ψ cos kψ − cos (k−1)ψ: one
+        // cosine per point, not one per harmonic.
+        let (_, cos_1) = c.at.psi_v.sin_cos();
+        let (mut cos_prev, mut cos_k) = (cos_1, one);
         for k in 1..=self.harmonics {
             s_k = s_k * s;
-            let (_, cos_k) = (F::of(k as f64) * c.at.psi_v).sin_cos();
-            both(&mut f, col, s_k * cos_k, 0);
+            (cos_prev, cos_k) = (
+                cos_k,
+                if k == 1 {
+                    cos_1
+                } else {
+                    F::of(2.0) * cos_1 * cos_k - cos_prev
+                },
+            );
+            on_nodes(c, nm, col, s_k * cos_k, &mut |col, v| f(col, v, 0));
             col += nm + nl;
         }
         let a = self.cross.min(MAX_CROSS);
@@ -411,8 +419,11 @@ pub fn depth_polynomial<F: Real>(
     range: &FittedDepths<F>,
 ) -> F {
     let at = |u: F| {
-        let p = legendre(F::of(2.0) * u - F::of(1.0), n);
-        d.iter().zip(&p).fold(F::of(0.0), |s, (a, b)| s + *a * *b)
+        let p = Legendre::new(F::of(2.0) * u - F::of(1.0));
+        d.iter()
+            .take(n)
+            .zip(p)
+            .fold(F::of(0.0), |s, (a, b)| s + *a * b)
     };
     let edge = range.held(u);
     let value = at(edge);
@@ -464,7 +475,7 @@ pub(crate) fn on_nodes<F: Real>(
     nm: usize,
     col: usize,
     val: F,
-    f: &mut dyn FnMut(usize, F),
+    f: &mut impl FnMut(usize, F),
 ) {
     c.v.each(|m, w| f(col + m, w * val));
     c.l.each(|il, w| f(col + nm + il, w * val));
@@ -478,7 +489,7 @@ pub fn theta_hats<F: Real>(
     c: &Cell<F>,
     val: F,
     col: usize,
-    f: &mut dyn FnMut(usize, F, usize),
+    f: &mut impl FnMut(usize, F, usize),
 ) {
     let cos = scattering_cosine(&c.at);
     let half = (F::of(0.5) * cos.one_minus_mu).sqrt();

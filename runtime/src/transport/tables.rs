@@ -14,21 +14,21 @@
 //! | `mu_v_nodes` | [M] | view cosines of the μ_V parameters |
 //! | `thickness` | [N] | thicknesses of the depth ranges |
 //! | `ln_t_range` | [G, 2] | ln t span of each group's polynomials in ln t |
-//! | `beta` | [G, P, Q] | the parameters' Legendre coefficients in s(ln t) |
+//! | `beta` | [P, G, Q] | the parameters' Legendre coefficients in s(ln t), feature-major (version 1 files: [G, P, Q]) |
 //! | `u_range` | [G, N, L·M] | per thickness and (μ_L, μ_V) pair, the stretched depths fitted: [`U_STEPS`]-step integers lo · 4096 + hi (u = step/4095, widened outward; lo > hi: none) |
 //! | `t_ceiling` | [G, N, L] | optional: per thickness and sun cosine, the largest T of the fitted cells; T is capped at [`CEILING_FACTOR`] × the largest of the nodes a point draws on |
 //! | `phase_theta` | [n] | phase function nodes (degrees, increasing, 0 … 180); between them 2π p sin θ is linear in θ, as the tabulated model samples |
 //! | `phase` | [n] | phase function p(θ) (sr⁻¹) |
 //! | `collector_form` | [4] | optional: the collector form's J, K, Θ nodes, Q |
-//! | `sigma_beta`, `cz_beta`, `cx_beta` | [G, P_s, Q] | with it: ln σ, c_z/σ̂, c_x/σ̂ ([`super::collector`]) |
+//! | `sigma_beta`, `cz_beta`, `cx_beta` | [P_s, G, Q] | with it: ln σ, c_z/σ̂, c_x/σ̂ ([`super::collector`]), feature-major as `beta` |
 //!
 //! Files without the collector arrays load too; their [`Transport`] has c = 0, σ = 0.
 
-use super::collector::{CollectorForm, Statistic, MAX_COLLECTOR_HARMONICS, MAX_COLLECTOR_LEGENDRE};
+use super::collector::{CollectorForm, Statistic};
 use super::geometry::SlabPoint;
 use super::log_additive::{
     depth_polynomial, legendre, ln_boundary, ln_t_position, Cell, FittedDepths, Lerp, LogAdditive,
-    MAX_CROSS, MAX_HARMONICS, MAX_LEGENDRE,
+    MAX_LEGENDRE,
 };
 use super::single::{single_scattering, PhaseValue};
 use crate::container::{ArrayView, Container, FormatError};
@@ -86,14 +86,6 @@ pub const STRETCH_SCALE: f64 = 0.3;
 pub const STRETCH_EXPONENT: f64 = 0.65;
 /// Most nodes of each grid (sun cosines, view cosines, thicknesses).
 pub const MAX_NODES: usize = 1024;
-/// Room for the features of one point: J ≤ 16 Legendre terms on two μ_V and two μ_L nodes,
-/// γ and the pair terms on four (μ_V, μ_L) pairs, two Θ hats, K ≤ 8 harmonics, γ_L on two
-/// μ_L nodes and 3 A² interaction products.
-const MAX_FEATURES: usize = 16 * 4 + 4 * 3 + 4 + MAX_HARMONICS * 4 + 2 + 3 * MAX_CROSS * MAX_CROSS;
-/// Room for the features of a collector statistic at one point: at most two Θ blocks (4 values
-/// each) and K + 2 depth blocks of J values on two μ_V and two μ_L nodes.
-const MAX_C_FEATURES: usize = 8 + (MAX_COLLECTOR_HARMONICS + 2) * MAX_COLLECTOR_LEGENDRE * 4;
-
 /// Transport of one order group at a point: T = L/E⊥ (sr⁻¹), the collector c = (c_x, c_z) and
 /// its spread σ (mfp; docs/conventions.md).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -139,6 +131,7 @@ struct CollectorPart<'a> {
     form: CollectorForm,
     q: usize,
     beta: [ArrayView<'a>; 3],
+    strides: [Strides; 3],
 }
 
 /// Validated compressed tables, borrowing the container's bytes.
@@ -153,6 +146,7 @@ pub struct TransportTables<'a> {
     thickness: ArrayView<'a>,
     ln_t_range: ArrayView<'a>,
     beta: ArrayView<'a>,
+    strides: Strides,
     u_range: ArrayView<'a>,
     t_ceiling: Option<ArrayView<'a>>,
     phase_theta: ArrayView<'a>,
@@ -212,6 +206,7 @@ impl<'a> TransportTables<'a> {
             collector: collector_part(c, g, m, l)?,
             form,
             q,
+            strides: Strides::of(c.version(), g, p, q),
             group_first: need(c, names::GROUP_FIRST, g)?,
             mu_l: need(c, names::MU_L_NODES, l)?,
             mu_v: need(c, names::MU_V_NODES, m)?,
@@ -272,21 +267,39 @@ impl<'a> TransportTables<'a> {
     /// T = L/E⊥ (sr⁻¹) of group `g` at `at`; 0 where the tables resolve nothing or `g` is not
     /// a group. For several groups at one point, [`Self::transport_all`] shares the work.
     pub fn transport(&self, g: usize, at: &SlabPoint<f32>) -> f32 {
-        match self.point(at) {
-            Some(pt) if g < self.groups() => self.t_of(&pt, g),
-            _ => 0.0,
+        let mut out = [0.0];
+        if g < self.groups() {
+            self.transport_run(at, (g, 1), &mut out);
         }
+        out[0]
     }
 
     /// T of every group at `at` into `out[..groups()]` (the rest untouched): the features
-    /// (geometry, single-scattering factor, scattering angle) are computed once, then each
-    /// group is a dot product with its parameters at t.
+    /// (geometry, single-scattering factor, scattering angle) are computed once and summed
+    /// against every group's parameters together ([`Sums`]).
     pub fn transport_all(&self, at: &SlabPoint<f32>, out: &mut [f32]) {
         let groups = self.groups().min(out.len());
-        out[..groups].iter_mut().for_each(|v| *v = 0.0);
-        if let Some(pt) = self.point(at) {
-            for (g, slot) in out[..groups].iter_mut().enumerate() {
-                *slot = self.t_of(&pt, g);
+        let chunk = Sums::<T_SUMS>::capacity(self.q, self.form.depth_terms());
+        for first in (0..groups).step_by(chunk) {
+            let count = chunk.min(groups - first);
+            self.transport_run(at, (first, count), &mut out[first..first + count]);
+        }
+    }
+
+    /// T of the groups `first .. first + count` at `at` into `out[..count]` (the run fits one
+    /// [`Sums`]).
+    fn transport_run(&self, at: &SlabPoint<f32>, (first, count): (usize, usize), out: &mut [f32]) {
+        out.iter_mut().for_each(|v| *v = 0.0);
+        let Some(pt) = self.point(at) else {
+            return;
+        };
+        let mut sums = Sums::new(self.strides, (first, count), self.q, self.form.depth_terms());
+        if !self.add_t_features(&pt, &mut sums) {
+            return;
+        }
+        for (g, slot) in (first..first + count).zip(out) {
+            if let Some(range) = self.fitted_range(g, &pt) {
+                *slot = self.t_within(&pt, g, &range, &sums);
             }
         }
     }
@@ -294,25 +307,56 @@ impl<'a> TransportTables<'a> {
     /// T, c and σ of group `g` at `at`; c and σ are 0 where T is, or when the file holds no
     /// collector; all 0 when `g` is not a group.
     pub fn evaluate(&self, g: usize, at: &SlabPoint<f32>) -> Transport {
-        match self.point(at) {
-            Some(pt) if g < self.groups() => self.transport_of(&pt, &self.collector_rows(&pt), g),
-            _ => Transport::default(),
+        let mut out = [Transport::default()];
+        if g < self.groups() {
+            self.evaluate_run(at, (g, 1), &mut out);
         }
+        out[0]
     }
 
     /// T, c and σ of every group at `at` into `out[..groups()]` (the rest untouched); c and σ
-    /// are 0 where T is, or when the file holds no collector.
+    /// are 0 where T is, or when the file holds no collector. The features are computed once
+    /// and summed against every group's parameters together ([`Sums`]).
     pub fn evaluate_all(&self, at: &SlabPoint<f32>, out: &mut [Transport]) {
         let groups = self.groups().min(out.len());
-        out[..groups]
-            .iter_mut()
-            .for_each(|v| *v = Transport::default());
+        let mut chunk = Sums::<T_SUMS>::capacity(self.q, self.form.depth_terms());
+        if let Some(cp) = &self.collector {
+            chunk = chunk.min(Sums::<C_SUMS>::capacity(cp.q, cp.form.depth_terms()));
+        }
+        for first in (0..groups).step_by(chunk) {
+            let count = chunk.min(groups - first);
+            self.evaluate_run(at, (first, count), &mut out[first..first + count]);
+        }
+    }
+
+    /// T, c and σ of the groups `first .. first + count` at `at` into `out[..count]`.
+    fn evaluate_run(
+        &self,
+        at: &SlabPoint<f32>,
+        (first, count): (usize, usize),
+        out: &mut [Transport],
+    ) {
+        out.iter_mut().for_each(|v| *v = Transport::default());
         let Some(pt) = self.point(at) else {
             return;
         };
-        let rows = self.collector_rows(&pt);
-        for (g, slot) in out[..groups].iter_mut().enumerate() {
-            *slot = self.transport_of(&pt, &rows, g);
+        let mut sums = Sums::new(self.strides, (first, count), self.q, self.form.depth_terms());
+        if !self.add_t_features(&pt, &mut sums) {
+            return;
+        }
+        let collector = self.collector.as_ref().map(|cp| {
+            let mut c = [Sums::<C_SUMS>::EMPTY; 4];
+            self.add_collector_features(cp, &pt, (first, count), &mut c);
+            (cp, c)
+        });
+        for (g, slot) in (first..first + count).zip(out) {
+            let Some(range) = self.fitted_range(g, &pt) else {
+                continue;
+            };
+            slot.t = self.t_within(&pt, g, &range, &sums);
+            if let (Some((cp, c)), true) = (&collector, slot.t > 0.0) {
+                *slot = self.collector_of(cp, &pt, g, &range, c, slot.t);
+            }
         }
     }
 
@@ -346,13 +390,13 @@ impl<'a> TransportTables<'a> {
         single_scattering(&StoredPhase(self), 1.0, at)
     }
 
-    /// The features of T at a point, or None where every group is 0.
+    /// The geometry of T at a point, or None where every group is 0.
     fn point(&self, at: &SlabPoint<f32>) -> Option<Point> {
         let (t, d) = (at.thickness, at.depth);
         if !(t > 0.0) || !(d >= 0.0 && d <= t) {
             return None;
         }
-        let (nl, nm) = (self.mu_l.len(), self.mu_v.len());
+        let (nt, nl, nm) = (self.thickness.len(), self.mu_l.len(), self.mu_v.len());
         let cell = Cell {
             at: *at,
             l: lerp(&self.mu_l, at.mu_l),
@@ -360,40 +404,83 @@ impl<'a> TransportTables<'a> {
             u: stretched_u(d, t),
         };
         let offset = ln_boundary(at)?;
-        let mut row = [(0u32, 0.0f32); MAX_FEATURES];
-        let mut n = 0;
-        let ok = self
-            .form
-            .for_each_feature_in_depth(&cell, nm, nl, |col, v, j| {
-                if n < MAX_FEATURES {
-                    row[n] = (packed(col, j), v);
-                    n += 1;
-                }
-            });
-        ok.then(|| Point {
+        let near_t = lerp(&self.thickness, t);
+        // The grid nodes the point draws on, the same for every group: (thickness, μ_L, μ_V)
+        // corners for the fitted depths, (thickness, μ_L) for the ceiling.
+        let mut corners = [(0usize, 0.0f32); 8];
+        let mut ceiling = [0usize; 4];
+        let (mut nc, mut nceil) = (0, 0);
+        near_t.each(|it, wt| {
+            cell.l.each(|il, wl| {
+                ceiling[nceil] = it * nl + il;
+                nceil += 1;
+                cell.v.each(|m, wm| {
+                    corners[nc] = (((it * nl) + il) * nm + m, wt * wl * wm);
+                    nc += 1;
+                })
+            })
+        });
+        Some(Point {
             cell,
             offset,
-            row,
-            n,
-            near_t: lerp(&self.thickness, t),
             ln_t: Real::ln(t),
+            corners,
+            n_corners: nc,
+            ceiling,
+            n_ceiling: nceil,
+            per_group: (nt * nl * nm, nt * nl),
         })
     }
 
-    /// T of group `g` at `pt`: its depth polynomials read within its fitted depths
-    /// ([`depth_polynomial`]), at most its ceiling; 0 where it has none.
-    fn t_of(&self, pt: &Point, g: usize) -> f32 {
-        self.fitted_range(g, pt)
-            .map_or(0.0, |range| self.t_within(pt, g, &range))
+    /// Adds T's features at `pt` to `sums`; false where the form says every group is 0.
+    fn add_t_features(&self, pt: &Point, sums: &mut Sums<T_SUMS>) -> bool {
+        let (nl, nm) = (self.mu_l.len(), self.mu_v.len());
+        let beta = self.beta.bytes();
+        self.form
+            .for_each_feature_in_depth(&pt.cell, nm, nl, |col, v, j| sums.add(beta, col, v, j))
     }
 
-    /// T of group `g` at `pt` given its fitted depths there.
-    fn t_within(&self, pt: &Point, g: usize, range: &FittedDepths<f32>) -> f32 {
+    /// Adds the collector's features at `pt` for the groups `run`: ln σ, c_z's terms, c_z's
+    /// ℓ/σ̂ terms (computed with σ̂ = 1, divided by the group's σ̂ after), c_x.
+    fn add_collector_features(
+        &self,
+        cp: &CollectorPart,
+        pt: &Point,
+        run: (usize, usize),
+        out: &mut [Sums<C_SUMS>; 4],
+    ) {
         let (nl, nm) = (self.mu_l.len(), self.mu_v.len());
+        let n = cp.form.depth_terms();
+        let reach = cp.form.cz_reach_start(nm, nl);
+        for (part, s) in [0, 1, 1, 2].into_iter().enumerate() {
+            out[part] = Sums::new(cp.strides[s], run, cp.q, n);
+        }
+        for (s, stat) in Statistic::ALL.iter().enumerate() {
+            let beta = cp.beta[s].bytes();
+            cp.form
+                .for_each_feature_in_depth(*stat, &pt.cell, 1.0, nm, nl, |col, v, j| {
+                    let part = match s {
+                        0 => 0,
+                        1 if col < reach => 1,
+                        1 => 2,
+                        _ => 3,
+                    };
+                    out[part].add(beta, col, v, j);
+                });
+        }
+    }
+
+    /// T of group `g` at `pt` given its fitted depths there and the features' `sums`.
+    fn t_within(
+        &self,
+        pt: &Point,
+        g: usize,
+        range: &FittedDepths<f32>,
+        sums: &Sums<T_SUMS>,
+    ) -> f32 {
         let lq = legendre_in(&self.ln_t_range, g, pt.ln_t, self.q);
-        let first = g * self.form.n_params(nm, nl);
-        let d = depth_sums(&self.beta, first, self.q, &lq, &pt.row[..pt.n]);
         let n = self.form.depth_terms();
+        let d = sums.depth_sums(g, &lq);
         let t = range.share * Real::exp(pt.offset + depth_polynomial(&d, n, pt.cell.u, range));
         match self.ceiling(g, pt) {
             Some(top) if t > top => top,
@@ -405,70 +492,34 @@ impl<'a> TransportTables<'a> {
     /// sun-cosine nodes `pt` draws on; None for files without the ceiling.
     fn ceiling(&self, g: usize, pt: &Point) -> Option<f32> {
         let top = self.t_ceiling.as_ref()?;
-        let (nt, nl) = (self.thickness.len(), self.mu_l.len());
-        let mut most = 0.0f32;
-        pt.near_t.each(|it, _| {
-            pt.cell.l.each(|il, _| {
-                most = most.max(top.get((g * nt + it) * nl + il).unwrap_or(0.0));
-            })
-        });
+        let base = g * pt.per_group.1;
+        let most = pt.ceiling[..pt.n_ceiling]
+            .iter()
+            .map(|&k| top.get(base + k).unwrap_or(0.0))
+            .fold(0.0f32, f32::max);
         Some(CEILING_FACTOR as f32 * most)
     }
 
-    /// The collector features at `pt`, the same for every group: c_z's ℓ/σ̂ terms are
-    /// computed with σ̂ = 1 and divided by the group's σ̂ after the dot product.
-    fn collector_rows(&self, pt: &Point) -> CollectorRows {
-        let mut rows = CollectorRows {
-            row: [[(0u32, 0.0f32); MAX_C_FEATURES]; 3],
-            len: [0; 3],
-            reach: 0,
-        };
-        let Some(cp) = &self.collector else {
-            return rows;
-        };
-        let (nl, nm) = (self.mu_l.len(), self.mu_v.len());
-        for ((stat, row), n) in Statistic::ALL.iter().zip(&mut rows.row).zip(&mut rows.len) {
-            cp.form
-                .for_each_feature_in_depth(*stat, &pt.cell, 1.0, nm, nl, |col, v, j| {
-                    if *n < MAX_C_FEATURES {
-                        row[*n] = (packed(col, j), v);
-                        *n += 1;
-                    }
-                });
-        }
-        // The ℓ/σ̂ terms are c_z's last blocks: a suffix of its row.
-        let reach = cp.form.cz_reach_start(nm, nl) as u32;
-        rows.reach = rows.row[1][..rows.len[1]].partition_point(|&(key, _)| key & COL < reach);
-        rows
-    }
-
-    /// T, c and σ of group `g` at `pt`.
-    fn transport_of(&self, pt: &Point, rows: &CollectorRows, g: usize) -> Transport {
-        let Some(range) = self.fitted_range(g, pt) else {
-            return Transport::default();
-        };
-        let t = self.t_within(pt, g, &range);
-        let (Some(cp), true) = (&self.collector, t > 0.0) else {
-            return Transport {
-                t,
-                ..Transport::default()
-            };
-        };
-        let (nl, nm) = (self.mu_l.len(), self.mu_v.len());
+    /// T, c and σ of group `g` (of T = `t` > 0) at `pt` from the collector's `sums`.
+    fn collector_of(
+        &self,
+        cp: &CollectorPart,
+        pt: &Point,
+        g: usize,
+        range: &FittedDepths<f32>,
+        sums: &[Sums<C_SUMS>; 4],
+        t: f32,
+    ) -> Transport {
         let lq = legendre_in(&self.ln_t_range, g, pt.ln_t, cp.q);
         // c and σ are held within the fitted depths.
         let u = range.held(pt.cell.u);
         let p_x = legendre(2.0 * u - 1.0, cp.form.depth_terms());
-        let dot = |s: usize, row: &[(u32, f32)]| {
-            let first = g * cp.form.n_params(Statistic::ALL[s], nm, nl);
-            dot_at_t(&cp.beta[s], first, cp.q, &lq, &p_x, row)
-        };
-        let sigma = Real::exp(dot(0, rows.of(0)));
-        let (near, reach) = rows.of(1).split_at(rows.reach);
-        let cz = dot(1, near) + dot(1, reach) / sigma;
+        let dot = |part: usize| sums[part].dot(g, &lq, &p_x);
+        let sigma = Real::exp(dot(0));
+        let cz = dot(1) + dot(2) / sigma;
         Transport {
             t,
-            c_x: sigma * dot(2, rows.of(2)),
+            c_x: sigma * dot(3),
             c_z: sigma * cz,
             sigma,
         }
@@ -477,24 +528,11 @@ impl<'a> TransportTables<'a> {
     /// Group `g`'s fitted depths around `pt` (of the thickness and (μ_L, μ_V) nodes the point
     /// draws on); None where none of them has fitted cells.
     fn fitted_range(&self, g: usize, pt: &Point) -> Option<FittedDepths<f32>> {
-        let nt = self.thickness.len();
-        let (nl, nm) = (self.mu_l.len(), self.mu_v.len());
-        let c = &pt.cell;
-        let mut corners = [(0.0f32, 1.0f32, 0.0f32); 8];
-        let mut k = 0;
-        pt.near_t.each(|it, wt| {
-            c.l.each(|il, wl| {
-                c.v.each(|m, wm| {
-                    let at = ((g * nt + it) * nl + il) * nm + m;
-                    if let Some(v) = self.u_range.get(at) {
-                        let (lo, hi) = unpack_u_range(v);
-                        corners[k] = (wt * wl * wm, lo, hi);
-                        k += 1;
-                    }
-                })
-            })
-        });
-        FittedDepths::of(corners[..k].iter().copied())
+        let base = g * pt.per_group.0;
+        FittedDepths::of(pt.corners[..pt.n_corners].iter().map(|&(at, w)| {
+            let (lo, hi) = unpack_u_range(self.u_range.get(base + at).unwrap_or(EMPTY_RANGE));
+            (w, lo, hi)
+        }))
     }
 
     /// p(θ) of the stored table between its nodes as the tabulated model samples it: the
@@ -509,20 +547,6 @@ impl<'a> TransportTables<'a> {
             (t, 2.0 * core::f32::consts::PI * p * Real::sin_cos(t).0)
         };
         phase_between(node(i), node(i + 1), theta, sin)
-    }
-}
-
-/// The collector's features at one point: ln σ, c_z and c_x rows, and where c_z's ℓ/σ̂ terms
-/// start in its row.
-struct CollectorRows {
-    row: [[(u32, f32); MAX_C_FEATURES]; 3],
-    len: [usize; 3],
-    reach: usize,
-}
-
-impl CollectorRows {
-    fn of(&self, s: usize) -> &[(u32, f32)] {
-        &self.row[s][..self.len[s]]
     }
 }
 
@@ -550,76 +574,160 @@ fn parse_form(c: &Container) -> Result<(LogAdditive, usize), FormatError> {
     Ok((form, q))
 }
 
-/// The features of T at one point.
+/// The geometry of T at one point, the same for every group.
 struct Point {
     cell: Cell<f32>,
     offset: f32,
-    row: [(u32, f32); MAX_FEATURES],
-    n: usize,
-    near_t: Lerp<f32>,
     ln_t: f32,
+    /// (index within a group's depth ranges, weight) of the grid corners the point draws on.
+    corners: [(usize, f32); 8],
+    n_corners: usize,
+    /// Indices within a group's ceilings of the (thickness, μ_L) nodes it draws on.
+    ceiling: [usize; 4],
+    n_ceiling: usize,
+    /// Depth ranges and ceilings per group.
+    per_group: (usize, usize),
 }
 
-/// Σ_features v P_j(x) Σ_k β[(first + col) · q + k] L_k: a dot product with the parameters at
-/// t, each feature (column and depth degree j [`packed`]) times P_j at the group's held depth.
-fn dot_at_t(
-    beta: &ArrayView,
-    first: usize,
-    q: usize,
-    lq: &[f32; MAX_Q],
-    p_x: &[f32; MAX_LEGENDRE],
-    row: &[(u32, f32)],
-) -> f32 {
-    let mut sum = 0.0;
-    for &(key, v) in row {
-        let j = (key >> DEGREE_SHIFT) as usize;
-        let pj = p_x.get(j).copied().unwrap_or(0.0);
-        sum += v * pj * coef_at_t(beta, first + (key & COL) as usize, q, lq);
-    }
-    sum
+/// Where group g's Q coefficients of parameter p start in a β array: version 1 files store β
+/// group-major [G, P, Q]; version 2 feature-major [P, G, Q], so that one feature's
+/// coefficients for every group lie together and a point's features are read once for all of
+/// them ([`Sums`]).
+#[derive(Clone, Copy, Debug)]
+struct Strides {
+    param: usize,
+    group: usize,
+    feature_major: bool,
 }
 
-/// Per depth degree j, Σ_features of degree j v Σ_k β[(first + col) · q + k] L_k: the
-/// coefficients of ln T's depth polynomial at this point ([`depth_polynomial`]).
-fn depth_sums(
-    beta: &ArrayView,
-    first: usize,
-    q: usize,
-    lq: &[f32; MAX_Q],
-    row: &[(u32, f32)],
-) -> [f32; MAX_LEGENDRE] {
-    let mut d = [0.0; MAX_LEGENDRE];
-    for &(key, v) in row {
-        let j = (key >> DEGREE_SHIFT) as usize;
-        if let Some(slot) = d.get_mut(j) {
-            *slot += v * coef_at_t(beta, first + (key & COL) as usize, q, lq);
+impl Strides {
+    /// The layout of a file of `version` holding `g` groups of `p` parameters of `q` terms.
+    fn of(version: u32, g: usize, p: usize, q: usize) -> Self {
+        if version >= 2 {
+            Self {
+                param: g * q,
+                group: q,
+                feature_major: true,
+            }
+        } else {
+            Self {
+                param: q,
+                group: p * q,
+                feature_major: false,
+            }
         }
     }
-    d
-}
 
-/// Bits of a packed feature key below its depth degree: the column.
-const DEGREE_SHIFT: u32 = 24;
-/// Mask of the column in a packed feature key.
-const COL: u32 = (1 << DEGREE_SHIFT) - 1;
-
-/// A feature's column and the degree j of its depth polynomial P_j as one key (columns are
-/// below 2^24: [`MAX_NODES`] bounds the form's parameters).
-fn packed(col: usize, j: usize) -> u32 {
-    (col as u32 & COL) | ((j as u32) << DEGREE_SHIFT)
-}
-
-/// Parameter `p` of a [G·P, Q] array at t: Σ_k β[p · q + k] L_k.
-#[inline(always)]
-fn coef_at_t(beta: &ArrayView, p: usize, q: usize, lq: &[f32; MAX_Q]) -> f32 {
-    let Some(run) = beta.bytes().get(4 * p * q..4 * (p + 1) * q) else {
-        return 0.0;
-    };
-    let mut coef = 0.0;
-    for (b, l) in run.chunks_exact(4).zip(lq) {
-        coef += f32::from_le_bytes([b[0], b[1], b[2], b[3]]) * l;
+    /// The index of group `g`'s first coefficient of parameter `p`.
+    #[inline(always)]
+    fn at(&self, g: usize, p: usize) -> usize {
+        g * self.group + p * self.param
     }
-    coef
+}
+
+/// Floats of the sums of T's features: 8 groups × Q ≤ 6 × J ≤ 8 at once (more groups are
+/// taken in runs).
+const T_SUMS: usize = 384;
+/// Floats of the sums of one collector statistic: 8 groups × Q ≤ 4 × J ≤ 4 at once.
+const C_SUMS: usize = 128;
+
+/// A point's features summed against the parameters of a run of groups at once:
+/// acc[j][(g − first) Q + k] = Σ over the features of depth degree j of v β[col][g][k].
+/// Feature-major β (version 2) makes each feature one contiguous run of (groups × Q) values,
+/// one vectorised multiply-add; group-major β (version 1) is gathered group by group. The sums
+/// are linear in β, so the Legendre terms in ln t, which differ per group, are applied after
+/// ([`Sums::depth_sums`], [`Sums::dot`]).
+#[derive(Clone, Copy)]
+struct Sums<const N: usize> {
+    acc: [f32; N],
+    strides: Strides,
+    first: usize,
+    groups: usize,
+    q: usize,
+    depth: usize,
+}
+
+impl<const N: usize> Sums<N> {
+    const EMPTY: Self = Self {
+        acc: [0.0; N],
+        strides: Strides {
+            param: 0,
+            group: 0,
+            feature_major: true,
+        },
+        first: 0,
+        groups: 0,
+        q: 0,
+        depth: 0,
+    };
+
+    /// Most groups of `q` terms in `depth` depth terms one holds (≥ 1: a form's q and depth
+    /// terms are at most 16 each).
+    fn capacity(q: usize, depth: usize) -> usize {
+        (N / (q * depth).max(1)).max(1)
+    }
+
+    /// Empty sums of the groups `first .. first + groups` (at most [`Self::capacity`]).
+    fn new(strides: Strides, (first, groups): (usize, usize), q: usize, depth: usize) -> Self {
+        Self {
+            strides,
+            first,
+            groups: groups.min(Self::capacity(q, depth)),
+            q,
+            depth: depth.min(MAX_LEGENDRE),
+            ..Self::EMPTY
+        }
+    }
+
+    /// Adds feature `v` of column `col` and depth degree `j`, its parameters in `beta`.
+    #[inline(always)]
+    fn add(&mut self, beta: &[u8], col: usize, v: f32, j: usize) {
+        let width = self.groups * self.q;
+        let Some(acc) = self.acc.get_mut(j * width..(j + 1) * width) else {
+            return;
+        };
+        if self.strides.feature_major {
+            let start = self.strides.at(self.first, col);
+            if let Some(run) = beta.get(4 * start..4 * (start + width)) {
+                multiply_add(acc, v, run);
+            }
+        } else {
+            for (i, acc) in acc.chunks_exact_mut(self.q).enumerate() {
+                let start = self.strides.at(self.first + i, col);
+                if let Some(run) = beta.get(4 * start..4 * (start + self.q)) {
+                    multiply_add(acc, v, run);
+                }
+            }
+        }
+    }
+
+    /// Group `g`'s depth sums: per depth degree j, Σ_k acc[j][g, k] L_k(ln t) — the
+    /// coefficients of its depth polynomial at this point ([`depth_polynomial`]).
+    fn depth_sums(&self, g: usize, lq: &[f32; MAX_Q]) -> [f32; MAX_LEGENDRE] {
+        let mut d = [0.0; MAX_LEGENDRE];
+        let width = self.groups * self.q;
+        let at = (g - self.first) * self.q;
+        for (j, slot) in d.iter_mut().enumerate().take(self.depth) {
+            if let Some(run) = self.acc.get(j * width + at..j * width + at + self.q) {
+                *slot = run.iter().zip(lq).map(|(a, l)| a * l).sum();
+            }
+        }
+        d
+    }
+
+    /// Group `g`'s statistic: Σ_j P_j(x) × its depth sum j, x at the group's held depth.
+    fn dot(&self, g: usize, lq: &[f32; MAX_Q], p_x: &[f32; MAX_LEGENDRE]) -> f32 {
+        let d = self.depth_sums(g, lq);
+        d.iter().zip(p_x).take(self.depth).map(|(a, b)| a * b).sum()
+    }
+}
+
+/// acc += v × the little-endian f32s of `run`.
+#[inline(always)]
+fn multiply_add(acc: &mut [f32], v: f32, run: &[u8]) {
+    for (a, b) in acc.iter_mut().zip(run.chunks_exact(4)) {
+        *a += v * f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+    }
 }
 
 /// L_0 … L_{q−1} of s ∈ [−1, 1], s the place of ln t in group g's span (`ranges`, [G, 2]).
@@ -662,11 +770,13 @@ fn collector_part<'a>(
     {
         *slot = Some(need(c, name, g * form.n_params(*stat, m, l) * q)?);
     }
+    let strides = Statistic::ALL.map(|stat| Strides::of(c.version(), g, form.n_params(stat, m, l), q));
     match beta {
         [Some(a), Some(b), Some(x)] => Ok(Some(CollectorPart {
             form,
             q,
             beta: [a, b, x],
+            strides,
         })),
         _ => Err(bad),
     }
@@ -677,6 +787,9 @@ fn whole_numbers(a: &ArrayView, max: f32) -> bool {
     a.iter()
         .all(|v| v >= 0.0 && v <= max && v == (v as u32) as f32)
 }
+
+/// A packed empty depth range (lo > hi).
+const EMPTY_RANGE: f32 = ((U_STEPS - 1) * U_STEPS) as f32;
 
 /// Steps of the packed depth ranges: u = step / (U_STEPS − 1).
 pub const U_STEPS: u32 = 4096;
