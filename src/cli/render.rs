@@ -2,13 +2,13 @@
 
 use anyhow::Result;
 use clap::{ArgMatches, Args};
-use nephele::render::fast::{render_fast, FastOptions, Finite, Method, Octaves};
+use nephele::render::fast::{prepare, render_fast, FastOptions, Finite, Method, Octaves};
 use nephele::render::image::Rendered;
-use nephele::render::output::write_outputs_with;
+use nephele::render::output::{exposure as output_exposure, write_outputs_with};
 use nephele::render::path::{render_reporting, Progress};
-use nephele::render::scene::Scene;
+use nephele::render::scene::{Camera, Scene};
 use nephele_runtime::transport::SearchOptions;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Options of `nephele render`.
 #[derive(Args, Debug)]
@@ -46,6 +46,13 @@ pub struct RenderArgs {
     /// one used) [default: the 90th percentile of the cloud's luminance maps to 0.75].
     #[arg(long, value_name = "K", value_parser = nephele::render::output::parse_exposure)]
     pub exposure: Option<f32>,
+    /// Fast methods: N views on an orbit around the vertical through the camera's look-at
+    /// point, 360°/N apart (the scene's camera first), all from one set of light maps: each
+    /// view a full output directory DIR/view_000 …, one exposure for all (the first view's),
+    /// and DIR/views.json (the maps' seconds once, every view's frame seconds, frames per
+    /// second with the maps reused).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=3600))]
+    pub orbit: Option<u32>,
     #[command(flatten)]
     pub fast: FastArgs,
 }
@@ -203,7 +210,8 @@ pub fn render_with(scene: &Scene, method: Method, fast: &FastArgs) -> Result<Ren
 
 /// The flags of one method only, by clap id.
 const PATH_TRACER_ONLY: [&str; 3] = ["spp", "time_budget", "sun_lobe_steps"];
-const FAST_ONLY: [&str; 7] = [
+const FAST_ONLY: [&str; 8] = [
+    "orbit",
     "tables",
     "allow_table_mismatch",
     "map_resolution",
@@ -274,7 +282,13 @@ pub fn run(args: RenderArgs, m: &ArgMatches) -> Result<()> {
         scene.camera.height = s[1];
     }
     scene.validate()?;
-    let out = args.out.unwrap_or_else(|| PathBuf::from("outputs/render"));
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("outputs/render"));
+    if let Some(n) = args.orbit {
+        return render_orbit(&scene, &args, n as usize, &out);
+    }
     let r = render_with(&scene, args.method, &args.fast)?;
     write_outputs_with(&out, &scene, &r, args.exposure)?;
     if args.method == Method::PathTracer {
@@ -310,6 +324,80 @@ pub fn run(args: RenderArgs, m: &ArgMatches) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// Renders `n` views of `scene` on an orbit from one set of light maps (`--orbit`).
+fn render_orbit(scene: &Scene, args: &RenderArgs, n: usize, out: &Path) -> Result<()> {
+    for w in scene.warnings() {
+        eprintln!("warning: {w}");
+    }
+    let opts = args.fast.options(args.method)?;
+    let bar = super::progress::work_bar("render", (n * 1000) as u64);
+    bar.set_message("preparing the phase function, the medium and the light maps");
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    let summary = super::with_tables(args.fast.tables.as_deref(), |tables| {
+        let prepared = prepare(scene, tables, &opts)?;
+        let mut exposure = args.exposure;
+        let mut views = Vec::with_capacity(n);
+        for k in 0..n {
+            bar.set_message(format!("view {} of {n}", k + 1));
+            let mut view = scene.clone();
+            view.camera = orbit_camera(&scene.camera, k, n);
+            let progress = |done: f64| bar.set_position(((k as f64 + done) * 1000.0) as u64);
+            let r = prepared.render(&view.camera, &progress);
+            let opacity: Vec<f32> = r.transmittance.iter().map(|t| 1.0 - t).collect();
+            let k_used = *exposure.get_or_insert(output_exposure(&r.beauty, &opacity).k);
+            write_outputs_with(&out.join(format!("view_{k:03}")), &view, &r, Some(k_used))?;
+            views.push((
+                view.camera,
+                r.seconds,
+                r.details["seconds_per_stage"].clone(),
+            ));
+        }
+        Ok((prepared.seconds(), views, exposure))
+    })?;
+    bar.finish_and_clear();
+    let ((setup, maps, sky), views, exposure) = summary;
+    let reused: Vec<f64> = views.iter().skip(1).map(|v| v.1).collect();
+    let mean_reused = reused.iter().sum::<f64>() / reused.len().max(1) as f64;
+    let doc = serde_json::json!({
+        "method": method_name(args.method),
+        "views": views.iter().enumerate().map(|(k, (cam, s, stages))| serde_json::json!({
+            "dir": format!("view_{k:03}"), "camera": cam, "frame_seconds": s,
+            "maps_reused": k > 0, "seconds_per_stage": stages,
+        })).collect::<Vec<_>>(),
+        "seconds": {"setup_phase_function": setup, "light_maps_once": maps, "sky_table_once": sky,
+                    "mean_frame_with_maps_reused": if reused.is_empty() { None } else { Some(mean_reused) }},
+        "frames_per_second_with_maps_reused": (!reused.is_empty()).then(|| 1.0 / mean_reused.max(1e-9)),
+        "exposure": exposure,
+    });
+    nephele::io::atomic::write_atomic(&out.join("views.json"), |w| {
+        Ok(serde_json::to_writer_pretty(w, &doc)?)
+    })?;
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    println!(
+        "{n} views of {w}×{h} pixels, {}: light maps {} once, the first frame {}, the others {} each ({:.1} frames/s with the maps reused); wrote {}/view_000 … view_{:03}, views.json",
+        method_name(args.method),
+        super::seconds(maps + sky),
+        super::seconds(views[0].1),
+        super::seconds(mean_reused),
+        1.0 / mean_reused.max(1e-9),
+        out.display(),
+        n - 1
+    );
+    Ok(())
+}
+
+/// View `k` of `n` on the orbit of `cam`: its position turned by 360° k/n about the vertical
+/// through its look-at point.
+fn orbit_camera(cam: &Camera, k: usize, n: usize) -> Camera {
+    let phi = std::f64::consts::TAU * k as f64 / n as f64;
+    let (s, c) = phi.sin_cos();
+    let d = [0, 1].map(|i| cam.position[i] - cam.look_at[i]);
+    let mut out = *cam;
+    out.position[0] = cam.look_at[0] + c * d[0] - s * d[1];
+    out.position[1] = cam.look_at[1] + s * d[0] + c * d[1];
+    out
 }
 
 /// The collector search's statistics per order group, in words (render.json has the counts).

@@ -53,7 +53,10 @@ impl AtomicFiles {
             .context("output path has no file name")?
             .to_string_lossy();
         // Keep the extension last: some writers pick the format from it.
-        Ok(path.with_file_name(format!(".tmp-{}-{name}", std::process::id())))
+        // Unique per process and per call: threads of one process may write the same target.
+        static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+        let k = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        Ok(path.with_file_name(format!(".tmp-{}-{k}-{name}", std::process::id())))
     }
 
     /// Writes bytes into a temporary file (see [`AtomicFiles::write`]).

@@ -5,10 +5,12 @@
 //! - [`batch`]: intensities of many spheres as matrix products;
 //! - [`distribution`], [`index`], [`colour`], [`grid`]: the ingredients of a polydisperse job;
 //! - [`polydisperse`]: the job itself, producing [`polydisperse::PhaseTable`]s;
-//! - [`limits`]: the ranges a job must lie in, and its memory, checked before it runs.
+//! - [`limits`]: the ranges a job must lie in, and its memory, checked before it runs;
+//! - [`cache`]: the phase functions scenes ask for by diameter, kept on disk between runs.
 
 pub mod angular;
 pub mod batch;
+pub mod cache;
 pub mod colour;
 pub mod distribution;
 pub mod grid;

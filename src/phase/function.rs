@@ -3,6 +3,7 @@
 
 use super::model::build;
 use super::spec::PhaseSpec;
+use crate::mie::cache;
 use crate::mie::output::channels;
 use crate::mie::polydisperse::{CONVERGED_DEFAULT, DEFAULT_WAVELENGTHS};
 use crate::mie::MieJob;
@@ -19,7 +20,8 @@ pub enum Phase {
 }
 
 impl Phase {
-    /// Builds the phase function of `spec` (a Mie table is computed here, a few seconds); a
+    /// Builds the phase function of `spec` (a Mie table is computed here, a few seconds, or
+    /// read from the cache of earlier runs: [`crate::mie::cache`]); a
     /// per-channel (rgb) spec is an error here, see `build_channels`.
     pub fn build(spec: &PhaseSpec) -> Result<Self> {
         let mut models = Self::build_channels(spec)?;
@@ -35,9 +37,16 @@ impl Phase {
         let (theta, columns) = match spec {
             PhaseSpec::Mie { diameter_um, rgb } => {
                 let job = MieJob::paper(*diameter_um, CONVERGED_DEFAULT, DEFAULT_WAVELENGTHS);
-                let mut tables = job.compute(&|_, _| {})?.0;
-                ensure!(!tables.is_empty(), "Mie job gave no table");
-                let t = tables.swap_remove(0);
+                let t = cache::first_table(&job, cache::default_dir().as_deref(), || {
+                    let mut tables = job.compute(&|_, _| {})?.0;
+                    ensure!(!tables.is_empty(), "Mie job gave no table");
+                    let t = tables.swap_remove(0);
+                    Ok(cache::CachedPhase {
+                        theta_deg: t.theta_deg,
+                        phase: t.phase,
+                        phase_rgb: t.phase_rgb,
+                    })
+                })?;
                 let columns = if *rgb {
                     channels(&t.phase_rgb)
                 } else {

@@ -28,8 +28,8 @@ mod search;
 pub use finite::{absorbed, finite_cloud, mean_cosine, FiniteCloud, Kept};
 pub use geometry::SlabPoint;
 pub use search::{
-    find_collector, local_slab, Clamps, Collector, FilteredSurface, Lateral, LitSurface, LocalSlab,
-    SearchOptions, Viewpoint,
+    find_collector, find_collectors, local_slab, Clamps, Collector, FilteredSurface, Lateral,
+    LitSurface, LocalSlab, SearchOptions, Viewpoint,
 };
 pub use single::{scattering_cosine, single_scattering, PhaseValue};
 pub use tables::{Domain, Transport, TransportTables};

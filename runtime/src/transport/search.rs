@@ -28,7 +28,7 @@
 //! slab it actually has along the light.
 
 use super::geometry::SlabPoint;
-use super::tables::{Transport, TransportTables};
+use super::tables::{Transport, TransportTables, MAX_GROUPS};
 use crate::frame::{cross, dot, Vec3};
 use crate::real::Real;
 
@@ -314,19 +314,102 @@ pub fn find_collector<S: LitSurface + ?Sized>(
     sun: Vec3<f32>,
     opts: &SearchOptions,
 ) -> Option<Collector> {
-    let (mut c, mut sigma) = (v.position, surface.initial_scale());
-    let mut last: Option<Collector> = None;
-    let mut reads = 0;
-    loop {
-        let scale = if opts.filter { sigma } else { 0.0 };
-        let Some(s) = query(surface, c, scale, last.as_ref()) else {
-            return last;
+    Search::new(v, surface).run(tables, g, (surface, v, sun), opts)
+}
+
+/// The collectors of every group for the viewpoint `v` into `out[..groups()]` (each as
+/// [`find_collector`] gives it, bit for bit; the rest of `out` untouched). The first step is
+/// the same for every group — the surface filtered at the map's extent around p — so it reads
+/// the tables once for all of them ([`TransportTables::evaluate_all`], which shares the
+/// features); each group then searches on alone.
+pub fn find_collectors<S: LitSurface + ?Sized>(
+    tables: &TransportTables,
+    surface: &S,
+    v: &Viewpoint,
+    sun: Vec3<f32>,
+    opts: &SearchOptions,
+    out: &mut [Option<Collector>],
+) {
+    let groups = tables.groups().min(out.len()).min(MAX_GROUPS);
+    out[..groups].iter_mut().for_each(|o| *o = None);
+    let start = Search::new(v, surface);
+    let scale = if opts.filter { start.sigma } else { 0.0 };
+    let Some(s) = query(surface, start.c, scale, None) else {
+        return;
+    };
+    let slab = local_slab(tables, &s, v, sun);
+    let mut first = [Transport::default(); MAX_GROUPS];
+    tables.evaluate_all(&slab.at, &mut first[..groups]);
+    for (g, slot) in out[..groups].iter_mut().enumerate() {
+        let mut search = start;
+        *slot = match search.advance(first[g], &slab, sun, opts) {
+            Step::Done(c) => c,
+            Step::Next => search.run(tables, g, (surface, v, sun), opts),
         };
-        let slab = local_slab(tables, &s, v, sun);
-        let tr = tables.evaluate(g, &slab.at);
-        reads += 1;
+    }
+}
+
+/// A search in progress: the current collector centre and spread, the last step's result and
+/// the reads so far.
+#[derive(Clone, Copy)]
+struct Search {
+    c: Vec3<f32>,
+    sigma: f32,
+    last: Option<Collector>,
+    reads: u32,
+}
+
+/// What a step decided.
+enum Step {
+    /// The search ends with this result.
+    Done(Option<Collector>),
+    /// Another read is needed.
+    Next,
+}
+
+impl Search {
+    /// The start: c₀ = p, σ₀ = the surface's extent.
+    fn new<S: LitSurface + ?Sized>(v: &Viewpoint, surface: &S) -> Self {
+        Self {
+            c: v.position,
+            sigma: surface.initial_scale(),
+            last: None,
+            reads: 0,
+        }
+    }
+
+    /// Reads on until the search ends.
+    fn run<S: LitSurface + ?Sized>(
+        mut self,
+        tables: &TransportTables,
+        g: usize,
+        (surface, v, sun): (&S, &Viewpoint, Vec3<f32>),
+        opts: &SearchOptions,
+    ) -> Option<Collector> {
+        loop {
+            let scale = if opts.filter { self.sigma } else { 0.0 };
+            let Some(s) = query(surface, self.c, scale, self.last.as_ref()) else {
+                return self.last;
+            };
+            let slab = local_slab(tables, &s, v, sun);
+            let tr = tables.evaluate(g, &slab.at);
+            if let Step::Done(c) = self.advance(tr, &slab, sun, opts) {
+                return c;
+            }
+        }
+    }
+
+    /// One step from the read `tr` in the local slab `slab`: the new centre and spread.
+    fn advance(
+        &mut self,
+        tr: Transport,
+        slab: &LocalSlab,
+        sun: Vec3<f32>,
+        opts: &SearchOptions,
+    ) -> Step {
+        self.reads += 1;
         if !(tr.t > 0.0 && tr.sigma > 0.0 && slab.extinction > 0.0) {
-            return last;
+            return Step::Done(self.last);
         }
         let k = 1.0 / slab.extinction;
         let target = add(
@@ -337,33 +420,38 @@ pub fn find_collector<S: LitSurface + ?Sized>(
         let new_sigma = tr.sigma * k;
         // The move across the light, clamped; along the light the point follows the target
         // (it stays on the lit face, where the collector is reported).
-        let delta = [target[0] - c[0], target[1] - c[1], target[2] - c[2]];
+        let delta = [
+            target[0] - self.c[0],
+            target[1] - self.c[1],
+            target[2] - self.c[2],
+        ];
         let along = dot(delta, sun);
         let mut across = add(delta, sun, -along);
         let mut moved = length(across);
-        if opts.step_clamp && reads > 1 && moved > new_sigma {
+        if opts.step_clamp && self.reads > 1 && moved > new_sigma {
             across = across.map(|x| x * new_sigma / moved);
             moved = new_sigma;
         }
-        let converged = reads > 1
+        let converged = self.reads > 1
             && moved <= opts.tolerance * new_sigma
-            && (new_sigma - sigma).abs() <= opts.tolerance * new_sigma;
-        c = add(add(c, across, 1.0), sun, along);
-        sigma = new_sigma;
+            && (new_sigma - self.sigma).abs() <= opts.tolerance * new_sigma;
+        self.c = add(add(self.c, across, 1.0), sun, along);
+        self.sigma = new_sigma;
         let found = Collector {
             transport: tr,
             at: slab.at,
-            centre: c,
-            sigma,
-            reads,
+            centre: self.c,
+            sigma: self.sigma,
+            reads: self.reads,
             converged,
             clamps: slab.clamps,
             extinction: slab.extinction,
         };
-        if converged || reads >= opts.max_reads.max(1) {
-            return Some(found);
+        if converged || self.reads >= opts.max_reads.max(1) {
+            return Step::Done(Some(found));
         }
-        last = Some(found);
+        self.last = Some(found);
+        Step::Next
     }
 }
 

@@ -24,7 +24,7 @@
 //!
 //! Files without the collector arrays load too; their [`Transport`] has c = 0, σ = 0.
 
-use super::collector::{CollectorForm, Statistic};
+use super::collector::{CollectorForm, Statistic, MAX_COLLECTOR_LEGENDRE};
 use super::geometry::SlabPoint;
 use super::log_additive::{
     depth_polynomial, legendre, ln_boundary, ln_t_position, Cell, FittedDepths, Lerp, LogAdditive,
@@ -630,6 +630,9 @@ impl Strides {
 const T_SUMS: usize = 384;
 /// Floats of the sums of one collector statistic: 8 groups × Q ≤ 4 × J ≤ 4 at once.
 const C_SUMS: usize = 128;
+// Every form the loader accepts fits at least one group.
+const _: () = assert!(T_SUMS >= MAX_LEGENDRE * MAX_Q);
+const _: () = assert!(C_SUMS >= MAX_COLLECTOR_LEGENDRE * MAX_Q);
 
 /// A point's features summed against the parameters of a run of groups at once:
 /// acc[j][(g − first) Q + k] = Σ over the features of depth degree j of v β[col][g][k].

@@ -12,8 +12,9 @@
 //! by what absorption leaves only (under a uniform sky the sides gain what they leak).
 
 use super::{Frame, Pixel};
+use crate::render::image::GROUP_FIRST;
 use nephele_runtime::transport::{
-    absorbed, find_collector, finite_cloud, local_slab, mean_cosine, FiniteCloud, LitSurface,
+    absorbed, find_collectors, finite_cloud, local_slab, mean_cosine, FiniteCloud, LitSurface,
     SlabPoint, TransportTables, Viewpoint,
 };
 use serde::Serialize;
@@ -138,9 +139,17 @@ impl Frame<'_> {
         sun32: [f32; 3],
         stats: &mut [GroupStats],
     ) {
-        for (g, st) in stats.iter_mut().enumerate() {
+        let mut found = [None; GROUP_FIRST.len()];
+        find_collectors(
+            self.tables,
+            &self.side,
+            vp,
+            sun32,
+            &self.opts.search,
+            &mut found,
+        );
+        for ((g, st), found) in stats.iter_mut().enumerate().zip(found) {
             st.searches += 1;
-            let found = find_collector(self.tables, g, &self.side, vp, sun32, &self.opts.search);
             let Some(f) = found else {
                 st.empty += 1;
                 match self.coarse_slab(vp, sun32) {

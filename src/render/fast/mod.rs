@@ -44,7 +44,7 @@ use super::geometry::{dot, Vec3};
 use super::image::{Rendered, GROUP_FIRST};
 use super::medium::Medium;
 use super::regions::region_of;
-use super::scene::Scene;
+use super::scene::{Camera, Scene};
 use crate::phase::Phase;
 use anyhow::{ensure, Result};
 pub use collector::{Finite, GroupStats};
@@ -185,7 +185,7 @@ impl FastOptions {
 /// Everything a frame needs, built once.
 struct Frame<'a> {
     scene: &'a Scene,
-    medium: &'a dyn Medium,
+    medium: Box<dyn Medium>,
     side: SunSide,
     tables: &'a TransportTables<'a>,
     sky: Option<SkyTable>,
@@ -200,13 +200,26 @@ struct Frame<'a> {
     finite: FiniteCloud,
 }
 
-/// Renders `scene` with a fast method; `progress(fraction)` as rows finish.
-pub fn render_fast(
-    scene: &Scene,
-    tables: &TransportTables,
+/// A scene prepared for the fast renderers: the medium, the phase functions, the light-space
+/// maps and the sky table — everything that depends on the cloud and the sun, not on the
+/// camera. Built once ([`prepare`]), it renders any number of views ([`Prepared::render`]).
+pub struct Prepared<'a> {
+    frame: Frame<'a>,
+    warnings: Vec<String>,
+    /// Seconds: the phase functions and the table check, the maps, the sky table.
+    setup: f64,
+    maps: f64,
+    sky: f64,
+    /// Views rendered so far (the first one is charged the maps and the sky table).
+    views: AtomicUsize,
+}
+
+/// Prepares `scene` for the fast method of `opts` with `tables`.
+pub fn prepare<'a>(
+    scene: &'a Scene,
+    tables: &'a TransportTables<'a>,
     opts: &FastOptions,
-    progress: &(dyn Fn(f64) + Sync),
-) -> Result<Rendered> {
+) -> Result<Prepared<'a>> {
     opts.validate()?;
     let t_start = Instant::now();
     let medium = scene.build_medium()?;
@@ -214,7 +227,7 @@ pub fn render_fast(
     let mut warnings = Vec::new();
     check_tables(scene, tables, &phases, opts, &mut warnings)?;
     let g = mean_cosine(&phases);
-    let t_setup = t_start.elapsed().as_secs_f64();
+    let setup = t_start.elapsed().as_secs_f64();
     let step = opts.step.unwrap_or(0.5 / scene.sigma_t);
     let threshold = opts.surface_density * scene.sigma_t;
     let t0 = Instant::now();
@@ -224,14 +237,14 @@ pub fn render_fast(
         &opts.maps(step, threshold),
         opts.thickness_scale,
     )?;
-    let t_maps = t0.elapsed().as_secs_f64();
+    let maps = t0.elapsed().as_secs_f64();
     let t0 = Instant::now();
     let has_sky = scene.sky.iter().any(|&s| s > 0.0);
     let sky = has_sky.then(|| SkyTable::build(tables));
-    let t_sky = t0.elapsed().as_secs_f64();
+    let sky_seconds = t0.elapsed().as_secs_f64();
     let frame = Frame {
         scene,
-        medium: medium.as_ref(),
+        medium,
         side,
         tables,
         sky,
@@ -242,37 +255,73 @@ pub fn render_fast(
         g,
         finite: opts.finite.runtime(tables, scene.albedo),
     };
-    let t0 = Instant::now();
-    let (image, stats, sky_share) = frame.pixels(progress);
-    let t_pixels = t0.elapsed().as_secs_f64();
-    let seconds = t_maps + t_sky + t_pixels;
-    let mut r = image;
-    r.seconds = seconds;
-    r.details = serde_json::json!({
-        "method": opts.method,
-        "correction": opts.finite.name(),
-        "options": opts,
-        "search": {
-            "max_reads": opts.search.max_reads,
-            "tolerance": opts.search.tolerance,
-            "step_clamp": opts.search.step_clamp,
-            "filter": opts.search.filter,
-        },
-        "march_step_m": step,
-        "surface_sigma_t": threshold,
-        "mean_cosine_g": g,
-        "seconds_per_stage": {
-            "setup_phase_function": t_setup,
-            "light_maps": t_maps,
-            "sky_table": t_sky,
-            "pixels": t_pixels,
-            "frame": seconds,
-        },
-        "groups": stats,
-        "sky_term_share_of_scattered_light": sky_share,
-        "warnings": warnings,
-    });
-    Ok(r)
+    Ok(Prepared {
+        frame,
+        warnings,
+        setup,
+        maps,
+        sky: sky_seconds,
+        views: AtomicUsize::new(0),
+    })
+}
+
+impl Prepared<'_> {
+    /// Seconds it took: the phase functions and the table check, the light maps, the sky
+    /// table.
+    pub fn seconds(&self) -> (f64, f64, f64) {
+        (self.setup, self.maps, self.sky)
+    }
+
+    /// Renders the view of `camera`; `progress(fraction)` as rows finish. The first view's
+    /// frame time includes building the maps and the sky table; later views reuse them
+    /// (render.json: `maps_reused`). The pixels do not depend on which view came first.
+    pub fn render(&self, camera: &Camera, progress: &(dyn Fn(f64) + Sync)) -> Rendered {
+        let first = self.views.fetch_add(1, Ordering::Relaxed) == 0;
+        let opts = &self.frame.opts;
+        let t0 = Instant::now();
+        let (image, stats, sky_share) = self.frame.pixels(&Pinhole::new(camera), progress);
+        let t_pixels = t0.elapsed().as_secs_f64();
+        let shared = if first { self.maps + self.sky } else { 0.0 };
+        let seconds = shared + t_pixels;
+        let mut r = image;
+        r.seconds = seconds;
+        r.details = serde_json::json!({
+            "method": opts.method,
+            "correction": opts.finite.name(),
+            "options": opts,
+            "search": {
+                "max_reads": opts.search.max_reads,
+                "tolerance": opts.search.tolerance,
+                "step_clamp": opts.search.step_clamp,
+                "filter": opts.search.filter,
+            },
+            "march_step_m": self.frame.step,
+            "surface_sigma_t": self.frame.threshold,
+            "mean_cosine_g": self.frame.g,
+            "seconds_per_stage": {
+                "setup_phase_function": self.setup,
+                "light_maps": self.maps,
+                "sky_table": self.sky,
+                "pixels": t_pixels,
+                "frame": seconds,
+            },
+            "maps_reused": !first,
+            "groups": stats,
+            "sky_term_share_of_scattered_light": sky_share,
+            "warnings": self.warnings,
+        });
+        r
+    }
+}
+
+/// Renders `scene` with a fast method; `progress(fraction)` as rows finish.
+pub fn render_fast(
+    scene: &Scene,
+    tables: &TransportTables,
+    opts: &FastOptions,
+    progress: &(dyn Fn(f64) + Sync),
+) -> Result<Rendered> {
+    Ok(prepare(scene, tables, opts)?.render(&scene.camera, progress))
 }
 
 /// The sun side of `scene` (default maps) and, for every `stride`-th pixel of its camera whose
@@ -288,7 +337,7 @@ pub fn surface_points(scene: &Scene, stride: usize) -> Result<(SunSide, Vec<View
     let tables = nephele_runtime::embedded::mie_10um();
     let frame = Frame {
         scene,
-        medium: medium.as_ref(),
+        medium,
         side,
         tables: &tables,
         sky: None,
@@ -315,8 +364,11 @@ impl Frame<'_> {
 
     /// Every pixel, rows in parallel (deterministic: no randomness, sums in a fixed order).
     /// Also the sky term's share of the scattered light.
-    fn pixels(&self, progress: &(dyn Fn(f64) + Sync)) -> (Rendered, Vec<GroupStats>, f64) {
-        let cam = Pinhole::new(&self.scene.camera);
+    fn pixels(
+        &self,
+        cam: &Pinhole,
+        progress: &(dyn Fn(f64) + Sync),
+    ) -> (Rendered, Vec<GroupStats>, f64) {
         let (w, h) = (cam.width, cam.height);
         let ng = GROUP_FIRST.len();
         let done = AtomicUsize::new(0);
@@ -324,7 +376,7 @@ impl Frame<'_> {
             .into_par_iter()
             .map(|j| {
                 let mut stats = self.empty_stats();
-                let row = (0..w).map(|i| self.pixel(&cam, i, j, &mut stats)).collect();
+                let row = (0..w).map(|i| self.pixel(cam, i, j, &mut stats)).collect();
                 progress((done.fetch_add(1, Ordering::Relaxed) + 1) as f64 / h as f64);
                 (row, stats)
             })

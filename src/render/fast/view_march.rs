@@ -68,51 +68,58 @@ impl Frame<'_> {
         // The view ray's optical depth so far, and where the surface point was found.
         let (mut tau_v, mut tau_at_p, mut stopped) = (0.0f64, None::<f64>, false);
         let mut tau_at_densest = 0.0;
-        let _: Option<()> = substeps(self.medium, o, w, range, self.step, |a, b, sigma| {
-            let h = b - a;
-            let ta = match tau_a {
-                Some((s, t)) if s == a => t,
-                _ => self.side.optical_depth(at(a)),
-            };
-            let tb = self.side.optical_depth(at(b));
-            tau_a = Some((b, tb));
-            let k = (tb - ta) / h;
-            for (i, integral) in v.integrals.iter_mut().enumerate().take(n_oct) {
-                let ai = factors[i];
-                let rate = sigma + ai * k;
-                let e = if rate.abs() * h < 1e-9 {
-                    h
-                } else {
-                    -(-rate * h).exp_m1() / rate
+        let _: Option<()> = substeps(
+            self.medium.as_ref(),
+            o,
+            w,
+            range,
+            self.step,
+            |a, b, sigma| {
+                let h = b - a;
+                let ta = match tau_a {
+                    Some((s, t)) if s == a => t,
+                    _ => self.side.optical_depth(at(a)),
                 };
-                *integral += sigma * v.transmittance * (-ai * ta).exp() * e;
-            }
-            let mid = 0.5 * (a + b);
-            if v.surface.is_none() {
-                if sigma >= self.threshold {
-                    let s = match prev {
-                        Some((pm, ps)) if ps < self.threshold && sigma > ps => {
-                            pm + (mid - pm) * (self.threshold - ps) / (sigma - ps)
-                        }
-                        _ => a,
+                let tb = self.side.optical_depth(at(b));
+                tau_a = Some((b, tb));
+                let k = (tb - ta) / h;
+                for (i, integral) in v.integrals.iter_mut().enumerate().take(n_oct) {
+                    let ai = factors[i];
+                    let rate = sigma + ai * k;
+                    let e = if rate.abs() * h < 1e-9 {
+                        h
+                    } else {
+                        -(-rate * h).exp_m1() / rate
                     };
-                    v.surface = Some(at(s));
-                    tau_at_p = Some(tau_v + sigma * (s - a).max(0.0));
-                } else if sigma > densest.1 {
-                    densest = (mid, sigma);
-                    tau_at_densest = tau_v + 0.5 * sigma * h;
+                    *integral += sigma * v.transmittance * (-ai * ta).exp() * e;
                 }
-            }
-            prev = Some((mid, sigma));
-            tau_v += sigma * h;
-            v.transmittance *= (-sigma * h).exp();
-            if v.transmittance < 1e-4 {
-                stopped = true;
-                ControlFlow::Break(())
-            } else {
-                ControlFlow::Continue(())
-            }
-        });
+                let mid = 0.5 * (a + b);
+                if v.surface.is_none() {
+                    if sigma >= self.threshold {
+                        let s = match prev {
+                            Some((pm, ps)) if ps < self.threshold && sigma > ps => {
+                                pm + (mid - pm) * (self.threshold - ps) / (sigma - ps)
+                            }
+                            _ => a,
+                        };
+                        v.surface = Some(at(s));
+                        tau_at_p = Some(tau_v + sigma * (s - a).max(0.0));
+                    } else if sigma > densest.1 {
+                        densest = (mid, sigma);
+                        tau_at_densest = tau_v + 0.5 * sigma * h;
+                    }
+                }
+                prev = Some((mid, sigma));
+                tau_v += sigma * h;
+                v.transmittance *= (-sigma * h).exp();
+                if v.transmittance < 1e-4 {
+                    stopped = true;
+                    ControlFlow::Break(())
+                } else {
+                    ControlFlow::Continue(())
+                }
+            },
+        );
         if v.surface.is_none() && densest.1 > 0.0 {
             v.surface = Some(at(densest.0));
             tau_at_p = Some(tau_at_densest);

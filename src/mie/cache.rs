@@ -1,0 +1,153 @@
+//! A disk cache of the Mie phase functions scenes ask for by diameter (`{"kind": "mie"}`): the
+//! polydisperse job takes seconds, and a render would otherwise repeat it on every run.
+//!
+//! An entry is keyed by everything that determines its values: the job itself (serialized:
+//! distribution, wavelengths, size rule, refractive indices, angles, illuminant), the crate's
+//! version and [`REVISION`] (bumped whenever the Mie numerics change). The key is stored in the
+//! entry and compared on reading, so a hash collision or a foreign file is a miss, never a wrong
+//! phase function. Values are stored as JSON numbers, which round-trip f64 exactly: a cached
+//! phase function is bit for bit the computed one. Entries are written atomically; one that
+//! cannot be read is recomputed and rewritten; a cache that cannot be written is skipped.
+//!
+//! Where: `$NEPHELE_CACHE_DIR`, else `$XDG_CACHE_HOME/nephele`, else `$HOME/.cache/nephele`;
+//! `NEPHELE_CACHE_DIR=off` turns it off.
+
+use super::polydisperse::MieJob;
+use crate::io::atomic::write_atomic;
+use anyhow::{ensure, Result};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// Bumped whenever the Mie computation's values change, so that older entries miss.
+pub const REVISION: u32 = 1;
+
+/// What a cached job keeps: the angles and, per table, the mono and linear-sRGB phase functions.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CachedPhase {
+    /// Angles (degrees).
+    pub theta_deg: Vec<f64>,
+    /// p (sr⁻¹) at the angles.
+    pub phase: Vec<f64>,
+    /// Linear-sRGB channels, n_θ × 3 row-major (sr⁻¹).
+    pub phase_rgb: Vec<f64>,
+}
+
+#[derive(Serialize, Deserialize)]
+struct Entry {
+    key: String,
+    value: CachedPhase,
+}
+
+/// The cache directory from the environment (None: off, or no home to put it in).
+pub fn default_dir() -> Option<PathBuf> {
+    let var = |name: &str| std::env::var_os(name).filter(|v| !v.is_empty());
+    match var("NEPHELE_CACHE_DIR") {
+        Some(v) if v == "off" => None,
+        Some(v) => Some(PathBuf::from(v)),
+        None => var("XDG_CACHE_HOME")
+            .map(|d| PathBuf::from(d).join("nephele"))
+            .or_else(|| var("HOME").map(|h| PathBuf::from(h).join(".cache/nephele"))),
+    }
+}
+
+/// The first table of `job`, from the cache in `dir` if it holds it, else computed by
+/// `compute` and stored there (`dir` None: computed, nothing stored).
+pub fn first_table(
+    job: &MieJob,
+    dir: Option<&Path>,
+    compute: impl FnOnce() -> Result<CachedPhase>,
+) -> Result<CachedPhase> {
+    let key = format!(
+        "nephele {} mie revision {REVISION} {}",
+        crate::VERSION,
+        serde_json::to_string(job)?
+    );
+    let Some(dir) = dir else {
+        return compute();
+    };
+    let path = dir.join(format!("mie-{:016x}.json", fnv1a(key.as_bytes())));
+    if let Some(hit) = read(&path, &key) {
+        return Ok(hit);
+    }
+    let value = compute()?;
+    // A cache that cannot be written (read-only home, full disk) only costs the next run time.
+    let _ = store(
+        &path,
+        &Entry {
+            key,
+            value: value.clone(),
+        },
+    );
+    Ok(value)
+}
+
+/// The entry at `path` if it is one of `key` and well formed.
+fn read(path: &Path, key: &str) -> Option<CachedPhase> {
+    let text = std::fs::read_to_string(path).ok()?;
+    let e: Entry = serde_json::from_str(&text).ok()?;
+    let v = e.value;
+    let n = v.theta_deg.len();
+    let sound = e.key == key
+        && n >= 2
+        && v.phase.len() == n
+        && v.phase_rgb.len() == 3 * n
+        && v.phase.iter().chain(&v.phase_rgb).all(|p| p.is_finite());
+    sound.then_some(v)
+}
+
+fn store(path: &Path, e: &Entry) -> Result<()> {
+    let dir = path.parent().expect("a file in the cache directory");
+    std::fs::create_dir_all(dir)?;
+    write_atomic(path, |w| Ok(serde_json::to_writer(w, e)?))?;
+    ensure!(read(path, &e.key).is_some(), "the entry does not read back");
+    Ok(())
+}
+
+/// FNV-1a, 64 bits: a file name for a key (the key itself is compared on reading).
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mie::polydisperse::{CONVERGED_DEFAULT, DEFAULT_WAVELENGTHS};
+
+    fn value(scale: f64) -> CachedPhase {
+        CachedPhase {
+            theta_deg: vec![0.0, 90.0, 180.0],
+            phase: vec![0.1 * scale, 1.0 / 3.0, std::f64::consts::PI * 1e-7],
+            phase_rgb: (0..9).map(|i| scale / (i as f64 + 1.0)).collect(),
+        }
+    }
+
+    /// A miss computes and stores, a hit returns the very bits without computing; another
+    /// job misses; a corrupt or foreign entry is recomputed and rewritten; no directory: no
+    /// cache.
+    #[test]
+    fn hits_return_the_computed_bits_and_anything_else_recomputes() {
+        let dir = tempfile::tempdir().unwrap();
+        let job = MieJob::paper(10.0, CONVERGED_DEFAULT, DEFAULT_WAVELENGTHS);
+        let first = first_table(&job, Some(dir.path()), || Ok(value(1.0))).unwrap();
+        let again = first_table(&job, Some(dir.path()), || panic!("a hit must not compute"));
+        assert_eq!(again.unwrap(), first);
+        let other = MieJob::paper(12.0, CONVERGED_DEFAULT, DEFAULT_WAVELENGTHS);
+        let v = first_table(&other, Some(dir.path()), || Ok(value(2.0))).unwrap();
+        assert_eq!(v, value(2.0));
+        let files: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+        assert_eq!(files.len(), 2);
+        for f in files {
+            std::fs::write(f.unwrap().path(), b"{\"key\": 1").unwrap();
+        }
+        let v = first_table(&job, Some(dir.path()), || Ok(value(3.0))).unwrap();
+        assert_eq!(v, value(3.0));
+        let hit = first_table(&job, Some(dir.path()), || panic!("rewritten")).unwrap();
+        assert_eq!(hit, value(3.0));
+        assert_eq!(
+            first_table(&job, None, || Ok(value(4.0))).unwrap(),
+            value(4.0)
+        );
+    }
+}
