@@ -2,12 +2,13 @@
 //! search, per order group, over the surface points of every 7th pixel of its camera (the
 //! default light-space maps, 256², the shipped Mie 10 µm tables).
 //!
-//! `cargo bench --bench collector`; reads per search are printed before the timings.
+//! And every group at once with the first read shared (`find_collectors`, as the renderer
+//! searches). `cargo bench --bench collector`; reads per search are printed before the timings.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use nephele::render::fast::surface_points;
 use nephele::render::scene::Scene;
-use nephele_runtime::transport::{find_collector, SearchOptions};
+use nephele_runtime::transport::{find_collector, find_collectors, SearchOptions};
 
 fn bench(c: &mut Criterion) {
     let scene = Scene::parse(include_str!("../fit-configs/scenes/cloud.json")).unwrap();
@@ -45,6 +46,21 @@ fn bench(c: &mut Criterion) {
             },
         );
     }
+    // Every group at once: the first read shared (find_collectors), as the renderer searches.
+    group.bench_function(
+        format!("all groups, first read shared ({} points)", points.len()),
+        |b| {
+            b.iter(|| {
+                let mut t = 0.0f32;
+                for v in &points {
+                    let mut out = [None; 8];
+                    find_collectors(&tables, &side, v, sun, &opts, &mut out);
+                    t += out.iter().flatten().map(|f| f.transport.t).sum::<f32>();
+                }
+                t
+            })
+        },
+    );
     group.finish();
 }
 

@@ -24,11 +24,13 @@
 //!
 //! Files without the collector arrays load too; their [`Transport`] has c = 0, σ = 0.
 
-use super::collector::{CollectorForm, Statistic, MAX_COLLECTOR_LEGENDRE};
+use super::collector::{
+    CollectorForm, Statistic, MAX_COLLECTOR_HARMONICS, MAX_COLLECTOR_LEGENDRE,
+};
 use super::geometry::SlabPoint;
 use super::log_additive::{
     depth_polynomial, legendre, ln_boundary, ln_t_position, Cell, FittedDepths, Lerp, LogAdditive,
-    MAX_LEGENDRE,
+    MAX_CROSS, MAX_HARMONICS, MAX_LEGENDRE,
 };
 use super::single::{single_scattering, PhaseValue};
 use crate::container::{ArrayView, Container, FormatError};
@@ -86,6 +88,14 @@ pub const STRETCH_SCALE: f64 = 0.3;
 pub const STRETCH_EXPONENT: f64 = 0.65;
 /// Most nodes of each grid (sun cosines, view cosines, thicknesses).
 pub const MAX_NODES: usize = 1024;
+/// Room for the features of one point: J ≤ 16 Legendre terms on two μ_V and two μ_L nodes,
+/// γ and the pair terms on four (μ_V, μ_L) pairs, two Θ hats, K ≤ 8 harmonics, γ_L on two
+/// μ_L nodes and 3 A² interaction products.
+const MAX_FEATURES: usize = 16 * 4 + 4 * 3 + 4 + MAX_HARMONICS * 4 + 2 + 3 * MAX_CROSS * MAX_CROSS;
+/// Room for the features of a collector statistic at one point: at most two Θ blocks (4 values
+/// each) and K + 2 depth blocks of J values on two μ_V and two μ_L nodes.
+const MAX_C_FEATURES: usize = 8 + (MAX_COLLECTOR_HARMONICS + 2) * MAX_COLLECTOR_LEGENDRE * 4;
+
 /// Transport of one order group at a point: T = L/E⊥ (sr⁻¹), the collector c = (c_x, c_z) and
 /// its spread σ (mfp; docs/conventions.md).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -435,9 +445,20 @@ impl<'a> TransportTables<'a> {
     /// Adds T's features at `pt` to `sums`; false where the form says every group is 0.
     fn add_t_features(&self, pt: &Point, sums: &mut Sums<T_SUMS>) -> bool {
         let (nl, nm) = (self.mu_l.len(), self.mu_v.len());
-        let beta = self.beta.bytes();
-        self.form
-            .for_each_feature_in_depth(&pt.cell, nm, nl, |col, v, j| sums.add(beta, col, v, j))
+        // The features are listed first and summed after, in one tight loop: a call into the
+        // sums per feature from inside the generator costs more than the sums themselves.
+        let mut row = [(0u32, 0.0f32); MAX_FEATURES];
+        let mut n = 0;
+        let ok = self
+            .form
+            .for_each_feature_in_depth(&pt.cell, nm, nl, |col, v, j| {
+                if n < MAX_FEATURES {
+                    row[n] = (packed(col, j), v);
+                    n += 1;
+                }
+            });
+        sums.add_row(self.beta.bytes(), &row[..n]);
+        ok
     }
 
     /// Adds the collector's features at `pt` for the groups `run`: ln σ, c_z's terms, c_z's
@@ -455,18 +476,28 @@ impl<'a> TransportTables<'a> {
         for (part, s) in [0, 1, 1, 2].into_iter().enumerate() {
             out[part] = Sums::new(cp.strides[s], run, cp.q, n);
         }
+        let mut row = [(0u32, 0.0f32); MAX_C_FEATURES];
         for (s, stat) in Statistic::ALL.iter().enumerate() {
-            let beta = cp.beta[s].bytes();
+            let mut n = 0;
             cp.form
                 .for_each_feature_in_depth(*stat, &pt.cell, 1.0, nm, nl, |col, v, j| {
-                    let part = match s {
-                        0 => 0,
-                        1 if col < reach => 1,
-                        1 => 2,
-                        _ => 3,
-                    };
-                    out[part].add(beta, col, v, j);
+                    if n < MAX_C_FEATURES {
+                        row[n] = (packed(col, j), v);
+                        n += 1;
+                    }
                 });
+            let beta = cp.beta[s].bytes();
+            let row = &row[..n];
+            match s {
+                0 => out[0].add_row(beta, row),
+                1 => {
+                    // The ℓ/σ̂ terms are c_z's last blocks: a suffix of its row.
+                    let split = row.partition_point(|&(key, _)| ((key & COL) as usize) < reach);
+                    out[1].add_row(beta, &row[..split]);
+                    out[2].add_row(beta, &row[split..]);
+                }
+                _ => out[3].add_row(beta, row),
+            }
         }
     }
 
@@ -704,6 +735,13 @@ impl<const N: usize> Sums<N> {
         }
     }
 
+    /// Adds every feature of `row` (packed keys, values).
+    fn add_row(&mut self, beta: &[u8], row: &[(u32, f32)]) {
+        for &(key, v) in row {
+            self.add(beta, (key & COL) as usize, v, (key >> DEGREE_SHIFT) as usize);
+        }
+    }
+
     /// Group `g`'s depth sums: per depth degree j, Σ_k acc[j][g, k] L_k(ln t) — the
     /// coefficients of its depth polynomial at this point ([`depth_polynomial`]).
     fn depth_sums(&self, g: usize, lq: &[f32; MAX_Q]) -> [f32; MAX_LEGENDRE] {
@@ -723,6 +761,17 @@ impl<const N: usize> Sums<N> {
         let d = self.depth_sums(g, lq);
         d.iter().zip(p_x).take(self.depth).map(|(a, b)| a * b).sum()
     }
+}
+
+/// Bits of a packed feature key below its depth degree: the column.
+const DEGREE_SHIFT: u32 = 24;
+/// Mask of the column in a packed feature key.
+const COL: u32 = (1 << DEGREE_SHIFT) - 1;
+
+/// A feature's column and the degree j of its depth polynomial P_j as one key (columns are
+/// below 2^24: [`MAX_NODES`] bounds the form's parameters).
+fn packed(col: usize, j: usize) -> u32 {
+    (col as u32 & COL) | ((j as u32) << DEGREE_SHIFT)
 }
 
 /// acc += v × the little-endian f32s of `run`.
