@@ -80,9 +80,15 @@ pub struct FastArgs {
     /// ρ₀: the lit surface is where the density crosses this fraction of the scene's σ_t.
     #[arg(long, default_value_t = 0.5, value_name = "RHO")]
     pub surface_density: f64,
-    /// Rays per pixel: an n × n grid over the pixel.
-    #[arg(long, default_value_t = 1, value_name = "N")]
+    /// Rays per pixel: an n × n grid over the pixel (antialiasing: the march — opacity, order
+    /// 1, the sky term, the octaves — runs on every ray; the collector searches once per pixel,
+    /// at its most opaque ray's surface point).
+    #[arg(long, default_value_t = 2, value_name = "N")]
     pub rays: u32,
+    /// Collector: search on every ray of a pixel, not once per pixel (an ablation: n² times the
+    /// searches).
+    #[arg(long)]
+    pub search_every_ray: bool,
     /// Collector search: most table reads per group.
     #[arg(long, default_value_t = 8, value_name = "N")]
     pub iterations: u32,
@@ -153,6 +159,7 @@ impl FastArgs {
             step: self.march_step,
             surface_density: self.surface_density,
             rays: self.rays,
+            search_every_ray: self.search_every_ray,
             search: SearchOptions {
                 max_reads: self.iterations,
                 tolerance: self.tolerance,
@@ -220,7 +227,8 @@ const FAST_ONLY: [&str; 8] = [
     "surface_density",
     "rays",
 ];
-const COLLECTOR_ONLY: [&str; 8] = [
+const COLLECTOR_ONLY: [&str; 9] = [
+    "search_every_ray",
     "iterations",
     "tolerance",
     "no_step_clamp",

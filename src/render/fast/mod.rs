@@ -57,6 +57,7 @@ use sky::SkyTable;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 use sun_side::sun_side;
+use view_march::ViewRay;
 pub use sun_side::SunSide;
 use table_check::{check_tables, mean_cosine};
 
@@ -87,8 +88,11 @@ pub struct FastOptions {
     pub step: Option<f64>,
     /// ρ₀: the lit surface is where σ_t = ρ₀ σ_t,scene.
     pub surface_density: f64,
-    /// Rays per pixel: an n × n grid.
+    /// Rays per pixel: an n × n grid (the collector searches once per pixel unless
+    /// `search_every_ray`).
     pub rays: u32,
+    /// The collector searches on every ray of a pixel, not once per pixel (an ablation).
+    pub search_every_ray: bool,
     /// Collector search settings.
     #[serde(skip)]
     pub search: SearchOptions,
@@ -110,7 +114,8 @@ impl Default for FastOptions {
             planes: 256,
             step: None,
             surface_density: 0.5,
-            rays: 1,
+            rays: 2,
+            search_every_ray: false,
             search: SearchOptions::default(),
             octaves: Octaves::default(),
             allow_mismatch: false,
@@ -412,23 +417,41 @@ impl Frame<'_> {
         (out, stats, sky_sum / all.max(1e-300))
     }
 
-    /// One pixel: the mean over its n × n rays.
+    /// One pixel: the mean over its n × n rays. The march (opacity, order 1, the sky term, the
+    /// octaves) runs on every ray; the collector searches once per pixel, at the surface point
+    /// of its most opaque ray, its orders ≥ 2 weighed by the pixel's mean opacity — unless
+    /// `search_every_ray` (each ray its own searches, n² times the cost).
     fn pixel(&self, cam: &Pinhole, i: usize, j: usize, stats: &mut [GroupStats]) -> Pixel {
         let n = self.opts.rays as usize;
+        let once = self.opts.method == Method::Collector && !self.opts.search_every_ray && n > 1;
         let mut px = Pixel::default();
         let inv = 1.0 / (n * n) as f64;
+        let mut densest: Option<(f64, Viewpoint, Vec3)> = None;
         for k in 0..n * n {
             let (u, v) = ((k % n) as f64 + 0.5, (k / n) as f64 + 0.5);
             let dir = cam.direction(i, j, u / n as f64, v / n as f64);
-            let one = self.ray(cam.position, dir, stats);
+            let (one, ray) = self.ray(cam.position, dir, (!once).then_some(&mut *stats));
             px.add(&one, inv);
+            let alpha = 1.0 - ray.transmittance;
+            if let (Some(p), Some(vp)) = (ray.surface, ray.viewpoint(dir)) {
+                if densest.as_ref().is_none_or(|d| alpha > d.0) {
+                    densest = Some((alpha, vp, p));
+                }
+            }
+        }
+        if let (true, Some((_, vp, p))) = (once, densest) {
+            px.sun_tau = self.side.optical_depth(p);
+            let sun32 = self.scene.sun.direction.map(|x| x as f32);
+            let alpha = 1.0 - px.transmittance;
+            self.collector(&mut px, alpha, &vp, sun32, stats);
         }
         px.region = region_of(1.0 - px.transmittance, px.sun_tau);
         px
     }
 
-    /// One view ray: its transmittance, order 1, and the scattered orders of the method.
-    fn ray(&self, o: Vec3, w: Vec3, stats: &mut [GroupStats]) -> Pixel {
+    /// One view ray: its transmittance, order 1, and the scattered orders of the method (the
+    /// collector's only with `stats` to count its searches in); and the march itself.
+    fn ray(&self, o: Vec3, w: Vec3, stats: Option<&mut [GroupStats]>) -> (Pixel, ViewRay) {
         let v = self.march(o, w);
         let mut px = Pixel {
             transmittance: v.transmittance,
@@ -444,20 +467,16 @@ impl Frame<'_> {
         }
         self.sky_term(&mut px, v.transmittance);
         let (Some(p), Some(vp)) = (v.surface, v.viewpoint(w)) else {
-            return px;
+            return (px, v);
         };
         px.sun_tau = self.side.optical_depth(p);
         let sun32 = sun.map(|x| x as f32);
-        match self.opts.method {
-            Method::Collector => self.collector(&mut px, alpha, &vp, sun32, stats),
-            Method::Single | Method::Octaves => {
-                if self.opts.method == Method::Octaves {
-                    px.sun[1] = self.octaves(cos, &v.integrals);
-                }
-            }
-            Method::PathTracer => unreachable!("validated"),
+        match (self.opts.method, stats) {
+            (Method::Collector, Some(stats)) => self.collector(&mut px, alpha, &vp, sun32, stats),
+            (Method::Octaves, _) => px.sun[1] = self.octaves(cos, &v.integrals),
+            _ => {}
         }
-        px
+        (px, v)
     }
 
     /// Σ_{1 ≤ i < N} bⁱ ϖ p_HG(θ; cⁱ g) I_{aⁱ} (per unit E_sun; octave 0 is order 1).
