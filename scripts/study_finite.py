@@ -35,6 +35,14 @@ GROUPS = ["order 2", "orders 3-4", "orders 5-6", "orders 7-8", "orders 9-12", "o
 FIRST = [2, 3, 5, 7, 9, 13, 19, 31]
 
 
+def octaves_args(path):
+    """--octaves N A B C from the frozen fit (fit-configs/octaves-fitted.json: fitted on
+    cloud_side alone by scripts/fit_fast.py)."""
+    with open(path) as f:
+        fit = json.load(f)
+    return ["--octaves", str(fit["n"]), str(fit["a"]), str(fit["b"]), str(fit["c"])]
+
+
 def run(args):
     r = subprocess.run(args, capture_output=True, text=True)
     if r.returncode != 0:
@@ -149,6 +157,8 @@ def main():
     ap.add_argument("--out", required=True)
     ap.add_argument("--bin", default="target/release/nephele")
     ap.add_argument("--scenes", nargs="*", default=SEEN + HELD_OUT + ABSORBING)
+    ap.add_argument("--octaves", default="fit-configs/octaves-fitted.json",
+                    help="the octaves' frozen fit (scripts/fit_fast.py on cloud_side)")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     rows = []
@@ -160,7 +170,7 @@ def main():
         if scene in ABSORBING:
             variants = {"leakage": []}
         else:
-            variants["octaves (fitted)"] = ["--octaves", "4", "0.239", "0.760", "0.599"]
+            variants["octaves (fitted)"] = octaves_args(a.octaves)
         report = render_and_compare(a.bin, scene, a.refs, a.out, variants)
         for name, cand in zip(variants, report["candidates"]):
             rows.append(row(scene, name, report, cand))

@@ -57,9 +57,9 @@ use sky::SkyTable;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 use sun_side::sun_side;
-use view_march::ViewRay;
 pub use sun_side::SunSide;
 use table_check::{check_tables, mean_cosine};
+use view_march::ViewRay;
 
 /// How a frame is rendered.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
