@@ -383,13 +383,21 @@ fn render_orbit(scene: &Scene, args: &RenderArgs, n: usize, out: &Path) -> Resul
         Ok(serde_json::to_writer_pretty(w, &doc)?)
     })?;
     let (w, h) = (scene.camera.width, scene.camera.height);
+    let others = if reused.is_empty() {
+        String::new()
+    } else {
+        format!(
+            ", the others {} each ({:.1} frames/s with the maps reused)",
+            super::seconds(mean_reused),
+            1.0 / mean_reused.max(1e-9)
+        )
+    };
     println!(
-        "{n} views of {w}×{h} pixels, {}: light maps {} once, the first frame {}, the others {} each ({:.1} frames/s with the maps reused); wrote {}/view_000 … view_{:03}, views.json",
+        "{n} views of {w}×{h} pixels, {}: light maps {} once, the first frame {}{others}; wrote \
+         {}/view_000 … view_{:03}, views.json",
         method_name(args.method),
         super::seconds(maps + sky),
         super::seconds(views[0].1),
-        super::seconds(mean_reused),
-        1.0 / mean_reused.max(1e-9),
         out.display(),
         n - 1
     );
