@@ -142,7 +142,7 @@ fn feature_major(per_group: &[&[f64]], p: usize, q: usize) -> Result<Vec<f32>> {
 
 /// The tables `bytes` (any version the runtime loads) rewritten in the layout of `version`
 /// (1: β group-major [G, P, Q]; 2, the current: feature-major [P, G, Q]); every other array
-/// as it is. `nephele transport --upgrade` writes version 2 from older files.
+/// as it is (`cargo run --release --example ntt_relayout -- OLD.ntt NEW.ntt`).
 pub fn relayout(bytes: &[u8], version: u32) -> Result<Vec<u8>> {
     ensure!(
         (1..=VERSION).contains(&version),
