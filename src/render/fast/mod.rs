@@ -426,21 +426,21 @@ impl Frame<'_> {
         let once = self.opts.method == Method::Collector && !self.opts.search_every_ray && n > 1;
         let mut px = Pixel::default();
         let inv = 1.0 / (n * n) as f64;
-        let mut densest: Option<(f64, Viewpoint, Vec3)> = None;
+        let mut densest: Option<(f64, Viewpoint)> = None;
         for k in 0..n * n {
             let (u, v) = ((k % n) as f64 + 0.5, (k / n) as f64 + 0.5);
             let dir = cam.direction(i, j, u / n as f64, v / n as f64);
             let (one, ray) = self.ray(cam.position, dir, (!once).then_some(&mut *stats));
             px.add(&one, inv);
             let alpha = 1.0 - ray.transmittance;
-            if let (Some(p), Some(vp)) = (ray.surface, ray.viewpoint(dir)) {
-                if densest.as_ref().is_none_or(|d| alpha > d.0) {
-                    densest = Some((alpha, vp, p));
+            match ray.viewpoint(dir) {
+                Some(vp) if once && densest.as_ref().is_none_or(|d| alpha > d.0) => {
+                    densest = Some((alpha, vp))
                 }
+                _ => {}
             }
         }
-        if let (true, Some((_, vp, p))) = (once, densest) {
-            px.sun_tau = self.side.optical_depth(p);
+        if let Some((_, vp)) = densest {
             let sun32 = self.scene.sun.direction.map(|x| x as f32);
             let alpha = 1.0 - px.transmittance;
             self.collector(&mut px, alpha, &vp, sun32, stats);
