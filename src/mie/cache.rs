@@ -15,6 +15,7 @@
 use super::polydisperse::MieJob;
 use crate::io::atomic::write_atomic;
 use anyhow::{ensure, Result};
+use nephele_runtime::container::crc32;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -65,7 +66,8 @@ pub fn first_table(
     let Some(dir) = dir else {
         return compute();
     };
-    let path = dir.join(format!("mie-{:016x}.json", fnv1a(key.as_bytes())));
+    // A file name from the key (the key itself is compared on reading).
+    let path = dir.join(format!("mie-{:08x}.json", crc32(key.as_bytes())));
     if let Some(hit) = read(&path, &key) {
         return Ok(hit);
     }
@@ -101,13 +103,6 @@ fn store(path: &Path, e: &Entry) -> Result<()> {
     write_atomic(path, |w| Ok(serde_json::to_writer(w, e)?))?;
     ensure!(read(path, &e.key).is_some(), "the entry does not read back");
     Ok(())
-}
-
-/// FNV-1a, 64 bits: a file name for a key (the key itself is compared on reading).
-fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
-        (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
-    })
 }
 
 #[cfg(test)]
