@@ -1,6 +1,6 @@
 //! Phase-model benchmarks (criterion): eval and sample of every runtime model, f32 and f64,
 //! static dispatch, 1024 calls per iteration (divide the reported time by 1024 for ns per call).
-//! The side-by-side comparison with ../shared/bench/phase_ref.c is scripts/bench_phase.sh.
+//! The side-by-side comparison with benches/baselines/phase_ref.c is scripts/bench_phase.sh.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use nephele_runtime::phase::{

@@ -1,5 +1,5 @@
 //! ns per evaluation and per sample of the runtime's phase models, f32 and f64, in the same
-//! loop shape as ../shared/bench/phase_ref.c (xorshift numbers, an accumulated sum), so that
+//! loop shape as benches/baselines/phase_ref.c (xorshift numbers, an accumulated sum), so that
 //! scripts/bench_phase.sh can print both side by side.
 //!
 //!     cargo run --release --example bench_phase [-- N]

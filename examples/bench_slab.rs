@@ -1,6 +1,6 @@
 //! Scattering events per second on one core of the slab walk with full tallies (default grid:
 //! 16 planes × 16 μ_V × 12 ψ_V × 9 order groups, collector moments), on the problem of
-//! ../shared/bench/slab_ref.c (τ = 4, HG g = 0.9, normal incidence), so that
+//! benches/baselines/slab_ref.c (τ = 4, HG g = 0.9, normal incidence), so that
 //! scripts/bench_slab.sh can print both side by side.
 //!
 //!     cargo run --release --example bench_slab [-- PHOTONS [MU_L]]

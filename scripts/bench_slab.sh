@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Slab walk speed: nephele's walk with full tallies (examples/bench_slab.rs) next to the plain
-# scalar C walk of ../shared/bench/slab_ref.c (cc -O3 -march=native), same problem (τ = 4,
+# scalar C walk of benches/baselines/slab_ref.c (cc -O3 -march=native), same problem (τ = 4,
 # HG g = 0.9, normal incidence), one core each, in one run.
 # Usage: scripts/bench_slab.sh [PHOTONS]
 set -euo pipefail
@@ -8,9 +8,9 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 n=${1:-2000000}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-cc -O3 -march=native -o "$tmp/slab_ref" ../shared/bench/slab_ref.c -lm
+cc -O3 -march=native -o "$tmp/slab_ref" benches/baselines/slab_ref.c -lm
 cargo build --release --quiet --example bench_slab
-echo "== ../shared/bench/slab_ref.c (analog walk, totals and 10 μ bins)"
+echo "== benches/baselines/slab_ref.c (analog walk, totals and 10 μ bins)"
 "$tmp/slab_ref" 4 0.9 "$n" | head -2
 echo
 echo "== nephele slab walk (16 planes × 16 μ_V × 12 ψ_V × 9 groups, collector moments)"

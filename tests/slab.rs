@@ -23,7 +23,7 @@ fn rule(photons: u64) -> StopRule {
 
 #[test]
 fn disort_problem_3a_fluxes_and_radiances() {
-    // ../shared/reference/disort-benchmarks.json, problem 3a: HG g = 0.75, albedo 1, τ = 1,
+    // tests/data/disort-benchmarks.json, problem 3a: HG g = 0.75, albedo 1, τ = 1,
     // μ₀ = 1, fbeam = π, so T = uu/π and a flux F/π is per unit incident flux.
     let hg = HenyeyGreenstein::new(0.75);
     let mu_edges = vec![

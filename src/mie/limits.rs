@@ -10,9 +10,9 @@ use anyhow::{bail, Result};
 use std::f64::consts::PI;
 
 /// Smallest size parameter x = π d n_medium / λ the Mie series is verified at (the Rayleigh
-/// limit test; ../shared/spec/10-mie.md).
+/// limit test; docs/mie.md).
 pub const X_MIN: f64 = 1e-3;
-/// Largest verified size parameter (the stability test at 2·10⁴; ../shared/spec/10-mie.md).
+/// Largest verified size parameter (the stability test at 2·10⁴; docs/mie.md).
 pub const X_MAX: f64 = 2e4;
 /// Plausible vacuum wavelengths, nm: far UV to far infrared. Outside, the number was almost
 /// certainly meant in other units.

@@ -5,10 +5,10 @@ pub mod cli;
 
 use std::path::PathBuf;
 
-/// `../shared/reference/<name>` read as JSON.
+/// `tests/data/<name>` (published reference values, sources in tests/data/README.md) read as JSON.
 pub fn reference(name: &str) -> serde_json::Value {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/reference")
+        .join("tests/data")
         .join(name);
     let text = std::fs::read_to_string(&path)
         .unwrap_or_else(|e| panic!("reference file {}: {e}", path.display()));
