@@ -41,13 +41,14 @@ pub mod fitting {
         CollectorForm, Statistic, MAX_COLLECTOR_HARMONICS, MAX_COLLECTOR_LEGENDRE,
     };
     pub use crate::transport::log_additive::{
-        depth_polynomial, legendre, ln_boundary, ln_t_position, theta_hats, Cell, FittedDepths,
-        Lerp, LogAdditive, LN_F1_FLOOR, MAX_CROSS, MAX_HARMONICS, MAX_LEGENDRE, MAX_THETA_NODES,
+        depth_fraction, depth_polynomial, legendre, ln_boundary, ln_t_position, stretched_u,
+        theta_hats, Cell, FittedDepths, Lerp, LogAdditive, LN_F1_FLOOR, MAX_CROSS, MAX_HARMONICS,
+        MAX_LEGENDRE, MAX_THETA_NODES, STRETCH_EXPONENT, STRETCH_SCALE,
     };
     pub use crate::transport::single::single_scattering_bin;
     pub use crate::transport::tables::{
-        names, pack_u_range, stretched_u, unpack_u_range, CEILING_FACTOR, DEFAULT_GROUP_FIRST,
-        MAX_GROUPS, MAX_NODES, MAX_Q, STRETCH_EXPONENT, STRETCH_SCALE, U_STEPS,
+        names, pack_u_range, unpack_u_range, CEILING_FACTOR, DEFAULT_GROUP_FIRST, MAX_GROUPS,
+        MAX_NODES, MAX_Q, U_STEPS,
     };
 }
 pub use real::Real;

@@ -331,7 +331,7 @@ impl LogAdditive {
         let offset = ln_boundary(&c.at)?;
         let mut d = [F::of(0.0); MAX_LEGENDRE];
         let ok = self.for_each_feature_in_depth(c, nm, nl, |col, v, j| d[j] = d[j] + v * coef(col));
-        let depth = depth_polynomial(&d, self.depth_terms(), c.u, range);
+        let depth = depth_polynomial(&d, self.depth_terms(), c.u, c.at.thickness, range);
         ok.then(|| offset + depth + range.share.ln())
     }
 }
@@ -401,21 +401,49 @@ impl<F: Real> FittedDepths<F> {
     }
 }
 
+/// The stretch of nephele slab's default depth planes: d/t = (e^{βu} − 1)/(e^β − 1) at
+/// stretched depth u ∈ [0, 1], β = `STRETCH_SCALE` · t^`STRETCH_EXPONENT` (t in mfp), which
+/// crowds the planes toward the lit face of thick slabs ([`stretched_u`] is its inverse,
+/// [`depth_fraction`] the map itself). x = 2u − 1 is the form's depth variable.
+pub const STRETCH_SCALE: f64 = 0.3;
+/// See [`STRETCH_SCALE`].
+pub const STRETCH_EXPONENT: f64 = 0.65;
+
+/// The stretched depth u ∈ [0, 1] of depth d in a slab of thickness t (both in mfp): the
+/// inverse of [`depth_fraction`].
+pub fn stretched_u(d: f32, t: f32) -> f32 {
+    let beta = STRETCH_SCALE as f32 * Real::exp(STRETCH_EXPONENT as f32 * Real::ln(t));
+    if beta < 1e-6 {
+        return d / t;
+    }
+    (Real::ln(1.0 + (Real::exp(beta) - 1.0) * d / t) / beta).clamp(0.0, 1.0)
+}
+
+/// d/t at stretched depth u in a slab of thickness t (mfp): (e^{βu} − 1)/(e^β − 1).
+pub fn depth_fraction<F: Real>(u: F, t: F) -> F {
+    let beta = F::of(STRETCH_SCALE) * (F::of(STRETCH_EXPONENT) * t.ln()).exp();
+    if beta < F::of(1e-6) {
+        return u;
+    }
+    exp_m1(beta * u) / exp_m1(beta)
+}
+
 /// The stretch of depth (in u) over which [`depth_polynomial`] measures the slope at the end of
 /// the fitted depths: one plane spacing of the default grid (16 planes).
 pub const EDGE_STEP: f64 = 1.0 / 15.0;
 
-/// Σ_{j<n} d_j P_j(2u − 1), the depth part of ln T, read as the tables' information allows:
-/// inside the fitted depths `range` the polynomial itself; beyond them its value at the range's
-/// end continued with its slope over the last [`EDGE_STEP`] where ln T falls outward, and held
-/// where it rises. So T decays where the light fades away from the fitted cells (the far face
-/// of a thick slab for low orders) and never exceeds its value at the fitted edge, while B and
-/// F₁, which follow the point itself, take T to 0 where the light goes (a face behind the
-/// viewpoint) — a polynomial's swing beyond its data never does.
+/// Σ_{j<n} d_j P_j(2u − 1), the depth part of ln T (ln T/B less the share) at stretched depth
+/// `u` of a slab `thickness` mfp thick, read as the tables' information allows. Inside the
+/// fitted depths `range`: the polynomial itself. Beyond them, where ln T falls outward over the
+/// last [`EDGE_STEP`] inside, T/B is continued from the range's end toward the face ahead, by
+/// [`continued_toward_face`]; where it rises, it is held. So T never exceeds its value at the
+/// fitted edge, while B and F₁, which follow the point itself, take T to 0 where the light
+/// goes (a face behind the viewpoint) — a polynomial's swing beyond its data never does.
 pub fn depth_polynomial<F: Real>(
     d: &[F; MAX_LEGENDRE],
     n: usize,
     u: F,
+    thickness: F,
     range: &FittedDepths<F>,
 ) -> F {
     let at = |u: F| {
@@ -432,20 +460,69 @@ pub fn depth_polynomial<F: Real>(
     }
     let step = F::of(EDGE_STEP);
     // One step back inside (the range itself if narrower), and the outward rate of change.
-    let inside = range.held(if u > range.hi {
-        range.hi - step
-    } else {
-        range.lo + step
-    });
-    let run = (edge - inside).abs();
-    if !(run > F::of(0.0)) {
+    let far = u > range.hi;
+    let inside = range.held(if far { range.hi - step } else { range.lo + step });
+    let inner = at(inside);
+    if !((edge - inside).abs() > F::of(0.0)) || !(inner > value) {
         return value;
     }
-    let slope = (value - at(inside)) / run;
-    if slope < F::of(0.0) {
-        value + slope * (u - edge).abs()
+    // Distances (mfp) to the face ahead: the far face d = t beyond `hi`, the lit face d = 0
+    // below `lo`.
+    let to_face = |u: F| {
+        let f = depth_fraction(u, thickness);
+        thickness * if far { F::of(1.0) - f } else { f }
+    };
+    value
+        + continued_toward_face(
+            inner - value,
+            (to_face(inside), to_face(edge), to_face(u)),
+        )
+}
+
+/// ln of T/B at distance `h` from a face relative to its value at the fitted edge (distance
+/// `h_edge`), given `rise` = ln(T/B) one step further inside (distance `h_inside`) less the
+/// edge's, > 0. Two shapes agree at both points:
+/// - *exponential* in depth (ln T linear in u, as before 2026-12-03): right where a group's
+///   light fades away from its fitted cells (low orders deep in a thick slab);
+/// - *linear* in depth: the diffusion regime near a face, where the source function falls
+///   linearly to the extrapolated boundary a fraction of a transport length beyond the face,
+///   and T/B with it. The exponential overshoots there: 2–9× above DISORT within 1–2 mfp of the
+///   far face of a 32–64 mfp slab looking at it (docs/compress.md, "Near a face").
+///
+/// The line is taken, floored by s × the exponential with s = the line's zero crossing as a
+/// share of the edge's distance, clamped to [0, 1]: a line that stays positive up to the face
+/// (s = 0, diffusion) is read as is; one that would reach 0 at the edge (s = 1, fast decay)
+/// gives the exponential; in between the two blend continuously, so T never jumps between
+/// neighbouring points, stays > 0 away from the face, and never exceeds the exponential.
+fn continued_toward_face<F: Real>(rise: F, (h_inside, h_edge, h): (F, F, F)) -> F {
+    let zero = F::of(0.0);
+    let one = F::of(1.0);
+    let run = h_inside - h_edge;
+    if !(run > zero) || !(h_edge > zero) {
+        return zero; // no room: held
+    }
+    let exponential = -rise * (h_edge - h) / run;
+    let up = exp_m1(rise); // T_inside/T_edge − 1 > 0
+    let line = one + up * (h - h_edge) / run;
+    let crossing = h_edge - run / up;
+    let s = clamp01(crossing / h_edge);
+    let floor = s * exponential.exp();
+    let rel = if line > floor { line } else { floor };
+    if rel > zero {
+        rel.ln()
     } else {
-        value
+        exponential
+    }
+}
+
+/// x clamped to [0, 1] (NaN to 0).
+fn clamp01<F: Real>(x: F) -> F {
+    if x > F::of(1.0) {
+        F::of(1.0)
+    } else if x > F::of(0.0) {
+        x
+    } else {
+        F::of(0.0)
     }
 }
 
@@ -573,9 +650,9 @@ mod tests {
         assert_eq!(Lerp::between(&[0.0, 1.0], -5.0), Lerp::at(0));
     }
 
-    /// Inside the fitted depths the polynomial itself; beyond them it falls on with its edge
-    /// slope where it falls outward and is held where it would rise; nodes without cells do
-    /// not count and none at all is None.
+    /// Inside the fitted depths the polynomial itself; beyond them it falls on where it falls
+    /// outward and is held where it would rise; nodes without cells do not count and none at
+    /// all is None.
     #[test]
     fn depth_polynomial_reads_within_the_fitted_depths() {
         // ln T part = 2 P_1(x) = 2x: rising with depth.
@@ -583,15 +660,23 @@ mod tests {
         d[1] = 2.0;
         let range = FittedDepths::of([(1.0, 0.25, 0.75)]).unwrap();
         let x = |u: f64| 2.0 * u - 1.0;
-        assert!((depth_polynomial(&d, 2, 0.5, &range) - 2.0 * x(0.5)).abs() < 1e-15);
+        let t = 16.0;
+        assert!((depth_polynomial(&d, 2, 0.5, t, &range) - 2.0 * x(0.5)).abs() < 1e-15);
         // Deeper than the range: rising outward, held at the edge.
-        assert!((depth_polynomial(&d, 2, 0.9, &range) - 2.0 * x(0.75)).abs() < 1e-15);
-        // Toward the lit face: falling outward with slope 4 per unit u.
-        let v = depth_polynomial(&d, 2, 0.05, &range);
-        assert!((v - (2.0 * x(0.25) - 4.0 * 0.2)).abs() < 1e-12, "{v}");
+        assert!((depth_polynomial(&d, 2, 0.9, t, &range) - 2.0 * x(0.75)).abs() < 1e-15);
+        // Toward the lit face: falling outward, below the edge, never above the exponential
+        // continuation with the edge's slope (4 per unit u there, at most 4 · 0.2 down at
+        // u = 0.05), finite at the face itself.
+        let edge = 2.0 * x(0.25);
+        let v = depth_polynomial(&d, 2, 0.05, t, &range);
+        assert!(v < edge && v.is_finite(), "{v}");
+        let h = |u: f64| t * depth_fraction(u, t);
+        let exponential = edge - 4.0 / 15.0 * (h(0.25) - h(0.05)) / (h(0.25 + 1.0 / 15.0) - h(0.25));
+        assert!(v <= exponential + 1e-12, "{v} vs {exponential}");
+        assert!(depth_polynomial(&d, 2, 0.0, t, &range).is_finite());
         // A narrow range (one depth) holds.
         let one = FittedDepths::of([(1.0, 0.5, 0.5)]).unwrap();
-        assert!((depth_polynomial(&d, 2, 0.9, &one) - 0.0).abs() < 1e-15);
+        assert!((depth_polynomial(&d, 2, 0.9, t, &one) - 0.0).abs() < 1e-15);
         assert_eq!(FittedDepths::of([(1.0, 0.6, 0.2)]), None);
         assert_eq!(FittedDepths::<f64>::of([]), None);
         let r = FittedDepths::of([(0.25, 0.0, 1.0), (0.75, 0.4, 0.8), (0.5, 0.9, 0.1)]).unwrap();
@@ -601,6 +686,44 @@ mod tests {
         );
         assert!((r.share - 2.0 / 3.0).abs() < 1e-15);
         assert_eq!(r.held(2.0), r.hi);
+    }
+
+    /// The continuation toward a face is exact on the diffusion regime's profile, T/B linear in
+    /// the distance h to the face with the extrapolated boundary z₀ beyond it, and follows a
+    /// fast exponential fall within 5 %; it never exceeds the exponential through the same two
+    /// points and T is continuous where the blend changes.
+    #[test]
+    fn continuation_toward_a_face_follows_diffusion_and_fast_decay() {
+        let (h_inside, h_edge) = (29.0, 17.0);
+        for z0 in [0.5, 5.0, 20.0] {
+            let rise = ((h_inside + z0) / (h_edge + z0) as f64).ln();
+            for h in [0.0, 0.5, 1.3, 8.0, 16.0] {
+                let got = continued_toward_face(rise, (h_inside, h_edge, h));
+                let want = ((h + z0) / (h_edge + z0)).ln();
+                assert!((got - want).abs() < 1e-12, "z0 {z0}, h {h}: {got} vs {want}");
+            }
+        }
+        for k in [0.3, 1.0] {
+            // T/B ∝ e^{k h}: falls by e^{k · 12} over one step.
+            let rise = k * (h_inside - h_edge);
+            for h in [1.0, 5.0, 12.0] {
+                let got = continued_toward_face(rise, (h_inside, h_edge, h));
+                let want = -k * (h_edge - h);
+                assert!(got <= want + 1e-12 && got > want + (0.95f64).ln(), "k {k}, h {h}");
+            }
+        }
+        let mut last = None;
+        for i in 0..=4000 {
+            let rise = 0.001 * i as f64;
+            let v = continued_toward_face(rise, (h_inside, h_edge, 4.0));
+            assert!(v <= 0.0 && v >= -rise * (h_edge - 4.0) / (h_inside - h_edge) - 40.0);
+            if let Some(prev) = last {
+                // Continuous in T (relative to the edge's): steps of 0.001 in the rise.
+                let (a, b) = (f64::exp(prev), v.exp());
+                assert!((a - b).abs() < 0.01, "jump at rise {rise}: {a} → {b}");
+            }
+            last = Some(v);
+        }
     }
 
     #[test]

@@ -29,7 +29,8 @@ use super::collector::{
 };
 use super::geometry::SlabPoint;
 use super::log_additive::{
-    depth_polynomial, legendre, ln_boundary, ln_t_position, Cell, FittedDepths, Lerp, LogAdditive,
+    depth_polynomial, legendre, ln_boundary, ln_t_position, stretched_u, Cell, FittedDepths, Lerp,
+    LogAdditive,
     MAX_CROSS, MAX_HARMONICS, MAX_LEGENDRE,
 };
 use super::single::{single_scattering, PhaseValue};
@@ -80,12 +81,6 @@ pub const MAX_GROUPS: usize = 64;
 /// 7–8, 9–12, 13–18, 19–30, 31–∞ (a `.ntt` holds those of orders ≥ 2:
 /// [`TransportTables::group_first_order`]).
 pub const DEFAULT_GROUP_FIRST: [u32; 9] = [1, 2, 3, 5, 7, 9, 13, 19, 31];
-/// The stretch of nephele slab's default depth planes: d/t = (e^{βu} − 1)/(e^β − 1) at
-/// stretched depth u ∈ [0, 1], β = `STRETCH_SCALE` · t^`STRETCH_EXPONENT` (t in mfp), which
-/// crowds the planes toward the lit face of thick slabs ([`stretched_u`] is its inverse).
-pub const STRETCH_SCALE: f64 = 0.3;
-/// See [`STRETCH_SCALE`].
-pub const STRETCH_EXPONENT: f64 = 0.65;
 /// Most nodes of each grid (sun cosines, view cosines, thicknesses).
 pub const MAX_NODES: usize = 1024;
 /// Room for the features of one point: J ≤ 16 Legendre terms on two μ_V and two μ_L nodes,
@@ -512,7 +507,7 @@ impl<'a> TransportTables<'a> {
         let lq = legendre_in(&self.ln_t_range, g, pt.ln_t, self.q);
         let n = self.form.depth_terms();
         let d = sums.depth_sums(g, &lq);
-        let t = range.share * Real::exp(pt.offset + depth_polynomial(&d, n, pt.cell.u, range));
+        let t = range.share * Real::exp(pt.offset + depth_polynomial(&d, n, pt.cell.u, pt.cell.at.thickness, range));
         match self.ceiling(g, pt) {
             Some(top) if t > top => top,
             _ => t,
@@ -900,17 +895,6 @@ fn bracket(a: &ArrayView, x: f32) -> usize {
         }
     }
     lo
-}
-
-/// The stretched depth u ∈ [0, 1] of depth d in a slab of thickness t: the inverse of the slab
-/// grid's planes d/t = (e^{βu} − 1)/(e^β − 1), β = 0.3 t^0.65 (nephele slab's default grid,
-/// [`STRETCH_SCALE`]).
-pub fn stretched_u(d: f32, t: f32) -> f32 {
-    let beta = STRETCH_SCALE as f32 * Real::exp(STRETCH_EXPONENT as f32 * Real::ln(t));
-    if beta < 1e-6 {
-        return d / t;
-    }
-    (Real::ln(1.0 + (Real::exp(beta) - 1.0) * d / t) / beta).clamp(0.0, 1.0)
 }
 
 /// The stored phase function, for order 1.
