@@ -434,6 +434,7 @@ impl<'a> TransportTables<'a> {
             ceiling,
             n_ceiling: nceil,
             per_group: (nt * nl * nm, nt * nl),
+            p_u: legendre(2.0 * cell.u - 1.0, MAX_LEGENDRE),
         })
     }
 
@@ -507,7 +508,17 @@ impl<'a> TransportTables<'a> {
         let lq = legendre_in(&self.ln_t_range, g, pt.ln_t, self.q);
         let n = self.form.depth_terms();
         let d = sums.depth_sums(g, &lq);
-        let t = range.share * Real::exp(pt.offset + depth_polynomial(&d, n, pt.cell.u, pt.cell.at.thickness, range));
+        let u = pt.cell.u;
+        let depth = if range.held(u) == u {
+            // depth_polynomial's own sum, on the point's P_j computed once.
+            d.iter()
+                .take(n)
+                .zip(&pt.p_u)
+                .fold(0.0, |s, (a, b)| s + *a * *b)
+        } else {
+            depth_polynomial(&d, n, u, pt.cell.at.thickness, range)
+        };
+        let t = range.share * Real::exp(pt.offset + depth);
         match self.ceiling(g, pt) {
             Some(top) if t > top => top,
             _ => t,
@@ -539,7 +550,11 @@ impl<'a> TransportTables<'a> {
         let lq = legendre_in(&self.ln_t_range, g, pt.ln_t, cp.q);
         // c and σ are held within the fitted depths.
         let u = range.held(pt.cell.u);
-        let p_x = legendre(2.0 * u - 1.0, cp.form.depth_terms());
+        let p_x = if u == pt.cell.u {
+            pt.p_u
+        } else {
+            legendre(2.0 * u - 1.0, cp.form.depth_terms())
+        };
         let dot = |part: usize| sums[part].dot(g, &lq, &p_x);
         let sigma = Real::exp(dot(0));
         let cz = dot(1) + dot(2) / sigma;
@@ -613,6 +628,9 @@ struct Point {
     n_ceiling: usize,
     /// Depth ranges and ceilings per group.
     per_group: (usize, usize),
+    /// P_j(2u − 1) at the point's own depth: every group's depth polynomial where the point
+    /// lies within the group's fitted depths (most points), computed once.
+    p_u: [f32; MAX_LEGENDRE],
 }
 
 /// Where group g's Q coefficients of parameter p start in a β array: version 1 files store β
@@ -730,8 +748,29 @@ impl<const N: usize> Sums<N> {
         }
     }
 
-    /// Adds every feature of `row` (packed keys, values).
+    /// Adds every feature of `row` (packed keys, values). With `std` on x86-64 the loop is also
+    /// compiled for AVX2 and that copy runs where the CPU has it: a feature's parameters for
+    /// all groups (8 × 5 for T) take half the vector adds. Each accumulator gets the same
+    /// products in the same order either way (no FMA), so the answers are bit-identical.
     fn add_row(&mut self, beta: &[u8], row: &[(u32, f32)]) {
+        #[cfg(all(feature = "std", target_arch = "x86_64"))]
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above.
+            return unsafe { self.add_row_avx2(beta, row) };
+        }
+        self.add_row_any(beta, row);
+    }
+
+    /// [`Self::add_row`] compiled for AVX2.
+    #[cfg(all(feature = "std", target_arch = "x86_64"))]
+    #[target_feature(enable = "avx2")]
+    fn add_row_avx2(&mut self, beta: &[u8], row: &[(u32, f32)]) {
+        self.add_row_any(beta, row);
+    }
+
+    /// [`Self::add_row`] for the target's baseline.
+    #[inline(always)]
+    fn add_row_any(&mut self, beta: &[u8], row: &[(u32, f32)]) {
         for &(key, v) in row {
             self.add(beta, (key & COL) as usize, v, (key >> DEGREE_SHIFT) as usize);
         }
