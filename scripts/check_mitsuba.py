@@ -93,6 +93,55 @@ def chi2_cosines(samples: np.ndarray, pdf, bins: int = 100) -> tuple[float, int,
     return float(stat), dof, float(chi2_dist.sf(stat, dof))
 
 
+def check_exports(mi, bin_path: Path, tmp: Path) -> bool:
+    """`nephele phase --export mitsuba`: Mitsuba loads phase_mitsuba.json as written, reads it as
+    nephele says it will (its pdf = the values linear in mu over the reported normalisation, to
+    Mitsuba's f32), and the error against the model that phase.json reports is the one Mitsuba's
+    pdf shows between the nodes (the model's p evaluated by `nephele phase` at those cosines)."""
+    rng = np.random.default_rng(3)
+    ok_all = True
+    print("  nephele phase --export mitsuba, loaded by Mitsuba:")
+    cases = [
+        ("tabulated 1 um Mie, 20001 nodes", ["--model", "tabulated", "--table", str(tmp / "tab.npz"),
+                                             "--export-nodes", "20001"]),
+        ("hg-draine 10 um (default nodes)", ["--model", "hg-draine", "--diameter", "10"]),
+    ]
+    for name, cli in cases:
+        out = tmp / "export"
+        subprocess.run([str(bin_path), "phase", *cli, "--export", "mitsuba", "--out", str(out)],
+                       check=True, capture_output=True)
+        report = json.loads((out / "phase.json").read_text())["mitsuba"]
+        spec = json.loads((out / "phase_mitsuba.json").read_text())
+        values = np.array([float(v) for v in spec["values"].split(",")])
+        grid = np.linspace(-1.0, 1.0, len(values))
+        phase = mi.load_dict(spec)
+        # Random cosines, the ends, and the midpoints around the forward peak.
+        h = grid[1] - grid[0]
+        mu = np.concatenate([rng.uniform(-1, 1, 2000), [-1.0, 1.0], 1 - h * (np.arange(40) + 0.5)])
+        mu = np.unique(mu)[::-1]  # angles increasing, as `--angles` takes them
+        got = mitsuba_pdf(mi, phase, mu)
+        want = np.interp(mu, grid, values) / report["normalisation"]
+        # Mitsuba builds wo and its cosine in f32 (an ulp is 6e-8 near 1, and the round trip
+        # through sin theta loses a few): where p changes fast between nodes (the peak), that
+        # moves its reading by |d ln p / d mu| x up to 4 ulps; beyond that, 1e-5.
+        cell = np.clip(((mu + 1) / h).astype(int), 0, len(values) - 2)
+        slope = np.abs(values[cell + 1] - values[cell]) / h / np.maximum(want * report["normalisation"], 1e-300)
+        as_read = float(np.max(np.abs(got / want - 1) / (1e-5 + 2.4e-7 * slope)))
+        # Against the model: nephele's own p at the midpoints near the peak and the random ones.
+        angles = tmp / "angles.txt"
+        np.savetxt(angles, np.degrees(np.arccos(np.clip(mu, -1, 1))), fmt="%.17g")
+        subprocess.run([str(bin_path), "phase", *cli, "--angles", str(angles), "--out", str(tmp / "model")],
+                       check=True, capture_output=True)
+        model = np.load(tmp / "model" / "phase.npz")["phase"]
+        off_model = float(np.max(np.abs(got / model - 1)))
+        ok = as_read <= 1.0 and off_model <= report["max_rel_error_between_nodes"] * 1.01 + 1e-5
+        ok_all &= ok
+        print(f"    {name:<34} as written: {as_read:.2f} of the f32 tolerance; off the model {off_model:.2e} (reported "
+              f"{report['max_rel_error_between_nodes']:.2e}, normalisation {report['normalisation']:.5f})"
+              f"  {'PASS' if ok else 'FAIL'}")
+    return ok_all
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--bin", type=Path, default=DEFAULT_BIN)
@@ -145,6 +194,7 @@ def main(argv=None) -> int:
             failed |= not ok
             print(f"  {name:<38} {rel:12.2e} {stat:8.1f}/{dof:<5d} {p:10.3g}  {'PASS' if ok else 'FAIL'}{note}")
             rows.append(dict(case=name, pdf_max_rel=rel, chi2=stat, dof=dof, p=p, passed=ok))
+        failed |= not check_exports(mi, args.bin, tmp)
     print("check_mitsuba:", "FAIL" if failed else "PASS")
     return 1 if failed else 0
 

@@ -5,6 +5,7 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use nephele::io::{AtomicFiles, Npz};
 use nephele::mie::grid::angles_from_spec;
+use nephele::phase::mitsuba::Tabphase;
 use nephele::phase::{build, Model, ModelParams, Preset};
 use nephele_runtime::phase::TabulatedTable;
 use nephele_runtime::PhaseFunction;
@@ -83,6 +84,23 @@ pub struct PhaseArgs {
     /// Also write phase.csv (theta_deg, mu, phase) for spreadsheets.
     #[arg(long)]
     csv: bool,
+    /// Also write the phase function for another renderer: `mitsuba` writes Mitsuba 3's
+    /// tabphase (phase_mitsuba.xml for scene files, phase_mitsuba.json for
+    /// `mitsuba.load_dict`) on --export-nodes cosines, with what the table loses in
+    /// phase.json.
+    #[arg(long, value_enum)]
+    export: Option<Export>,
+    /// Cosines of the export's table, evenly spaced from −1 to 1 (Mitsuba interpolates linearly
+    /// in μ: a narrow forward peak needs many).
+    #[arg(long, default_value_t = nephele::phase::mitsuba::DEFAULT_NODES)]
+    export_nodes: usize,
+}
+
+/// Renderers `nephele phase --export` writes for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Export {
+    /// Mitsuba 3's `tabphase` plugin.
+    Mitsuba,
 }
 
 impl PhaseArgs {
@@ -125,6 +143,10 @@ pub fn run(args: PhaseArgs) -> Result<()> {
         args.seed.is_none() || args.samples > 0,
         "--seed applies to --samples (the drawn cosines), and none were asked for"
     );
+    anyhow::ensure!(
+        args.export_nodes >= 2,
+        "--export-nodes must be at least 2 (the table's ends μ = −1 and +1)"
+    );
     let seed = args.seed.unwrap_or(1);
     let table;
     let (model, params): (Box<dyn PhaseFunction<f64> + '_>, serde_json::Value) =
@@ -166,7 +188,10 @@ pub fn run(args: PhaseArgs) -> Result<()> {
         .add("lut_phase", &[args.lut], &lut_phase)
         .add("icdf_mu", &[args.lut], &icdf)
         .add("samples_mu", &[samples.len()], &samples);
-    let sidecar = json!({
+    let export = args
+        .export
+        .map(|Export::Mitsuba| Tabphase::of(model.as_ref(), args.export_nodes));
+    let mut sidecar = json!({
         "tool": "nephele", "version": nephele::VERSION, "model": args.model, "params": params,
         "mean_cosine": model.mean_cosine(), "samples": args.samples, "seed": seed,
         "conventions": {
@@ -176,8 +201,26 @@ pub fn run(args: PhaseArgs) -> Result<()> {
             "samples_mu": "cosines drawn with xi from xoshiro256++ seeded with `seed`"
         }
     });
+    if let Some(tab) = &export {
+        sidecar["mitsuba"] = json!({
+            "files": ["phase_mitsuba.xml", "phase_mitsuba.json"],
+            "nodes": tab.values.len(),
+            "grid": "p at mu_i = -1 + 2i/(N-1), backward first, as tabphase takes it; Mitsuba interpolates linearly in mu and normalises",
+            "normalisation": tab.normalisation,
+            "mean_cosine_as_mitsuba_reads_it": tab.mean_cosine,
+            "max_rel_error_between_nodes": tab.max_rel_error,
+            "worst_mu": tab.worst_mu,
+        });
+    }
     std::fs::create_dir_all(&args.out)?;
     let mut set = AtomicFiles::new();
+    if let Some(tab) = &export {
+        set.write_bytes(&args.out.join("phase_mitsuba.xml"), tab.xml().as_bytes())?;
+        set.write_bytes(
+            &args.out.join("phase_mitsuba.json"),
+            &serde_json::to_vec_pretty(&tab.dict())?,
+        )?;
+    }
     set.write(&args.out.join("phase.npz"), |w| npz.write_to(w))?;
     set.write_bytes(
         &args.out.join("phase.json"),
@@ -201,6 +244,24 @@ pub fn run(args: PhaseArgs) -> Result<()> {
         args.model.name(),
         args.out.display()
     );
+    if let Some(tab) = &export {
+        println!(
+            "mitsuba tabphase ({} cosines): mean cosine as Mitsuba reads it {:.6}, normalisation \
+             {:.6}, at most {:.2e} off the model between nodes (at mu = {:.5})",
+            tab.values.len(),
+            tab.mean_cosine,
+            tab.normalisation,
+            tab.max_rel_error,
+            tab.worst_mu
+        );
+        if (tab.normalisation - 1.0).abs() > 0.01 {
+            eprintln!(
+                "warning: the table holds {:+.1} % of the light (its nodes miss part of the \
+                 forward peak): raise --export-nodes",
+                100.0 * (tab.normalisation - 1.0)
+            );
+        }
+    }
     Ok(())
 }
 

@@ -8,6 +8,7 @@
 
 mod function;
 pub mod lut;
+pub mod mitsuba;
 mod model;
 mod spec;
 
