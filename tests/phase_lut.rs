@@ -166,20 +166,14 @@ fn every_models_lut_runs_from_back_to_forward_and_samples_its_pdf() {
 #[test]
 fn mitsuba_export_writes_tabphase_backward_first() {
     let dir = std::env::temp_dir().join(format!("nephele-export-{}", std::process::id()));
-    let out = dir.to_str().unwrap();
-    succeeds(&[
-        "phase",
-        "--model",
-        "hg",
-        "--g",
-        "0.6",
-        "--export",
-        "mitsuba",
-        "--export-nodes",
-        "1001",
-        "--out",
-        out,
-    ]);
+    let export = |nodes: &'static str, out: &Path| -> Vec<String> {
+        let flags = "phase --model hg --g 0.6 --export mitsuba --export-nodes";
+        let mut args: Vec<String> = flags.split(' ').map(String::from).collect();
+        args.extend([nodes.into(), "--out".into(), out.display().to_string()]);
+        args
+    };
+    let args = export("1001", &dir);
+    succeeds(&args.iter().map(String::as_str).collect::<Vec<_>>());
     let dict: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.join("phase_mitsuba.json")).unwrap()).unwrap();
     assert_eq!(dict["type"], "tabphase");
@@ -207,20 +201,9 @@ fn mitsuba_export_writes_tabphase_backward_first() {
     assert!((report["normalisation"].as_f64().unwrap() - 1.0).abs() < 1e-4);
     assert!((report["mean_cosine_as_mitsuba_reads_it"].as_f64().unwrap() - 0.6).abs() < 1e-4);
     let empty = dir.join("refused");
+    let args = export("1", &empty);
     common::cli::refuses(
-        &[
-            "phase",
-            "--model",
-            "hg",
-            "--g",
-            "0.6",
-            "--export",
-            "mitsuba",
-            "--export-nodes",
-            "1",
-            "--out",
-            empty.to_str().unwrap(),
-        ],
+        &args.iter().map(String::as_str).collect::<Vec<_>>(),
         "--export-nodes",
         Some(&empty),
     );
