@@ -109,11 +109,14 @@ pub fn parse_error(e: clap::Error) -> ExitCode {
         return ExitCode::from(e.exit_code() as u8);
     }
     let text = e.render().to_string();
-    let first = text
+    // The first paragraph, on one line: clap lists missing arguments on the lines below it.
+    let paragraph: Vec<&str> = text
         .lines()
-        .next()
-        .unwrap_or("")
-        .trim_start_matches("error: ");
+        .take_while(|l| !l.trim().is_empty())
+        .map(str::trim)
+        .collect();
+    let first = paragraph.join(" ");
+    let first = first.trim_start_matches("error: ");
     let tip = text
         .lines()
         .find_map(|l| l.trim().strip_prefix("tip: "))

@@ -3,6 +3,7 @@
 
 pub mod atomic;
 pub mod container;
+pub mod npy;
 pub mod npz;
 pub mod plot;
 

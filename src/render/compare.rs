@@ -17,6 +17,7 @@
 
 use super::image::GROUP_FIRST;
 use super::output::{exposure as auto_exposure, png_bytes, tone_map_with, CLOUD_OPACITY};
+use crate::io::npy::read_npy;
 use crate::io::plot::{image_grid, Tile};
 use crate::io::AtomicFiles;
 use anyhow::{bail, ensure, Context, Result};
@@ -44,20 +45,6 @@ pub struct RenderDir {
     pub halves: Option<Vec<f32>>,
     /// [H, W], if written.
     pub regions: Option<Vec<u8>>,
-}
-
-fn read_npy<T: npyz::Deserialize>(path: &Path, shape: &[u64]) -> Result<Vec<T>> {
-    let what = || format!("'{}'", path.display());
-    let file = std::fs::File::open(path).with_context(|| format!("cannot read {}", what()))?;
-    let npy = npyz::NpyFile::new(std::io::BufReader::new(file)).with_context(what)?;
-    ensure!(
-        npy.shape() == shape,
-        "{}: shape {:?}, expected {:?}",
-        what(),
-        npy.shape(),
-        shape
-    );
-    npy.into_vec::<T>().with_context(what)
 }
 
 /// A render directory's render.json.

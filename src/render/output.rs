@@ -4,26 +4,11 @@
 
 use super::image::{Rendered, GROUP_FIRST};
 use super::scene::Scene;
+use crate::io::npy::npy_bytes;
 use crate::io::AtomicFiles;
 use anyhow::{Context, Result};
-use npyz::WriterBuilder;
 use std::io::Write;
 use std::path::Path;
-
-/// A .npy of `shape` (float32, or uint8 for the regions).
-fn npy_bytes<T: npyz::AutoSerialize + Copy>(shape: &[u64], data: &[T]) -> Result<Vec<u8>> {
-    let mut bytes = Vec::new();
-    {
-        let mut w = npyz::WriteOptions::<T>::new()
-            .default_dtype()
-            .shape(shape)
-            .writer(&mut bytes)
-            .begin_nd()?;
-        w.extend(data.iter().copied())?;
-        w.finish()?;
-    }
-    Ok(bytes)
-}
 
 /// Pixels more opaque than this are the cloud's, for the automatic exposure (the same
 /// threshold as `nephele compare`'s "opaque" pixels).

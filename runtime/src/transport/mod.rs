@@ -20,11 +20,13 @@ macro_rules! form_module {
 }
 
 form_module!(collector, log_additive, single, tables);
+pub mod batch;
 mod finite;
 mod geometry;
 pub mod leakage;
 mod search;
 
+pub use batch::{evaluate_points, BatchError, Quantities, POINT_COLUMNS};
 pub use finite::{absorbed, finite_cloud, mean_cosine, FiniteCloud, Kept};
 pub use geometry::SlabPoint;
 pub use search::{
