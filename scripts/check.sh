@@ -82,6 +82,15 @@ if [[ ! -x "$BIN" ]]; then
 fi
 
 failed=()
+# The Python module (python/, PyO3): built into the venv by maturin, then its tests, which
+# compare it with the CLI above and with closed forms.
+echo
+echo "== python module: maturin develop --release, python/tests/test_nephele.py"
+if ! (VIRTUAL_ENV="$VENV" PATH="$VENV/bin:$PATH" "$VENV/bin/maturin" develop --release --locked \
+        -m "$ROOT/python/Cargo.toml" --quiet \
+      && "$PY" "$ROOT/python/tests/test_nephele.py" --bin "$BIN"); then
+    failed+=("python module")
+fi
 for check in "${CHECKS[@]}"; do
     echo
     echo "== scripts/$check"
@@ -95,4 +104,4 @@ if (( ${#failed[@]} )); then
     echo "check.sh: FAILED: ${failed[*]}"
     exit 1
 fi
-echo "check.sh: all ${#CHECKS[@]} check(s) passed"
+echo "check.sh: the python module and all ${#CHECKS[@]} check(s) passed"

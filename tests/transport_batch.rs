@@ -98,8 +98,8 @@ fn every_row_is_the_runtimes_answer_whatever_the_threads() {
     assert_eq!(side["rows_outside_the_slab_answered_0"], 1);
     assert_eq!(side["rows_outside_the_tables_grid"], 1);
     assert_eq!(side["columns"].as_array().unwrap().len(), width);
-    assert_eq!(side["columns"][1], "T_orders_2");
-    assert_eq!(side["columns"][width - 4], "T_orders_31+");
+    assert_eq!(side["columns"][1], "T_2");
+    assert_eq!(side["columns"][width - 4], "T_31+");
     // T only: order 1 and T per group, the same values.
     succeeds(&[
         "transport",

@@ -6,7 +6,7 @@ use clap::Args;
 use nephele::io::npy::{npy_bytes, read_rows};
 use nephele::io::AtomicFiles;
 use nephele_runtime::transport::{
-    evaluate_points, Quantities, SlabPoint, Transport, TransportTables, POINT_COLUMNS,
+    column_names, evaluate_points, Quantities, SlabPoint, Transport, TransportTables, POINT_COLUMNS,
 };
 use std::path::{Path, PathBuf};
 
@@ -127,21 +127,7 @@ fn batch(points: &Path, out: &Path, collector: bool, tab: &TransportTables) -> R
     let start = std::time::Instant::now();
     evaluate_points(tab, &flat, what, &mut answers).map_err(|e| anyhow::anyhow!("{e}"))?;
     let seconds = start.elapsed().as_secs_f64();
-    let mut columns = vec!["order1".to_string()];
-    for g in 0..tab.groups() {
-        let first = tab.group_first_order(g).unwrap_or(0.0);
-        let orders = match tab.group_first_order(g + 1) {
-            Some(next) if next - 1.0 > first => format!("{first}-{}", next - 1.0),
-            Some(_) => format!("{first}"),
-            None => format!("{first}+"),
-        };
-        let parts: &[&str] = if collector {
-            &["T", "c_x", "c_z", "sigma"]
-        } else {
-            &["T"]
-        };
-        columns.extend(parts.iter().map(|p| format!("{p}_orders_{orders}")));
-    }
+    let columns = column_names(tab, what);
     let sidecar = serde_json::json!({
         "points": points.display().to_string(),
         "rows": n,

@@ -28,6 +28,32 @@ impl Quantities {
     }
 }
 
+/// The names of the columns [`evaluate_points`] writes for `tables`: "order1", then per group
+/// "T_2", "T_3-4", …, "T_31+" (the group's orders), with [`Quantities::WithCollector`] each
+/// followed by "c_x_…", "c_z_…", "sigma_…".
+#[cfg(feature = "std")]
+pub fn column_names(
+    tables: &TransportTables,
+    what: Quantities,
+) -> std::vec::Vec<std::string::String> {
+    use std::format;
+    let mut names = std::vec!["order1".into()];
+    for g in 0..tables.groups() {
+        let first = tables.group_first_order(g).unwrap_or(0.0);
+        let orders = match tables.group_first_order(g + 1) {
+            Some(next) if next - 1.0 > first => format!("{first}-{}", next - 1.0),
+            Some(_) => format!("{first}"),
+            None => format!("{first}+"),
+        };
+        let parts: &[&str] = match what {
+            Quantities::Transport => &["T"],
+            Quantities::WithCollector => &["T", "c_x", "c_z", "sigma"],
+        };
+        names.extend(parts.iter().map(|p| format!("{p}_{orders}")));
+    }
+    names
+}
+
 /// Why a batch was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BatchError {

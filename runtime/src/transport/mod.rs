@@ -26,6 +26,8 @@ mod geometry;
 pub mod leakage;
 mod search;
 
+#[cfg(feature = "std")]
+pub use batch::column_names;
 pub use batch::{evaluate_points, BatchError, Quantities, POINT_COLUMNS};
 pub use finite::{absorbed, finite_cloud, mean_cosine, FiniteCloud, Kept};
 pub use geometry::SlabPoint;

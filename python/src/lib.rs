@@ -1,0 +1,385 @@
+//! `import nephele`: nephele-runtime on numpy arrays — the shipped (or any) transport tables
+//! evaluated at many points at once, and the phase models evaluated and sampled.
+//!
+//! Every answer comes from the Rust runtime itself (the batch of `nephele transport --points`,
+//! `transport::evaluate_points`, rayon across the rows), so Python sees the renderer's numbers
+//! bit for bit. Errors arrive as `ValueError` with the runtime's message; arrays of the wrong
+//! shape or dtype are refused with a message that names them.
+
+use nephele_runtime::embedded::MIE_10UM;
+use nephele_runtime::phase::{Draine, HenyeyGreenstein, HgDraine, Rayleigh, Schlick, TwoTermHg};
+use nephele_runtime::transport::{
+    column_names, evaluate_points, Quantities, TransportTables, POINT_COLUMNS,
+};
+use nephele_runtime::PhaseFunction;
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyUntypedArrayMethods};
+use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+/// Transport tables (a `.ntt`): T, c and σ per order group and order 1 in a slab.
+#[pyclass(frozen, module = "nephele")]
+struct Tables {
+    /// The file's bytes (checked at construction; parsed in place on every call).
+    bytes: Vec<u8>,
+    /// Where they came from, for repr.
+    source: String,
+}
+
+/// `e` as a Python ValueError with `what` before it.
+fn value_error(what: &str, e: impl std::fmt::Display) -> PyErr {
+    PyValueError::new_err(format!("{what}: {e}"))
+}
+
+impl Tables {
+    fn with<R>(&self, f: impl FnOnce(&TransportTables) -> R) -> PyResult<R> {
+        let tab = TransportTables::from_bytes(&self.bytes)
+            .map_err(|e| value_error(&format!("transport tables {}", self.source), e))?;
+        Ok(f(&tab))
+    }
+
+    fn checked(bytes: Vec<u8>, source: String) -> PyResult<Self> {
+        let me = Tables { bytes, source };
+        me.with(|_| ())?;
+        Ok(me)
+    }
+}
+
+/// The rows of a (N, 5) float32 or float64 array as f32, row-major.
+fn point_rows(points: &Bound<'_, PyAny>) -> PyResult<Vec<f32>> {
+    let shape_ok = |shape: &[usize]| shape.len() == 2 && shape[1] == POINT_COLUMNS;
+    let names = "t, mu_L, depth, mu_V, psi_V (radians)";
+    if let Ok(a) = points.downcast::<PyArray2<f64>>() {
+        let r = a.readonly();
+        if !shape_ok(r.shape()) {
+            return Err(value_error(
+                "points",
+                format!("shape {}, expected (N, 5): {names}", tuple(r.shape())),
+            ));
+        }
+        return Ok(r.as_array().iter().map(|&v| v as f32).collect());
+    }
+    if let Ok(a) = points.downcast::<PyArray2<f32>>() {
+        let r = a.readonly();
+        if !shape_ok(r.shape()) {
+            return Err(value_error(
+                "points",
+                format!("shape {}, expected (N, 5): {names}", tuple(r.shape())),
+            ));
+        }
+        return Ok(r.as_array().iter().copied().collect());
+    }
+    Err(PyTypeError::new_err(format!(
+        "points: a 2-D float32 or float64 numpy array of rows ({names}) expected, got {}",
+        describe(points)
+    )))
+}
+
+/// A shape as Python prints it: (3, 4), (5,).
+fn tuple(shape: &[usize]) -> String {
+    let parts: Vec<String> = shape.iter().map(|d| d.to_string()).collect();
+    if parts.len() == 1 {
+        format!("({},)", parts[0])
+    } else {
+        format!("({})", parts.join(", "))
+    }
+}
+
+/// "numpy array of dtype X and shape Y" or the Python type's name.
+fn describe(x: &Bound<'_, PyAny>) -> String {
+    if let Ok(a) = x.downcast::<numpy::PyUntypedArray>() {
+        return format!(
+            "a numpy array of dtype {} and shape {}",
+            a.dtype(),
+            tuple(a.shape())
+        );
+    }
+    x.get_type()
+        .name()
+        .map_or("an unknown object".into(), |n| n.to_string())
+}
+
+#[pymethods]
+impl Tables {
+    /// Tables(path=None): the `.ntt` at `path`, or the shipped Mie 10 µm tables the runtime
+    /// embeds (what `nephele render` uses).
+    #[new]
+    #[pyo3(signature = (path=None))]
+    fn new(path: Option<std::path::PathBuf>) -> PyResult<Self> {
+        match path {
+            None => Self::checked(MIE_10UM.to_vec(), "(embedded Mie 10 um)".into()),
+            Some(p) => {
+                let bytes = std::fs::read(&p).map_err(|e| {
+                    value_error(&format!("cannot read tables '{}'", p.display()), e)
+                })?;
+                Self::checked(bytes, format!("'{}'", p.display()))
+            }
+        }
+    }
+
+    /// Tables.from_bytes(data): tables from the bytes of a `.ntt`.
+    #[staticmethod]
+    fn from_bytes(data: &[u8]) -> PyResult<Self> {
+        Self::checked(data.to_vec(), "(bytes)".into())
+    }
+
+    fn __repr__(&self) -> String {
+        format!("nephele.Tables({})", self.source)
+    }
+
+    /// The number of order groups.
+    #[getter]
+    fn groups(&self) -> PyResult<usize> {
+        self.with(|t| t.groups())
+    }
+
+    /// The first scattering order of each group.
+    #[getter]
+    fn group_first_orders(&self) -> PyResult<Vec<f32>> {
+        self.with(|t| {
+            (0..t.groups())
+                .filter_map(|g| t.group_first_order(g))
+                .collect()
+        })
+    }
+
+    /// {"t": (lo, hi), "mu_l": (lo, hi)}: the grid the tables were fitted on (outside it the
+    /// parameters are held at the nearest end).
+    #[getter]
+    fn domain<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = self.with(|t| t.domain())?;
+        let out = PyDict::new(py);
+        out.set_item("t", d.thickness)?;
+        out.set_item("mu_l", d.mu_l)?;
+        Ok(out)
+    }
+
+    /// evaluate(points, collector=False) → float32 array.
+    ///
+    /// points: (N, 5) float32 or float64, rows of t (mfp), mu_L, depth below the lit face (mfp),
+    /// mu_V (> 0: light going up), psi_V (radians, from the sun's horizontal travel). Returns
+    /// (N, 1 + G): order 1 then T of each group (1/sr), or with collector=True (N, 1 + 4G):
+    /// order 1 then T, c_x, c_z, sigma of each group (mfp). Points outside the slab answer 0.
+    /// The rows are shared among threads; the answers do not depend on how many.
+    #[pyo3(signature = (points, collector=false))]
+    fn evaluate<'py>(
+        &self,
+        py: Python<'py>,
+        points: &Bound<'py, PyAny>,
+        collector: bool,
+    ) -> PyResult<Bound<'py, PyArray2<f32>>> {
+        let rows = point_rows(points)?;
+        let what = if collector {
+            Quantities::WithCollector
+        } else {
+            Quantities::Transport
+        };
+        let n = rows.len() / POINT_COLUMNS;
+        let (width, out) = py.allow_threads(|| {
+            self.with(|t| {
+                let width = what.columns(t.groups());
+                let mut out = vec![0.0f32; n * width];
+                let done = evaluate_points(t, &rows, what, &mut out).map(|_| ());
+                (width, done.map(|()| out))
+            })
+        })?;
+        let out = out.map_err(|e| value_error("evaluate", e))?;
+        let flat = PyArray1::from_vec(py, out);
+        flat.reshape([n, width])
+    }
+
+    /// The names of evaluate's columns: "order1", "T_2", "T_3-4", … (with collector=True
+    /// also "c_x_…", "c_z_…", "sigma_…").
+    #[pyo3(signature = (collector=false))]
+    fn columns(&self, collector: bool) -> PyResult<Vec<String>> {
+        let what = if collector {
+            Quantities::WithCollector
+        } else {
+            Quantities::Transport
+        };
+        self.with(|t| column_names(t, what))
+    }
+}
+
+/// A phase model from its name and keyword parameters.
+fn phase_model(
+    model: &str,
+    kw: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Box<dyn PhaseFunction<f64> + Send + Sync>> {
+    let get = |name: &str| -> PyResult<Option<f64>> {
+        match kw.map(|d| d.get_item(name)).transpose()?.flatten() {
+            Some(v) => Ok(Some(v.extract::<f64>().map_err(|_| {
+                PyTypeError::new_err(format!("{model}: {name} must be a number"))
+            })?)),
+            None => Ok(None),
+        }
+    };
+    let need = |name: &str| -> PyResult<f64> {
+        get(name)?.ok_or_else(|| PyValueError::new_err(format!("{model} needs {name}=")))
+    };
+    let g_of = |name: &str| -> PyResult<f64> {
+        let g = need(name)?;
+        if g > -1.0 && g < 1.0 {
+            Ok(g)
+        } else {
+            Err(PyValueError::new_err(format!(
+                "{model}: {name} = {g} must be in (-1, 1)"
+            )))
+        }
+    };
+    let unit = |name: &str| -> PyResult<f64> {
+        let w = need(name)?;
+        if (0.0..=1.0).contains(&w) {
+            Ok(w)
+        } else {
+            Err(PyValueError::new_err(format!(
+                "{model}: {name} = {w} must be in [0, 1]"
+            )))
+        }
+    };
+    let alpha = || -> PyResult<f64> {
+        let a = need("alpha")?;
+        if a >= 0.0 && a.is_finite() {
+            Ok(a)
+        } else {
+            Err(PyValueError::new_err(format!(
+                "{model}: alpha = {a} must be >= 0"
+            )))
+        }
+    };
+    let known = |names: &[&str]| -> PyResult<()> {
+        if let Some(d) = kw {
+            for k in d.keys() {
+                let k: String = k.extract()?;
+                if !names.contains(&k.as_str()) {
+                    return Err(PyValueError::new_err(format!(
+                        "{model} does not take {k} (it takes: {})",
+                        names.join(", ")
+                    )));
+                }
+            }
+        }
+        Ok(())
+    };
+    Ok(match model.replace('-', "_").as_str() {
+        "hg" => {
+            known(&["g"])?;
+            Box::new(HenyeyGreenstein::new(g_of("g")?))
+        }
+        "draine" => {
+            known(&["g", "alpha"])?;
+            Box::new(Draine::new(g_of("g")?, alpha()?))
+        }
+        "two_term_hg" => {
+            known(&["g", "g2", "w"])?;
+            Box::new(TwoTermHg::two_term(g_of("g")?, g_of("g2")?, unit("w")?))
+        }
+        "hg_draine" if get("diameter")?.is_some() => {
+            known(&["diameter"])?;
+            let d = need("diameter")?;
+            if !(d > 0.0 && d.is_finite()) {
+                return Err(PyValueError::new_err(format!(
+                    "hg_draine: diameter = {d} um must be > 0"
+                )));
+            }
+            Box::new(HgDraine::from_diameter(d))
+        }
+        "hg_draine" => {
+            known(&["g_hg", "g_d", "alpha", "w_d"])?;
+            Box::new(HgDraine::hg_draine(
+                g_of("g_hg")?,
+                g_of("g_d")?,
+                alpha()?,
+                unit("w_d")?,
+            ))
+        }
+        "rayleigh" => {
+            known(&[])?;
+            Box::new(Rayleigh)
+        }
+        "schlick" => {
+            known(&["k"])?;
+            Box::new(Schlick::new(g_of("k")?))
+        }
+        other => {
+            return Err(PyValueError::new_err(format!(
+            "unknown phase model '{other}' (hg, draine, two_term_hg, hg_draine, rayleigh, schlick)"
+        )))
+        }
+    })
+}
+
+/// A 1-D float64 array's values, or an error naming `what`.
+fn values_1d(what: &str, x: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
+    if let Ok(a) = x.downcast::<PyArray1<f64>>() {
+        return Ok(a.readonly().as_array().to_vec());
+    }
+    if let Ok(a) = x.downcast::<PyArray1<f32>>() {
+        return Ok(a
+            .readonly()
+            .as_array()
+            .iter()
+            .map(|&v| f64::from(v))
+            .collect());
+    }
+    Err(PyTypeError::new_err(format!(
+        "{what}: a 1-D float32 or float64 numpy array expected, got {}",
+        describe(x)
+    )))
+}
+
+/// phase_eval(model, mu, **params) → p(mu) (1/sr), float64; mu = cos of the scattering angle
+/// (1 forward). Models and their parameters: hg (g), draine (g, alpha), two_term_hg (g, g2, w:
+/// w HG(g) + (1 - w) HG(g2)), hg_draine (diameter in um — Jendersie & d'Eon's curves — or g_hg,
+/// g_d, alpha, w_d), rayleigh, schlick (k).
+#[pyfunction]
+#[pyo3(signature = (model, mu, **params))]
+fn phase_eval<'py>(
+    py: Python<'py>,
+    model: &str,
+    mu: &Bound<'py, PyAny>,
+    params: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let m = phase_model(model, params)?;
+    map_values(py, ("mu", mu, (-1.0, 1.0)), |x| m.eval(x))
+}
+
+/// phase_sample(model, xi, **params) → cosines drawn by the model's exact sampler at the
+/// uniform numbers xi in [0, 1) (float64); the same models and parameters as phase_eval.
+#[pyfunction]
+#[pyo3(signature = (model, xi, **params))]
+fn phase_sample<'py>(
+    py: Python<'py>,
+    model: &str,
+    xi: &Bound<'py, PyAny>,
+    params: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let m = phase_model(model, params)?;
+    map_values(py, ("xi", xi, (0.0, 1.0)), |x| m.sample_mu(x))
+}
+
+/// `f` of every value of the 1-D array `x` (named `what`, each within `range`), without the GIL.
+fn map_values<'py>(
+    py: Python<'py>,
+    (what, x, (lo, hi)): (&str, &Bound<'py, PyAny>, (f64, f64)),
+    f: impl Fn(f64) -> f64 + Send + Sync,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let x = values_1d(what, x)?;
+    if let Some(bad) = x.iter().find(|v| !(lo..=hi).contains(*v)) {
+        return Err(PyValueError::new_err(format!(
+            "{what}: {bad} is outside [{lo}, {hi}]"
+        )));
+    }
+    let out: Vec<f64> = py.allow_threads(|| x.iter().map(|&v| f(v)).collect());
+    Ok(PyArray1::from_vec(py, out))
+}
+
+/// The module.
+#[pymodule]
+fn nephele(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<Tables>()?;
+    m.add_function(wrap_pyfunction!(phase_eval, m)?)?;
+    m.add_function(wrap_pyfunction!(phase_sample, m)?)?;
+    m.add("__version__", nephele_runtime::VERSION)?;
+    Ok(())
+}
