@@ -36,4 +36,4 @@ pub use search::{
     LitSurface, LocalSlab, SearchOptions, Viewpoint,
 };
 pub use single::{scattering_cosine, single_scattering, PhaseValue};
-pub use tables::{Domain, Transport, TransportTables};
+pub use tables::{Domain, Transport, TransportTables, MAX_GROUPS};

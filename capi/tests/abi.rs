@@ -1,0 +1,309 @@
+//! The C ABI: its header is what cbindgen writes from the source (NEPHELE_BLESS=1 rewrites it),
+//! a C program compiled by the system C compiler under AddressSanitizer and
+//! UndefinedBehaviorSanitizer answers as the Rust runtime does bit for bit, bad input gets its
+//! status code, and truncated or bit-flipped tables are refused without a crash.
+
+use nephele_c::*;
+use nephele_runtime::embedded::{mie_10um, MIE_10UM};
+use nephele_runtime::phase::HgDraine;
+use nephele_runtime::transport::{SlabPoint, Transport};
+use nephele_runtime::PhaseFunction;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+fn crate_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+#[test]
+fn the_header_is_cbindgens() {
+    let dir = crate_dir();
+    let config = cbindgen::Config::from_file(dir.join("cbindgen.toml")).unwrap();
+    let mut generated = Vec::new();
+    cbindgen::Builder::new()
+        .with_crate(&dir)
+        .with_config(config)
+        .generate()
+        .expect("cbindgen")
+        .write(&mut generated);
+    let path = dir.join("include/nephele.h");
+    if std::env::var_os("NEPHELE_BLESS").is_some() {
+        std::fs::write(&path, &generated).unwrap();
+    }
+    let committed = std::fs::read(&path).unwrap_or_default();
+    assert!(
+        committed == generated,
+        "include/nephele.h is not what cbindgen writes from src/lib.rs: run \
+         NEPHELE_BLESS=1 cargo test -p nephele-c --test abi"
+    );
+}
+
+/// The static library cargo built beside this test.
+fn static_library() -> PathBuf {
+    let exe = std::env::current_exe().unwrap();
+    let deps = exe.parent().unwrap();
+    [deps.to_path_buf(), deps.parent().unwrap().to_path_buf()]
+        .iter()
+        .map(|d| d.join("libnephele_c.a"))
+        .find(|p| p.exists())
+        .expect("libnephele_c.a beside the test binary")
+}
+
+/// Points over the whole domain: faces, the horizon (±0), grid edges and beyond, random.
+fn points() -> Vec<[f32; 5]> {
+    let mut p = vec![
+        [4.0, 0.5, 0.0, -0.3, 0.1],
+        [4.0, 0.5, 4.0, 0.3, 3.0],
+        [4.0, 0.5, 2.0, 0.0, 0.0],
+        [4.0, 0.5, 2.0, -0.0, 0.0],
+        [0.5, 0.125, 0.25, 1.0, 1.5],
+        [128.0, 1.0, 127.0, -1.0, 3.14159],
+        [500.0, 0.02, 10.0, 0.5, 0.7],
+        [4.0, 0.5, 5.0, 0.3, 0.0],
+    ];
+    let mut s = 0x9E3779B97F4A7C15u64;
+    let mut r = || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 40) as f32 / (1u64 << 24) as f32
+    };
+    for _ in 0..500 {
+        let t = 0.5 * 256f32.powf(r());
+        p.push([
+            t,
+            0.125 + 0.875 * r(),
+            t * r(),
+            2.0 * r() - 1.0,
+            6.2831 * r() - 3.1416,
+        ]);
+    }
+    p
+}
+
+#[test]
+fn a_c_program_under_sanitizers_answers_as_the_runtime() {
+    let tmp = std::env::temp_dir().join(format!("nephele-capi-{}", std::process::id()));
+    std::fs::create_dir_all(&tmp).unwrap();
+    let exe = tmp.join("nephele_example");
+    let source = crate_dir().join("../examples/c/nephele_example.c");
+    let cc = std::env::var("CC").unwrap_or_else(|_| "cc".into());
+    let built = Command::new(&cc)
+        .args(["-std=c99", "-Wall", "-Wextra", "-Werror", "-g", "-O1"])
+        .args(["-fsanitize=address,undefined", "-fno-sanitize-recover=all"])
+        .arg("-I")
+        .arg(crate_dir().join("include"))
+        .arg(&source)
+        .arg(static_library())
+        .args(["-lm", "-lpthread", "-ldl", "-o"])
+        .arg(&exe)
+        .output()
+        .expect("run the C compiler");
+    assert!(
+        built.status.success(),
+        "{cc}: {}",
+        String::from_utf8_lossy(&built.stderr)
+    );
+    let pts = points();
+    let mut child = Command::new(&exe)
+        .arg(crate_dir().join("../runtime/tables/mie10um/transport.ntt"))
+        .env("ASAN_OPTIONS", "detect_leaks=1:abort_on_error=1")
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    {
+        let mut input = child.stdin.take().unwrap();
+        for p in &pts {
+            let line: Vec<String> = p.iter().map(|v| format!("{:08x}", v.to_bits())).collect();
+            writeln!(input, "{}", line.join(" ")).unwrap();
+        }
+    }
+    let out = child.wait_with_output().unwrap();
+    assert!(
+        out.status.success(),
+        "the C example failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let tab = mie_10um();
+    let hex = |v: f32| format!("{:08x}", v.to_bits());
+    let mut all = [Transport::default(); 8];
+    for (p, line) in pts.iter().zip(&lines) {
+        let at = SlabPoint {
+            thickness: p[0],
+            mu_l: p[1],
+            depth: p[2],
+            mu_v: p[3],
+            psi_v: p[4],
+        };
+        tab.evaluate_all(&at, &mut all);
+        let mut want = vec![hex(tab.order1(&at))];
+        for v in &all {
+            want.extend([hex(v.t), hex(v.c_x), hex(v.c_z), hex(v.sigma)]);
+        }
+        assert_eq!(line.split(' ').collect::<Vec<_>>(), want, "{p:?}");
+    }
+    let phase = HgDraine::<f32>::from_diameter(10.0);
+    let phase_lines: Vec<&&str> = lines.iter().filter(|l| l.starts_with("phase ")).collect();
+    assert_eq!(phase_lines.len(), 9);
+    for (i, line) in phase_lines.iter().enumerate() {
+        let (mu, xi) = (-1.0f32 + 0.25 * i as f32, 0.125f32 * i as f32);
+        let want = format!(
+            "phase {} {} {}",
+            hex(phase.eval(mu)),
+            hex(phase.pdf(mu)),
+            hex(phase.sample_mu(xi))
+        );
+        assert_eq!(**line, want);
+    }
+    let status = |case: &str| -> i32 {
+        let line = lines
+            .iter()
+            .find(|l| l.starts_with(&format!("status {case} ")))
+            .unwrap_or_else(|| panic!("no status line for {case}"));
+        line.split(' ').nth(2).unwrap().parse().unwrap()
+    };
+    for (case, code) in [
+        ("null_bytes", NepheleStatus::NullPointer),
+        ("null_out", NepheleStatus::NullPointer),
+        ("truncated", NepheleStatus::BadTables),
+        ("empty", NepheleStatus::BadTables),
+        ("corrupt", NepheleStatus::BadTables),
+        ("version", NepheleStatus::BadTables),
+        ("null_tables", NepheleStatus::NullPointer),
+        ("null_point", NepheleStatus::NullPointer),
+        ("bad_group", NepheleStatus::BadGroup),
+        ("short_out", NepheleStatus::BadArgument),
+        ("bad_g", NepheleStatus::BadArgument),
+        ("bad_mu", NepheleStatus::BadArgument),
+        ("bad_diameter", NepheleStatus::BadArgument),
+    ] {
+        assert_eq!(status(case), code as i32, "{case}");
+    }
+    let version = lines
+        .iter()
+        .find(|l| l.starts_with("status version"))
+        .unwrap();
+    assert!(version.contains("version 9"), "{version}");
+    std::fs::remove_dir_all(&tmp).unwrap();
+}
+
+/// Every 97th truncation and 3000 bit flips of the shipped file through the ABI: each refused
+/// with a status and a message or (a flip the checksum does not cover) loaded and answering
+/// finite values; no panic crosses the boundary.
+#[test]
+fn truncated_and_corrupt_tables_are_refused_without_a_crash() {
+    let load = |bytes: &[u8]| -> (NepheleStatus, *mut NepheleTables) {
+        let mut t = std::ptr::null_mut();
+        let s = unsafe { nephele_tables_from_bytes(bytes.as_ptr(), bytes.len(), &mut t) };
+        (s, t)
+    };
+    let message = || {
+        unsafe { std::ffi::CStr::from_ptr(nephele_last_error()) }
+            .to_string_lossy()
+            .into_owned()
+    };
+    for n in (0..MIE_10UM.len()).step_by(97) {
+        let (s, t) = load(&MIE_10UM[..n]);
+        assert_eq!(s, NepheleStatus::BadTables, "truncated at {n}");
+        assert!(t.is_null() && message().starts_with("transport tables: "));
+    }
+    let mut state = 0x2545F4914F6CDD1Du64;
+    let at = NepheleSlabPoint {
+        thickness: 8.0,
+        mu_l: 0.6,
+        depth: 3.0,
+        mu_v: -0.4,
+        psi_v: 1.0,
+    };
+    let mut loaded = 0;
+    for _ in 0..3000 {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        let mut bytes = MIE_10UM.to_vec();
+        let bit = (state % (8 * bytes.len() as u64)) as usize;
+        bytes[bit / 8] ^= 1 << (bit % 8);
+        let (s, t) = load(&bytes);
+        if s == NepheleStatus::Ok {
+            loaded += 1;
+            let mut out = [NepheleTransport::default(); NEPHELE_MAX_GROUPS];
+            let r = unsafe { nephele_evaluate_all(t, &at, out.as_mut_ptr(), out.len()) };
+            assert_eq!(r, NepheleStatus::Ok);
+            unsafe { nephele_tables_free(t) };
+        } else {
+            assert_eq!(s, NepheleStatus::BadTables);
+            assert!(t.is_null() && !message().is_empty());
+        }
+    }
+    // The CRC-32 covers every byte but its own: a flip there alone can load.
+    assert!(loaded <= 3000 / 100, "{loaded} flipped files loaded");
+}
+
+/// The ABI's answers for one point are the runtime's, through every entry point.
+#[test]
+fn the_entry_points_answer_as_the_runtime() {
+    let mut t = std::ptr::null_mut();
+    assert_eq!(
+        unsafe { nephele_tables_embedded(&mut t) },
+        NepheleStatus::Ok
+    );
+    let tab = mie_10um();
+    let at = NepheleSlabPoint {
+        thickness: 8.0,
+        mu_l: 0.6,
+        depth: 3.0,
+        mu_v: -0.4,
+        psi_v: 1.0,
+    };
+    let rt = SlabPoint {
+        thickness: at.thickness,
+        mu_l: at.mu_l,
+        depth: at.depth,
+        mu_v: at.mu_v,
+        psi_v: at.psi_v,
+    };
+    let mut groups = 0usize;
+    assert_eq!(
+        unsafe { nephele_tables_groups(t, &mut groups) },
+        NepheleStatus::Ok
+    );
+    assert_eq!(groups, tab.groups());
+    let mut ts = [0.0f32; NEPHELE_MAX_GROUPS];
+    assert_eq!(
+        unsafe { nephele_transport_all(t, &at, ts.as_mut_ptr(), ts.len()) },
+        NepheleStatus::Ok
+    );
+    for g in 0..groups {
+        let mut one = NepheleTransport::default();
+        assert_eq!(
+            unsafe { nephele_evaluate(t, g, &at, &mut one) },
+            NepheleStatus::Ok
+        );
+        let want = tab.evaluate(g, &rt);
+        assert_eq!(
+            [one.t, one.c_x, one.c_z, one.sigma].map(f32::to_bits),
+            [want.t, want.c_x, want.c_z, want.sigma].map(f32::to_bits)
+        );
+        assert_eq!(ts[g].to_bits(), want.t.to_bits());
+        let mut first = 0.0;
+        assert_eq!(
+            unsafe { nephele_tables_group_first_order(t, g, &mut first) },
+            NepheleStatus::Ok
+        );
+        assert_eq!(Some(first), tab.group_first_order(g));
+    }
+    let mut first = 0.0;
+    assert_eq!(
+        unsafe { nephele_tables_group_first_order(t, groups, &mut first) },
+        NepheleStatus::BadGroup
+    );
+    unsafe { nephele_tables_free(t) };
+    let v = unsafe { std::ffi::CStr::from_ptr(nephele_version()) };
+    assert_eq!(v.to_str().unwrap(), nephele_runtime::VERSION);
+    assert!(Path::new(&crate_dir().join("include/nephele.h")).exists());
+}
