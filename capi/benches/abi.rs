@@ -1,0 +1,93 @@
+//! The C ABI's cost beside the Rust call it wraps, in one run: T of all groups and T, c, σ of
+//! all groups at 4096 fixed random points (the shipped tables). `cargo bench -p nephele-c`.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use nephele_c::*;
+use nephele_runtime::embedded::mie_10um;
+use nephele_runtime::transport::{SlabPoint, Transport};
+use std::hint::black_box;
+
+fn points() -> Vec<NepheleSlabPoint> {
+    let mut s = 0x9E3779B97F4A7C15u64;
+    let mut r = || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 40) as f32 / (1u64 << 24) as f32
+    };
+    (0..4096)
+        .map(|_| {
+            let t = 0.5 * 256f32.powf(r());
+            NepheleSlabPoint {
+                thickness: t,
+                mu_l: 0.125 + 0.875 * r(),
+                depth: t * r(),
+                mu_v: 2.0 * r() - 1.0,
+                psi_v: 3.1416 * r(),
+            }
+        })
+        .collect()
+}
+
+fn bench(c: &mut Criterion) {
+    let pts = points();
+    let rust: Vec<SlabPoint<f32>> = pts
+        .iter()
+        .map(|p| SlabPoint {
+            thickness: p.thickness,
+            mu_l: p.mu_l,
+            depth: p.depth,
+            mu_v: p.mu_v,
+            psi_v: p.psi_v,
+        })
+        .collect();
+    let tab = mie_10um();
+    let mut handle = std::ptr::null_mut();
+    assert_eq!(unsafe { nephele_tables_embedded(&mut handle) }, NepheleStatus::Ok);
+    let mut group = c.benchmark_group("c_abi_4096_points");
+    group.bench_function("T all groups, Rust", |b| {
+        let mut out = [0.0f32; 8];
+        b.iter(|| {
+            for p in &rust {
+                tab.transport_all(black_box(p), &mut out);
+            }
+            out[0]
+        })
+    });
+    group.bench_function("T all groups, C ABI", |b| {
+        let mut out = [0.0f32; 8];
+        b.iter(|| {
+            for p in &pts {
+                unsafe { nephele_transport_all(handle, black_box(p), out.as_mut_ptr(), 8) };
+            }
+            out[0]
+        })
+    });
+    group.bench_function("T c sigma all groups, Rust", |b| {
+        let mut out = [Transport::default(); 8];
+        b.iter(|| {
+            for p in &rust {
+                tab.evaluate_all(black_box(p), &mut out);
+            }
+            out[0].t
+        })
+    });
+    group.bench_function("T c sigma all groups, C ABI", |b| {
+        let mut out = [NepheleTransport::default(); 8];
+        b.iter(|| {
+            for p in &pts {
+                unsafe { nephele_evaluate_all(handle, black_box(p), out.as_mut_ptr(), 8) };
+            }
+            out[0].t
+        })
+    });
+    group.finish();
+    unsafe { nephele_tables_free(handle) };
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default().sample_size(30);
+    targets = bench
+}
+criterion_main!(benches);
