@@ -43,7 +43,10 @@ fn bench(c: &mut Criterion) {
         .collect();
     let tab = mie_10um();
     let mut handle = std::ptr::null_mut();
-    assert_eq!(unsafe { nephele_tables_embedded(&mut handle) }, NepheleStatus::Ok);
+    assert_eq!(
+        unsafe { nephele_tables_embedded(&mut handle) },
+        NepheleStatus::Ok
+    );
     let mut group = c.benchmark_group("c_abi_4096_points");
     group.bench_function("T all groups, Rust", |b| {
         let mut out = [0.0f32; 8];

@@ -129,8 +129,9 @@ pub fn print_outcome(o: &Outcome, out: &Path) {
         println!(
             "wrote {} ({:.0} KB); the runtime's f32 evaluation against the fit: T within {:.1e}, \
              σ within {:.1e}, c within {:.1e} σ; order 1 from the stored phase table within {:.1e} \
-             of the phase function's; {} cells where only one of them is 0 ({} cells below \
-             f32's normal range not compared)",
+             of the phase function's; {} cells where only one of them is 0 (T of the cells below \
+             10⁻⁶ of their slice's largest within {:.1e}; {} cells below f32's normal range not \
+             compared)",
             n.path.display(),
             n.bytes as f64 / 1024.0,
             n.worst_t,
@@ -138,6 +139,7 @@ pub fn print_outcome(o: &Outcome, out: &Path) {
             n.worst_c_in_sigma,
             n.worst_order1,
             n.zero_mismatches,
+            n.worst_t_faint,
             n.below_f32
         );
     }
