@@ -180,6 +180,12 @@ pub unsafe extern "C" fn nephele_tables_from_bytes(
         if bytes.is_null() {
             return fail(NepheleStatus::NullPointer, "bytes is null");
         }
+        if len > isize::MAX as usize {
+            return fail(
+                NepheleStatus::BadArgument,
+                format!("len = {len} bytes cannot be"),
+            );
+        }
         let owned: Box<[u8]> = unsafe { std::slice::from_raw_parts(bytes, len) }.into();
         // SAFETY: the boxed bytes do not move while `NepheleTables` owns them, and the view
         // borrowing them is dropped first (field order).

@@ -482,18 +482,21 @@ pub fn depth_polynomial<F: Real>(
 /// ln of T/B at distance `h` from a face relative to its value at the fitted edge (distance
 /// `h_edge`), given `rise` = ln(T/B) one step further inside (distance `h_inside`) less the
 /// edge's, > 0. Two shapes agree at both points:
-/// - *exponential* in depth (ln T linear in u, as before 2026-12-03): right where a group's
-///   light fades away from its fitted cells (low orders deep in a thick slab);
+/// - *exponential* in depth (ln T linear in d; until 2026-12-03 the only shape, and linear in
+///   the stretched depth u instead): right where a group's light fades away from its fitted
+///   cells (low orders deep in a thick slab);
 /// - *linear* in depth: the diffusion regime near a face, where the source function falls
 ///   linearly to the extrapolated boundary a fraction of a transport length beyond the face,
 ///   and T/B with it. The exponential overshoots there: 2–9× above DISORT within 1–2 mfp of the
-///   far face of a 32–64 mfp slab looking at it (docs/compress.md, "Near a face").
+///   far face of a 32–64 mfp slab looking at it (docs/compress.md, "Near the far face").
 ///
 /// The line is taken, floored by s × the exponential with s = the line's zero crossing as a
 /// share of the edge's distance, clamped to [0, 1]: a line that stays positive up to the face
 /// (s = 0, diffusion) is read as is; one that would reach 0 at the edge (s = 1, fast decay)
 /// gives the exponential; in between the two blend continuously, so T never jumps between
-/// neighbouring points, stays > 0 away from the face, and never exceeds the exponential.
+/// neighbouring points, stays > 0 away from the face, and never exceeds the exponential. The
+/// blend is not monotone in `rise` (a slightly steeper fall at the edge can end a little higher
+/// near the face, between the two shapes): two points cannot tell the shapes apart better.
 fn continued_toward_face<F: Real>(rise: F, (h_inside, h_edge, h): (F, F, F)) -> F {
     let zero = F::of(0.0);
     let one = F::of(1.0);
