@@ -22,9 +22,9 @@
 //! with [`Lerp`] weights. The toolchain fits it (`nephele compress`) with these very features.
 
 use super::geometry::SlabPoint;
-use super::single::{exp_m1, scattering_cosine, single_scattering};
+use super::single::{beam_scattered_once, exp_m1, scattering_cosine};
 use crate::legendre::Legendre;
-use crate::phase::HenyeyGreenstein;
+use crate::phase::{Cosine, HenyeyGreenstein, PhaseFunction};
 use crate::real::Real;
 
 /// Most Legendre terms in depth.
@@ -222,8 +222,9 @@ impl LogAdditive {
         mut f: impl FnMut(usize, F, usize),
     ) -> bool {
         let four_pi = F::of(4.0 * core::f64::consts::PI);
-        let hg0 = HenyeyGreenstein::new(F::of(0.0));
-        let f1 = four_pi * single_scattering(&hg0, F::of(1.0), &c.at);
+        // An isotropic phase function's value, as HG with g = 0 gives it at any angle.
+        let iso = HenyeyGreenstein::new(F::of(0.0)).pdf_cosine(Cosine::from_mu(F::of(1.0)));
+        let f1 = four_pi * beam_scattered_once(iso, &c.at);
         if !(f1 >= F::of(0.0)) {
             return false;
         }
@@ -412,7 +413,12 @@ pub const STRETCH_EXPONENT: f64 = 0.65;
 /// The stretched depth u ∈ [0, 1] of depth d in a slab of thickness t (both in mfp): the
 /// inverse of [`depth_fraction`].
 pub fn stretched_u(d: f32, t: f32) -> f32 {
-    let beta = STRETCH_SCALE as f32 * Real::exp(STRETCH_EXPONENT as f32 * Real::ln(t));
+    stretched_u_at(d, t, Real::ln(t))
+}
+
+/// [`stretched_u`] given `ln_t` = ln t, which a caller often has already.
+pub(crate) fn stretched_u_at(d: f32, t: f32, ln_t: f32) -> f32 {
+    let beta = STRETCH_SCALE as f32 * Real::exp(STRETCH_EXPONENT as f32 * ln_t);
     if beta < 1e-6 {
         return d / t;
     }
@@ -575,19 +581,28 @@ pub fn theta_hats<F: Real>(
     let half = (F::of(0.5) * cos.one_minus_mu).sqrt();
     let theta = F::of(2.0) * (if half > F::of(1.0) { F::of(1.0) } else { half }).asin();
     let n = nodes.max(2);
+    let top = (n - 1) as f64;
     let node = |i: usize| {
-        let r = i as f64 / (n - 1) as f64;
+        let r = i as f64 / top;
         F::of(core::f64::consts::PI * r * r)
     };
-    let mut i = 1;
+    // The first node at or beyond Θ (from 1, at most n − 1): found from Θ's square root, then
+    // settled by the nodes themselves, so that rounding cannot move it.
+    let guess = (theta.f64() / core::f64::consts::PI).max(0.0).sqrt() * top;
+    let mut i = (guess as usize).clamp(1, n - 1);
+    while i > 1 && node(i - 1) >= theta {
+        i -= 1;
+    }
     while i < n - 1 && node(i) < theta {
         i += 1;
     }
     let (a, b) = (node(i - 1), node(i));
     let w = ((theta - a) / (b - a)).clamp_to(F::of(0.0), F::of(1.0));
-    for (k, h) in [(i - 1, F::of(1.0) - w), (i, w)] {
-        f(col + 2 * k, val * h, 0);
-        f(col + 2 * k + 1, val * h, 1);
+    // Degree by degree: a sum over the features of one degree takes them as one run.
+    for j in 0..2 {
+        for (k, h) in [(i - 1, F::of(1.0) - w), (i, w)] {
+            f(col + 2 * k + j, val * h, j);
+        }
     }
 }
 

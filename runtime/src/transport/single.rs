@@ -64,6 +64,13 @@ pub fn single_scattering<F: Real, P: PhaseValue<F> + ?Sized>(
     albedo: F,
     at: &SlabPoint<F>,
 ) -> F {
+    beam_scattered_once(albedo * phase.value(scattering_cosine(at)), at)
+}
+
+/// T₁ at `at` for a phase function of the constant value `p` (sr⁻¹, albedo included): the
+/// depth and direction factor of [`single_scattering`], which the log-additive form's F₁ reads
+/// with p = 1/(4π) without computing a scattering angle.
+pub(crate) fn beam_scattered_once<F: Real>(p: F, at: &SlabPoint<F>) -> F {
     let (zero, one) = (F::of(0.0), F::of(1.0));
     let SlabPoint {
         depth: d,
@@ -72,7 +79,6 @@ pub fn single_scattering<F: Real, P: PhaseValue<F> + ?Sized>(
         mu_l,
         ..
     } = *at;
-    let p = albedo * phase.value(scattering_cosine(at));
     let source = p * (-d / mu_l).exp();
     if mu_v == zero {
         // The horizon (either zero): the local source, at the faces too (the limit from

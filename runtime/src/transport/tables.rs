@@ -29,12 +29,13 @@ use super::collector::{
 };
 use super::geometry::SlabPoint;
 use super::log_additive::{
-    depth_polynomial, legendre, ln_boundary, ln_t_position, stretched_u, Cell, FittedDepths, Lerp,
+    depth_polynomial, legendre, ln_boundary, ln_t_position, stretched_u_at, Cell, FittedDepths, Lerp,
     LogAdditive,
     MAX_CROSS, MAX_HARMONICS, MAX_LEGENDRE,
 };
 use super::single::{single_scattering, PhaseValue};
 use crate::container::{ArrayView, Container, FormatError};
+use crate::legendre::Legendre;
 use crate::phase::{angle, phase_between, Cosine};
 use crate::real::Real;
 
@@ -293,7 +294,31 @@ impl<'a> TransportTables<'a> {
 
     /// T of the groups `first .. first + count` at `at` into `out[..count]` (the run fits one
     /// [`Sums`]).
-    fn transport_run(&self, at: &SlabPoint<f32>, (first, count): (usize, usize), out: &mut [f32]) {
+    fn transport_run(&self, at: &SlabPoint<f32>, run: (usize, usize), out: &mut [f32]) {
+        #[cfg(all(feature = "std", target_arch = "x86_64"))]
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above.
+            return unsafe { self.transport_run_avx2(at, run, out) };
+        }
+        self.transport_run_any(at, run, out);
+    }
+
+    /// [`Self::transport_run`] compiled for AVX2: the groups' lanes ([`LANES`]) in one
+    /// register. No FMA: the same answers, bit for bit.
+    #[cfg(all(feature = "std", target_arch = "x86_64"))]
+    #[target_feature(enable = "avx2")]
+    fn transport_run_avx2(&self, at: &SlabPoint<f32>, run: (usize, usize), out: &mut [f32]) {
+        self.transport_run_any(at, run, out);
+    }
+
+    /// [`Self::transport_run`] for the target's baseline.
+    #[inline(always)]
+    fn transport_run_any(
+        &self,
+        at: &SlabPoint<f32>,
+        (first, count): (usize, usize),
+        out: &mut [f32],
+    ) {
         out.iter_mut().for_each(|v| *v = 0.0);
         let Some(pt) = self.point(at) else {
             return;
@@ -302,10 +327,12 @@ impl<'a> TransportTables<'a> {
         if !self.add_t_features(&pt, &mut sums) {
             return;
         }
-        for (g, slot) in (first..first + count).zip(out) {
-            if let Some(range) = self.fitted_range(g, &pt) {
-                *slot = self.t_within(&pt, g, &range, &sums);
-            }
+        for (lanes, out) in (first..first + count)
+            .step_by(LANES)
+            .zip(out.chunks_mut(LANES))
+        {
+            let (t, _) = self.t_lanes(&pt, (lanes, out.len()), &sums);
+            out.copy_from_slice(&t[..out.len()]);
         }
     }
 
@@ -354,13 +381,16 @@ impl<'a> TransportTables<'a> {
             self.add_collector_features(cp, &pt, (first, count), &mut c);
             (cp, c)
         });
-        for (g, slot) in (first..first + count).zip(out) {
-            let Some(range) = self.fitted_range(g, &pt) else {
-                continue;
-            };
-            slot.t = self.t_within(&pt, g, &range, &sums);
-            if let (Some((cp, c)), true) = (&collector, slot.t > 0.0) {
-                *slot = self.collector_of(cp, &pt, g, &range, c, slot.t);
+        for (lanes, out) in (first..first + count)
+            .step_by(LANES)
+            .zip(out.chunks_mut(LANES))
+        {
+            let (t, ranges) = self.t_lanes(&pt, (lanes, out.len()), &sums);
+            for (i, slot) in out.iter_mut().enumerate() {
+                slot.t = t[i];
+                if let (Some((cp, c)), Some(range), true) = (&collector, &ranges[i], t[i] > 0.0) {
+                    *slot = self.collector_of(cp, &pt, lanes + i, range, c, t[i]);
+                }
             }
         }
     }
@@ -401,12 +431,13 @@ impl<'a> TransportTables<'a> {
         if !(t > 0.0) || !(d >= 0.0 && d <= t) {
             return None;
         }
+        let ln_t = Real::ln(t);
         let (nt, nl, nm) = (self.thickness.len(), self.mu_l.len(), self.mu_v.len());
         let cell = Cell {
             at: *at,
             l: lerp(&self.mu_l, at.mu_l),
             v: lerp(&self.mu_v, at.mu_v),
-            u: stretched_u(d, t),
+            u: stretched_u_at(d, t, ln_t),
         };
         let offset = ln_boundary(at)?;
         let near_t = lerp(&self.thickness, t);
@@ -428,14 +459,20 @@ impl<'a> TransportTables<'a> {
         Some(Point {
             cell,
             offset,
-            ln_t: Real::ln(t),
+            ln_t,
             corners,
             n_corners: nc,
             ceiling,
             n_ceiling: nceil,
             per_group: (nt * nl * nm, nt * nl),
-            p_u: legendre(2.0 * cell.u - 1.0, MAX_LEGENDRE),
+            p_u: legendre(2.0 * cell.u - 1.0, self.depth_terms()),
         })
+    }
+
+    /// The most depth terms T or the collector reads at a point.
+    fn depth_terms(&self) -> usize {
+        let c = self.collector.as_ref().map_or(0, |cp| cp.form.depth_terms());
+        self.form.depth_terms().max(c)
     }
 
     /// Adds T's features at `pt` to `sums`; false where the form says every group is 0.
@@ -497,44 +534,107 @@ impl<'a> TransportTables<'a> {
         }
     }
 
-    /// T of group `g` at `pt` given its fitted depths there and the features' `sums`.
-    fn t_within(
+    /// T of the groups `g0 .. g0 + n` (n ≤ [`LANES`]) at `pt` from the features' `sums`, and
+    /// each group's fitted depths there (None where no node the point draws on has fitted
+    /// cells: T is 0). The groups are taken side by side, lane i for group g0 + i, with the
+    /// arithmetic of one group (the same operations in the same order), so that the compiler
+    /// can put the lanes in one vector register.
+    #[inline(always)]
+    fn t_lanes(
         &self,
         pt: &Point,
-        g: usize,
-        range: &FittedDepths<f32>,
+        (g0, n): (usize, usize),
         sums: &Sums<T_SUMS>,
-    ) -> f32 {
-        let lq = legendre_in(&self.ln_t_range, g, pt.ln_t, self.q);
-        let n = self.form.depth_terms();
-        let d = sums.depth_sums(g, &lq);
+    ) -> ([f32; LANES], [Option<FittedDepths<f32>>; LANES]) {
+        let n = n.min(LANES);
+        let ranges = self.fitted_lanes(pt, (g0, n));
+        let d = sums.depth_lanes(g0, &self.ln_t_lanes(pt.ln_t, (g0, n), self.q));
+        let top = self.ceiling_lanes(pt, (g0, n));
+        let depth_terms = self.form.depth_terms();
         let u = pt.cell.u;
-        let depth = if range.held(u) == u {
-            // depth_polynomial's own sum, on the point's P_j computed once.
-            d.iter()
-                .take(n)
-                .zip(&pt.p_u)
-                .fold(0.0, |s, (a, b)| s + *a * *b)
-        } else {
-            depth_polynomial(&d, n, u, pt.cell.at.thickness, range)
-        };
-        let t = range.share * Real::exp(pt.offset + depth);
-        match self.ceiling(g, pt) {
-            Some(top) if t > top => top,
-            _ => t,
+        let mut t = [0.0f32; LANES];
+        for i in 0..n {
+            let Some(range) = &ranges[i] else {
+                continue;
+            };
+            let d_i: [f32; MAX_LEGENDRE] = core::array::from_fn(|j| d[j][i]);
+            let depth = if range.held(u) == u {
+                // depth_polynomial's own sum, on the point's P_j computed once.
+                d_i.iter()
+                    .take(depth_terms)
+                    .zip(&pt.p_u)
+                    .fold(0.0, |s, (a, b)| s + *a * *b)
+            } else {
+                depth_polynomial(&d_i, depth_terms, u, pt.cell.at.thickness, range)
+            };
+            let v = range.share * Real::exp(pt.offset + depth);
+            t[i] = match top[i] {
+                Some(top) if v > top => top,
+                _ => v,
+            };
         }
+        (t, ranges)
     }
 
-    /// [`CEILING_FACTOR`] × the largest T group `g`'s fitted cells hold at the thickness and
-    /// sun-cosine nodes `pt` draws on; None for files without the ceiling.
-    fn ceiling(&self, g: usize, pt: &Point) -> Option<f32> {
-        let top = self.t_ceiling.as_ref()?;
-        let base = g * pt.per_group.1;
-        let most = pt.ceiling[..pt.n_ceiling]
-            .iter()
-            .map(|&k| top.get(base + k).unwrap_or(0.0))
-            .fold(0.0f32, f32::max);
-        Some(CEILING_FACTOR as f32 * most)
+    /// L_k(s_g), s_g the place of ln t in group g's span, for k < `q` and the groups `g0 .. g0
+    /// + n`: [k][lane].
+    #[inline(always)]
+    fn ln_t_lanes(&self, ln_t: f32, (g0, n): (usize, usize), q: usize) -> [[f32; LANES]; MAX_Q] {
+        let span = |i: usize, e: usize| self.ln_t_range.get(2 * (g0 + i) + e).unwrap_or(0.0);
+        let s: [f32; LANES] = core::array::from_fn(|i| {
+            if i < n {
+                ln_t_position((span(i, 0), span(i, 1)), ln_t)
+            } else {
+                0.0
+            }
+        });
+        legendre_lanes(&s, q.min(MAX_Q))
+    }
+
+    /// The fitted depths of the groups `g0 .. g0 + n` around `pt` ([`FittedDepths::of`] of
+    /// the grid corners the point draws on), lane by lane.
+    #[inline(always)]
+    fn fitted_lanes(&self, pt: &Point, (g0, n): (usize, usize)) -> [Option<FittedDepths<f32>>; LANES] {
+        let (mut all, mut w, mut lo, mut hi) = ([0.0f32; LANES], [0.0f32; LANES], [0.0f32; LANES], [0.0f32; LANES]);
+        for &(at, wk) in &pt.corners[..pt.n_corners] {
+            for i in 0..n {
+                let packed = self.u_range.get((g0 + i) * pt.per_group.0 + at);
+                let (a, b) = unpack_u_range(packed.unwrap_or(EMPTY_RANGE));
+                all[i] += wk;
+                if a <= b && wk > 0.0 {
+                    w[i] += wk;
+                    lo[i] += wk * a;
+                    hi[i] += wk * b;
+                }
+            }
+        }
+        core::array::from_fn(|i| {
+            (w[i] > 0.0).then(|| FittedDepths {
+                lo: lo[i] / w[i],
+                hi: hi[i] / w[i],
+                share: w[i] / all[i],
+            })
+        })
+    }
+
+    /// [`CEILING_FACTOR`] × the largest T each of the groups `g0 .. g0 + n` holds in its
+    /// fitted cells at the thickness and sun-cosine nodes `pt` draws on; None for files
+    /// without the ceiling.
+    #[inline(always)]
+    fn ceiling_lanes(&self, pt: &Point, (g0, n): (usize, usize)) -> [Option<f32>; LANES] {
+        let Some(top) = self.t_ceiling.as_ref() else {
+            return [None; LANES];
+        };
+        core::array::from_fn(|i| {
+            let base = (g0 + i) * pt.per_group.1;
+            let most = || {
+                pt.ceiling[..pt.n_ceiling]
+                    .iter()
+                    .map(|&k| top.get(base + k).unwrap_or(0.0))
+                    .fold(0.0f32, f32::max)
+            };
+            (i < n).then(|| CEILING_FACTOR as f32 * most())
+        })
     }
 
     /// T, c and σ of group `g` (of T = `t` > 0) at `pt` from the collector's `sums`.
@@ -564,16 +664,6 @@ impl<'a> TransportTables<'a> {
             c_z: sigma * cz,
             sigma,
         }
-    }
-
-    /// Group `g`'s fitted depths around `pt` (of the thickness and (μ_L, μ_V) nodes the point
-    /// draws on); None where none of them has fitted cells.
-    fn fitted_range(&self, g: usize, pt: &Point) -> Option<FittedDepths<f32>> {
-        let base = g * pt.per_group.0;
-        FittedDepths::of(pt.corners[..pt.n_corners].iter().map(|&(at, w)| {
-            let (lo, hi) = unpack_u_range(self.u_range.get(base + at).unwrap_or(EMPTY_RANGE));
-            (w, lo, hi)
-        }))
     }
 
     /// p(θ) of the stored table between its nodes as the tabulated model samples it: the
@@ -771,8 +861,50 @@ impl<const N: usize> Sums<N> {
     /// [`Self::add_row`] for the target's baseline.
     #[inline(always)]
     fn add_row_any(&mut self, beta: &[u8], row: &[(u32, f32)]) {
+        if self.strides.feature_major {
+            // The shipped forms' widths: 8 groups × Q = 5 (T) and 8 × 4 (the collector), and
+            // one group of each.
+            match self.groups * self.q {
+                40 => return self.add_runs::<40>(beta, row),
+                32 => return self.add_runs::<32>(beta, row),
+                5 => return self.add_runs::<5>(beta, row),
+                _ => {}
+            }
+        }
         for &(key, v) in row {
             self.add(beta, (key & COL) as usize, v, (key >> DEGREE_SHIFT) as usize);
+        }
+    }
+
+    /// [`Self::add_row`] for feature-major β of `W` = groups × Q: each run of consecutive
+    /// features of one depth degree is summed in registers (a fixed-size copy of its
+    /// accumulators) and stored once, rather than each feature's sums going through memory and
+    /// waiting on the previous one's. The same products reach each accumulator in the same
+    /// order.
+    #[inline(always)]
+    fn add_runs<const W: usize>(&mut self, beta: &[u8], row: &[(u32, f32)]) {
+        let mut rest = row;
+        while let Some(&(first, _)) = rest.first() {
+            let degree = first >> DEGREE_SHIFT;
+            let len = rest
+                .iter()
+                .position(|&(key, _)| key >> DEGREE_SHIFT != degree)
+                .unwrap_or(rest.len());
+            let (run, tail) = rest.split_at(len);
+            rest = tail;
+            let j = degree as usize;
+            let Some(acc) = self.acc.get_mut(j * W..(j + 1) * W) else {
+                continue;
+            };
+            let mut sums = [0.0f32; W];
+            sums.copy_from_slice(acc);
+            for &(key, v) in run {
+                let start = 4 * self.strides.at(self.first, (key & COL) as usize);
+                if let Some(params) = beta.get(start..start + 4 * W) {
+                    multiply_add(&mut sums, v, params);
+                }
+            }
+            acc.copy_from_slice(&sums);
         }
     }
 
@@ -785,6 +917,25 @@ impl<const N: usize> Sums<N> {
         for (j, slot) in d.iter_mut().enumerate().take(self.depth) {
             if let Some(run) = self.acc.get(j * width + at..j * width + at + self.q) {
                 *slot = run.iter().zip(lq).map(|(a, l)| a * l).sum();
+            }
+        }
+        d
+    }
+
+    /// [`Self::depth_sums`] of the groups `g0 ..` of the run side by side, `lq` [k][lane]:
+    /// [j][lane] (lanes past the run 0).
+    #[inline(always)]
+    fn depth_lanes(&self, g0: usize, lq: &[[f32; LANES]; MAX_Q]) -> [[f32; LANES]; MAX_LEGENDRE] {
+        let mut d = [[0.0; LANES]; MAX_LEGENDRE];
+        let width = self.groups * self.q;
+        let lanes = (self.first + self.groups).saturating_sub(g0).min(LANES);
+        let base = (g0 - self.first) * self.q;
+        for (j, d) in d.iter_mut().enumerate().take(self.depth) {
+            for (i, slot) in d.iter_mut().enumerate().take(lanes) {
+                let at = j * width + base + i * self.q;
+                if let Some(run) = self.acc.get(at..at + self.q) {
+                    *slot = run.iter().zip(lq).fold(0.0, |s, (a, l)| s + a * l[i]);
+                }
             }
         }
         d
@@ -814,6 +965,25 @@ fn multiply_add(acc: &mut [f32], v: f32, run: &[u8]) {
     for (a, b) in acc.iter_mut().zip(run.chunks_exact(4)) {
         *a += v * f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
     }
+}
+
+/// Groups evaluated side by side: 8 f32 lanes, one AVX2 register.
+const LANES: usize = 8;
+
+/// P_0 … P_{n−1} of each lane of `x` ([k][lane]), by the same steps as [`legendre`].
+#[inline(always)]
+fn legendre_lanes(x: &[f32; LANES], n: usize) -> [[f32; LANES]; MAX_Q] {
+    let mut p = [[0.0; LANES]; MAX_Q];
+    let mut steps = [Legendre::new(0.0); LANES];
+    for (step, &x) in steps.iter_mut().zip(x) {
+        *step = Legendre::new(x);
+    }
+    for row in p.iter_mut().take(n) {
+        for (slot, step) in row.iter_mut().zip(steps.iter_mut()) {
+            *slot = step.next().unwrap_or(0.0);
+        }
+    }
+    p
 }
 
 /// L_0 … L_{q−1} of s ∈ [−1, 1], s the place of ln t in group g's span (`ranges`, [G, 2]).
