@@ -92,12 +92,12 @@ pub(crate) fn cells_of(tab: &SlabTables, it: usize) -> Vec<(Cell, [usize; 4], f6
         for j in 0..nd {
             for m in 0..nm {
                 for k in 0..nk {
-                    let c = Cell {
-                        at: tab.point(it, il, j, m, k),
-                        l: Lerp::at(il),
-                        v: Lerp::at(m),
-                        u: j as f64 / (nd - 1) as f64,
-                    };
+                    let c = Cell::new(
+                        tab.point(it, il, j, m, k),
+                        Lerp::at(il),
+                        Lerp::at(m),
+                        j as f64 / (nd - 1) as f64,
+                    );
                     if let Some(off) = ln_boundary(&c.at) {
                         out.push((c, [il, j, m, k], off));
                     }

@@ -255,18 +255,18 @@ mod tests {
     fn cell(mu_l: f64, mu_v: f64, psi: f64, u: f64) -> Cell<f64> {
         let nodes = [0.25, 0.5, 0.75, 1.0];
         let vnodes = [-0.75, -0.25, 0.25, 0.75];
-        Cell {
-            at: SlabPoint {
+        Cell::new(
+            SlabPoint {
                 depth: 4.0 * u,
                 thickness: 4.0,
                 mu_v,
                 psi_v: psi,
                 mu_l,
             },
-            l: Lerp::between(&nodes, mu_l),
-            v: Lerp::between(&vnodes, mu_v),
+            Lerp::between(&nodes, mu_l),
+            Lerp::between(&vnodes, mu_v),
             u,
-        }
+        )
     }
 
     /// Columns stay below n_params, and c_x vanishes at ψ = 0 and π (mirror symmetry) whatever
@@ -298,26 +298,26 @@ mod tests {
         for stat in Statistic::ALL {
             let c = cell(0.45, 0.55, 1.1, 0.3);
             let a = form.value(stat, &c, 1.7, 4, 4, coef);
-            let c32 = Cell {
-                at: SlabPoint {
+            let c32 = Cell::new(
+                SlabPoint {
                     depth: 1.2f32,
                     thickness: 4.0,
                     mu_v: 0.55,
                     psi_v: 1.1,
                     mu_l: 0.45,
                 },
-                l: Lerp {
+                Lerp {
                     lo: c.l.lo,
                     hi: c.l.hi,
                     w: c.l.w as f32,
                 },
-                v: Lerp {
+                Lerp {
                     lo: c.v.lo,
                     hi: c.v.hi,
                     w: c.v.w as f32,
                 },
-                u: 0.3,
-            };
+                0.3,
+            );
             let b = form.value(stat, &c32, 1.7f32, 4, 4, |i| coef(i) as f32);
             assert!(
                 (b as f64 - a).abs() < 1e-5 * (1.0 + a.abs()),

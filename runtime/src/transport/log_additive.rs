@@ -108,6 +108,7 @@ impl<F: Real> Lerp<F> {
     }
 
     /// Calls `f(node, weight)` for its one or two nodes.
+    #[inline(always)]
     pub fn each(&self, mut f: impl FnMut(usize, F)) {
         if self.hi != self.lo && self.w > F::of(0.0) {
             f(self.lo, F::of(1.0) - self.w);
@@ -130,9 +131,23 @@ pub struct Cell<F> {
     pub v: Lerp<F>,
     /// Stretched depth in [0, 1].
     pub u: F,
+    /// The scattering angle Θ (radians) between the sun's direction and the view's, which
+    /// the Θ-table features of T and of the collector read: computed once ([`Cell::new`]).
+    pub theta: F,
 }
 
 impl<F: Real> Cell<F> {
+    /// The cell of `at` with its cosines among the nodes (`l`, `v`) and stretched depth `u`.
+    pub fn new(at: SlabPoint<F>, l: Lerp<F>, v: Lerp<F>, u: F) -> Self {
+        Self {
+            at,
+            l,
+            v,
+            u,
+            theta: scattering_angle(&at),
+        }
+    }
+
     /// A cell at zero everything (for counting features).
     pub(crate) fn zero() -> Self {
         let z = F::of(0.0);
@@ -147,6 +162,7 @@ impl<F: Real> Cell<F> {
             l: Lerp::at(0),
             v: Lerp::at(0),
             u: z,
+            theta: z,
         }
     }
 }
@@ -554,8 +570,17 @@ pub fn ln_t_position<F: Real>((a, b): (F, F), ln_t: F) -> F {
     }
 }
 
+/// Θ (radians) at `at`, from 1 − cos Θ as 2 asin √((1 − cos Θ)/2): exact near the forward
+/// peak, where the hats are dense.
+fn scattering_angle<F: Real>(at: &SlabPoint<F>) -> F {
+    let cos = scattering_cosine(at);
+    let half = (F::of(0.5) * cos.one_minus_mu).sqrt();
+    F::of(2.0) * (if half > F::of(1.0) { F::of(1.0) } else { half }).asin()
+}
+
 /// `f(col + node, weight · val)` for the μ_V nodes of `c` (columns col … col + nm − 1) and the
 /// μ_L nodes (columns col + nm …): a parameter a(μ_V) + b(μ_L) read between its nodes.
+#[inline(always)]
 pub(crate) fn on_nodes<F: Real>(
     c: &Cell<F>,
     nm: usize,
@@ -570,6 +595,7 @@ pub(crate) fn on_nodes<F: Real>(
 /// The Θ-table features `val · h_i(Θ) · (P_0, P_1)(2u − 1)` at columns col + 2i, col + 2i + 1,
 /// as `f(column, val · h_i, j)` with j the Legendre degree in depth (0, 1): h_i the hat
 /// functions of the nodes Θ_i = π (i/(n − 1))², n = `nodes` (dense at the forward peak).
+#[inline(always)]
 pub fn theta_hats<F: Real>(
     nodes: usize,
     c: &Cell<F>,
@@ -577,9 +603,7 @@ pub fn theta_hats<F: Real>(
     col: usize,
     f: &mut impl FnMut(usize, F, usize),
 ) {
-    let cos = scattering_cosine(&c.at);
-    let half = (F::of(0.5) * cos.one_minus_mu).sqrt();
-    let theta = F::of(2.0) * (if half > F::of(1.0) { F::of(1.0) } else { half }).asin();
+    let theta = c.theta;
     let n = nodes.max(2);
     let top = (n - 1) as f64;
     let node = |i: usize| {
@@ -613,18 +637,18 @@ mod tests {
     fn cell<F: Real>(mu_l: f64, mu_v: f64, psi: f64, u: f64, t: f64) -> Cell<F> {
         let lnodes = [0.25, 0.5, 0.75, 1.0].map(F::of);
         let vnodes = [-0.75, -0.25, 0.25, 0.75].map(F::of);
-        Cell {
-            at: SlabPoint {
+        Cell::new(
+            SlabPoint {
                 depth: F::of(u * t),
                 thickness: F::of(t),
                 mu_v: F::of(mu_v),
                 psi_v: F::of(psi),
                 mu_l: F::of(mu_l),
             },
-            l: Lerp::between(&lnodes, F::of(mu_l)),
-            v: Lerp::between(&vnodes, F::of(mu_v)),
-            u: F::of(u),
-        }
+            Lerp::between(&lnodes, F::of(mu_l)),
+            Lerp::between(&vnodes, F::of(mu_v)),
+            F::of(u),
+        )
     }
 
     #[test]

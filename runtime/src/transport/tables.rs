@@ -362,7 +362,25 @@ impl<'a> TransportTables<'a> {
     }
 
     /// T, c and σ of the groups `first .. first + count` at `at` into `out[..count]`.
-    fn evaluate_run(
+    fn evaluate_run(&self, at: &SlabPoint<f32>, run: (usize, usize), out: &mut [Transport]) {
+        #[cfg(all(feature = "std", target_arch = "x86_64"))]
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above.
+            return unsafe { self.evaluate_run_avx2(at, run, out) };
+        }
+        self.evaluate_run_any(at, run, out);
+    }
+
+    /// [`Self::evaluate_run`] compiled for AVX2 (as [`Self::transport_run_avx2`]).
+    #[cfg(all(feature = "std", target_arch = "x86_64"))]
+    #[target_feature(enable = "avx2")]
+    fn evaluate_run_avx2(&self, at: &SlabPoint<f32>, run: (usize, usize), out: &mut [Transport]) {
+        self.evaluate_run_any(at, run, out);
+    }
+
+    /// [`Self::evaluate_run`] for the target's baseline.
+    #[inline(always)]
+    fn evaluate_run_any(
         &self,
         at: &SlabPoint<f32>,
         (first, count): (usize, usize),
@@ -386,11 +404,9 @@ impl<'a> TransportTables<'a> {
             .zip(out.chunks_mut(LANES))
         {
             let (t, ranges) = self.t_lanes(&pt, (lanes, out.len()), &sums);
-            for (i, slot) in out.iter_mut().enumerate() {
-                slot.t = t[i];
-                if let (Some((cp, c)), Some(range), true) = (&collector, &ranges[i], t[i] > 0.0) {
-                    *slot = self.collector_of(cp, &pt, lanes + i, range, c, t[i]);
-                }
+            match &collector {
+                Some((cp, c)) => self.collector_lanes(cp, &pt, (&t, &ranges), (lanes, c), out),
+                None => out.iter_mut().zip(t).for_each(|(slot, t)| slot.t = t),
             }
         }
     }
@@ -433,12 +449,12 @@ impl<'a> TransportTables<'a> {
         }
         let ln_t = Real::ln(t);
         let (nt, nl, nm) = (self.thickness.len(), self.mu_l.len(), self.mu_v.len());
-        let cell = Cell {
-            at: *at,
-            l: lerp(&self.mu_l, at.mu_l),
-            v: lerp(&self.mu_v, at.mu_v),
-            u: stretched_u_at(d, t, ln_t),
-        };
+        let cell = Cell::new(
+            *at,
+            lerp(&self.mu_l, at.mu_l),
+            lerp(&self.mu_v, at.mu_v),
+            stretched_u_at(d, t, ln_t),
+        );
         let offset = ln_boundary(at)?;
         let near_t = lerp(&self.thickness, t);
         // The grid nodes the point draws on, the same for every group: (thickness, μ_L, μ_V)
@@ -548,7 +564,8 @@ impl<'a> TransportTables<'a> {
     ) -> ([f32; LANES], [Option<FittedDepths<f32>>; LANES]) {
         let n = n.min(LANES);
         let ranges = self.fitted_lanes(pt, (g0, n));
-        let d = sums.depth_lanes(g0, &self.ln_t_lanes(pt.ln_t, (g0, n), self.q));
+        let mut d = [[0.0; LANES]; MAX_LEGENDRE];
+        sums.depth_lanes(g0, &self.ln_t_lanes(pt.ln_t, (g0, n), self.q), &mut d);
         let top = self.ceiling_lanes(pt, (g0, n));
         let depth_terms = self.form.depth_terms();
         let u = pt.cell.u;
@@ -601,11 +618,12 @@ impl<'a> TransportTables<'a> {
                 let packed = self.u_range.get((g0 + i) * pt.per_group.0 + at);
                 let (a, b) = unpack_u_range(packed.unwrap_or(EMPTY_RANGE));
                 all[i] += wk;
-                if a <= b && wk > 0.0 {
-                    w[i] += wk;
-                    lo[i] += wk * a;
-                    hi[i] += wk * b;
-                }
+                // 1 where the node has fitted cells, else 0: adding 0 leaves each sum as it
+                // was, with no branch to mispredict (empty nodes are common and irregular).
+                let has = f32::from(u8::from(a <= b && wk > 0.0));
+                w[i] += wk * has;
+                lo[i] += wk * a * has;
+                hi[i] += wk * b * has;
             }
         }
         core::array::from_fn(|i| {
@@ -637,32 +655,48 @@ impl<'a> TransportTables<'a> {
         })
     }
 
-    /// T, c and σ of group `g` (of T = `t` > 0) at `pt` from the collector's `sums`.
-    fn collector_of(
+    /// T, c and σ of the groups `g0 .. g0 + out.len()` (at most [`LANES`]) at `pt` into
+    /// `out`, given their T and fitted depths there, from the collector's `sums`; c and σ are 0
+    /// where T is. Lanes as in [`Self::t_lanes`].
+    #[inline(always)]
+    fn collector_lanes(
         &self,
         cp: &CollectorPart,
         pt: &Point,
-        g: usize,
-        range: &FittedDepths<f32>,
-        sums: &[Sums<C_SUMS>; 4],
-        t: f32,
-    ) -> Transport {
-        let lq = legendre_in(&self.ln_t_range, g, pt.ln_t, cp.q);
-        // c and σ are held within the fitted depths.
-        let u = range.held(pt.cell.u);
-        let p_x = if u == pt.cell.u {
-            pt.p_u
-        } else {
-            legendre(2.0 * u - 1.0, cp.form.depth_terms())
-        };
-        let dot = |part: usize| sums[part].dot(g, &lq, &p_x);
-        let sigma = Real::exp(dot(0));
-        let cz = dot(1) + dot(2) / sigma;
-        Transport {
-            t,
-            c_x: sigma * dot(3),
-            c_z: sigma * cz,
-            sigma,
+        (t, ranges): (&[f32; LANES], &[Option<FittedDepths<f32>>; LANES]),
+        (g0, sums): (usize, &[Sums<C_SUMS>; 4]),
+        out: &mut [Transport],
+    ) {
+        let lq = self.ln_t_lanes(pt.ln_t, (g0, out.len()), cp.q);
+        let mut parts = [[[0.0; LANES]; MAX_COLLECTOR_LEGENDRE]; 4];
+        for (d, sums) in parts.iter_mut().zip(sums) {
+            sums.depth_lanes(g0, &lq, d);
+        }
+        let depth = cp.form.depth_terms().min(MAX_COLLECTOR_LEGENDRE);
+        for (i, slot) in out.iter_mut().enumerate() {
+            *slot = Transport {
+                t: t[i],
+                ..Transport::default()
+            };
+            let Some(range) = ranges[i].filter(|_| t[i] > 0.0) else {
+                continue;
+            };
+            // c and σ are held within the fitted depths.
+            let u = range.held(pt.cell.u);
+            let p_x = if u == pt.cell.u {
+                pt.p_u
+            } else {
+                legendre(2.0 * u - 1.0, depth)
+            };
+            let dot = |part: usize| -> f32 {
+                let d = &parts[part];
+                d.iter().zip(&p_x).take(depth).map(|(d, p)| d[i] * p).sum()
+            };
+            let sigma = Real::exp(dot(0));
+            let cz = dot(1) + dot(2) / sigma;
+            slot.c_x = sigma * dot(3);
+            slot.c_z = sigma * cz;
+            slot.sigma = sigma;
         }
     }
 
@@ -908,25 +942,12 @@ impl<const N: usize> Sums<N> {
         }
     }
 
-    /// Group `g`'s depth sums: per depth degree j, Σ_k acc[j][g, k] L_k(ln t) — the
-    /// coefficients of its depth polynomial at this point ([`depth_polynomial`]).
-    fn depth_sums(&self, g: usize, lq: &[f32; MAX_Q]) -> [f32; MAX_LEGENDRE] {
-        let mut d = [0.0; MAX_LEGENDRE];
-        let width = self.groups * self.q;
-        let at = (g - self.first) * self.q;
-        for (j, slot) in d.iter_mut().enumerate().take(self.depth) {
-            if let Some(run) = self.acc.get(j * width + at..j * width + at + self.q) {
-                *slot = run.iter().zip(lq).map(|(a, l)| a * l).sum();
-            }
-        }
-        d
-    }
-
-    /// [`Self::depth_sums`] of the groups `g0 ..` of the run side by side, `lq` [k][lane]:
-    /// [j][lane] (lanes past the run 0).
+    /// The depth sums of the groups `g0 ..` of the run side by side: per depth degree j,
+    /// Σ_k acc[j][g, k] L_k(ln t), `lq` [k][lane] — the coefficients of each group's depth
+    /// polynomial at this point ([`depth_polynomial`]); into `d` [j][lane] (the first `depth`
+    /// rows; lanes past the run untouched).
     #[inline(always)]
-    fn depth_lanes(&self, g0: usize, lq: &[[f32; LANES]; MAX_Q]) -> [[f32; LANES]; MAX_LEGENDRE] {
-        let mut d = [[0.0; LANES]; MAX_LEGENDRE];
+    fn depth_lanes(&self, g0: usize, lq: &[[f32; LANES]; MAX_Q], d: &mut [[f32; LANES]]) {
         let width = self.groups * self.q;
         let lanes = (self.first + self.groups).saturating_sub(g0).min(LANES);
         let base = (g0 - self.first) * self.q;
@@ -934,17 +955,10 @@ impl<const N: usize> Sums<N> {
             for (i, slot) in d.iter_mut().enumerate().take(lanes) {
                 let at = j * width + base + i * self.q;
                 if let Some(run) = self.acc.get(at..at + self.q) {
-                    *slot = run.iter().zip(lq).fold(0.0, |s, (a, l)| s + a * l[i]);
+                    *slot = run.iter().zip(lq).map(|(a, l)| a * l[i]).sum();
                 }
             }
         }
-        d
-    }
-
-    /// Group `g`'s statistic: Σ_j P_j(x) × its depth sum j, x at the group's held depth.
-    fn dot(&self, g: usize, lq: &[f32; MAX_Q], p_x: &[f32; MAX_LEGENDRE]) -> f32 {
-        let d = self.depth_sums(g, lq);
-        d.iter().zip(p_x).take(self.depth).map(|(a, b)| a * b).sum()
     }
 }
 
@@ -984,15 +998,6 @@ fn legendre_lanes(x: &[f32; LANES], n: usize) -> [[f32; LANES]; MAX_Q] {
         }
     }
     p
-}
-
-/// L_0 … L_{q−1} of s ∈ [−1, 1], s the place of ln t in group g's span (`ranges`, [G, 2]).
-fn legendre_in(ranges: &ArrayView, g: usize, ln_t: f32, q: usize) -> [f32; MAX_Q] {
-    let (a, b) = (
-        ranges.get(2 * g).unwrap_or(0.0),
-        ranges.get(2 * g + 1).unwrap_or(0.0),
-    );
-    legendre(ln_t_position((a, b), ln_t), q.min(MAX_Q))
 }
 
 /// The optional collector arrays, checked like the others.
