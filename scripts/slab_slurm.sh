@@ -6,6 +6,9 @@
 #   sbatch --array=1-8 scripts/slab_slurm.sh                     # 8 shards of the default tables
 #   nephele merge --config fit-configs/slab-default.json --out outputs/slab shards/*
 #
+# scripts/slurm_local.sh runs it under a real one-node Slurm (CI does) and checks the merged
+# tables against one process; docs/integration.md says how it scales to a cluster.
+#
 #SBATCH --job-name=nephele-slab
 #SBATCH --cpus-per-task=8
 #SBATCH --time=04:00:00
