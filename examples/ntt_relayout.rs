@@ -14,7 +14,7 @@ fn main() -> Result<()> {
     );
     let version = match args.get(2) {
         Some(v) => v.parse().context("VERSION must be a whole number")?,
-        None => nephele_runtime::container::VERSION,
+        None => nephele_runtime::container::FORMAT_VERSION,
     };
     let bytes = std::fs::read(&args[0]).with_context(|| format!("reading {}", args[0]))?;
     let out = nephele::compress::ship::relayout(&bytes, version)?;

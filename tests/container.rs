@@ -157,7 +157,7 @@ proptest! {
         let mut bytes = sample();
         let n = bytes.len() - 4;
         bytes[at..at + 4].copy_from_slice(&value.to_le_bytes());
-        let crc = nephele_runtime::container::crc32(&bytes[..n]);
+        let crc = nephele_runtime::fitting::crc32(&bytes[..n]);
         bytes[n..].copy_from_slice(&crc.to_le_bytes());
         if let Ok(c) = Container::from_bytes(&bytes) {
             for i in 0..c.len() {

@@ -3,8 +3,8 @@
 //! records errors within the targets where they are met, and the runtime answers with
 //! physically sensible values everywhere in its range.
 
-use nephele_runtime::container::crc32;
 use nephele_runtime::embedded::{mie_10um, MIE_10UM};
+use nephele_runtime::fitting::crc32;
 use nephele_runtime::transport::{SlabPoint, Transport};
 use std::path::Path;
 

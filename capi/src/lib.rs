@@ -12,7 +12,7 @@ use nephele_runtime::embedded::MIE_10UM;
 use nephele_runtime::phase::{
     Draine, HenyeyGreenstein, HgDraine, Rayleigh, Schlick, TwoTermHg, VonMisesFisher,
 };
-use nephele_runtime::transport::{SlabPoint, Transport, TransportTables};
+use nephele_runtime::transport::{OwnedTables, SlabPoint, Transport, TransportTables};
 use nephele_runtime::PhaseFunction;
 use std::cell::RefCell;
 use std::ffi::{c_char, CString};
@@ -70,10 +70,8 @@ pub struct NepheleTransport {
 /// Loaded transport tables (opaque): from `nephele_tables_from_bytes` or
 /// `nephele_tables_embedded`, released by `nephele_tables_free`.
 pub struct NepheleTables {
-    /// The parsed view of `_bytes` (declared first: dropped before the bytes it borrows).
-    tables: TransportTables<'static>,
-    /// The caller's bytes, copied (None for the embedded tables).
-    _bytes: Option<Box<[u8]>>,
+    /// The caller's bytes, copied (or the embedded ones), checked once.
+    owned: OwnedTables,
 }
 
 /// A phase model (opaque): from one of the `nephele_phase_*` constructors, released by
@@ -186,16 +184,10 @@ pub unsafe extern "C" fn nephele_tables_from_bytes(
                 format!("len = {len} bytes cannot be"),
             );
         }
-        let owned: Box<[u8]> = unsafe { std::slice::from_raw_parts(bytes, len) }.into();
-        // SAFETY: the boxed bytes do not move while `NepheleTables` owns them, and the view
-        // borrowing them is dropped first (field order).
-        let view: &'static [u8] = unsafe { &*(owned.as_ref() as *const [u8]) };
-        match TransportTables::from_bytes(view) {
-            Ok(tables) => {
-                *out = Box::into_raw(Box::new(NepheleTables {
-                    tables,
-                    _bytes: Some(owned),
-                }));
+        let bytes = unsafe { std::slice::from_raw_parts(bytes, len) };
+        match OwnedTables::from_bytes(bytes) {
+            Ok(owned) => {
+                *out = Box::into_raw(Box::new(NepheleTables { owned }));
                 NepheleStatus::Ok
             }
             Err(e) => fail(NepheleStatus::BadTables, format!("transport tables: {e}")),
@@ -214,12 +206,9 @@ pub unsafe extern "C" fn nephele_tables_embedded(out: *mut *mut NepheleTables) -
             Ok(o) => o,
             Err(s) => return s,
         };
-        match TransportTables::from_bytes(MIE_10UM) {
-            Ok(tables) => {
-                *out = Box::into_raw(Box::new(NepheleTables {
-                    tables,
-                    _bytes: None,
-                }));
+        match OwnedTables::from_static(MIE_10UM) {
+            Ok(owned) => {
+                *out = Box::into_raw(Box::new(NepheleTables { owned }));
                 NepheleStatus::Ok
             }
             Err(e) => fail(NepheleStatus::BadTables, format!("embedded tables: {e}")),
@@ -250,7 +239,7 @@ pub unsafe extern "C" fn nephele_tables_groups(
     guarded(
         || match unsafe { (get(tables, "tables"), get_mut(out, "out")) } {
             (Ok(t), Ok(o)) => {
-                *o = t.tables.groups();
+                *o = t.owned.tables().groups();
                 NepheleStatus::Ok
             }
             (Err(s), _) | (_, Err(s)) => s,
@@ -270,8 +259,8 @@ pub unsafe extern "C" fn nephele_tables_group_first_order(
 ) -> NepheleStatus {
     guarded(
         || match unsafe { (get(tables, "tables"), get_mut(out, "out")) } {
-            (Ok(t), Ok(o)) => match t.tables.group_first_order(group) {
-                Some(first) if group < t.tables.groups() => {
+            (Ok(t), Ok(o)) => match t.owned.tables().group_first_order(group) {
+                Some(first) if group < t.owned.tables().groups() => {
                     *o = first;
                     NepheleStatus::Ok
                 }
@@ -285,7 +274,10 @@ pub unsafe extern "C" fn nephele_tables_group_first_order(
 fn bad_group(group: usize, t: &NepheleTables) -> NepheleStatus {
     fail(
         NepheleStatus::BadGroup,
-        format!("group {group} (the tables have {})", t.tables.groups()),
+        format!(
+            "group {group} (the tables have {})",
+            t.owned.tables().groups()
+        ),
     )
 }
 
@@ -306,10 +298,10 @@ pub unsafe extern "C" fn nephele_evaluate(
                 (Ok(t), Ok(a), Ok(o)) => (t, a, o),
                 (Err(s), _, _) | (_, Err(s), _) | (_, _, Err(s)) => return s,
             };
-        if group >= t.tables.groups() {
+        if group >= t.owned.tables().groups() {
             return bad_group(group, t);
         }
-        *out = transport(&t.tables.evaluate(group, &slab_point(at)));
+        *out = transport(&t.owned.tables().evaluate(group, &slab_point(at)));
         NepheleStatus::Ok
     })
 }
@@ -323,9 +315,9 @@ unsafe fn per_group<'a, T>(
     tables: *const NepheleTables,
     at: *const NepheleSlabPoint,
     (out, capacity): (*mut T, usize),
-) -> Result<(&'a TransportTables<'static>, SlabPoint<f32>, &'a mut [T]), NepheleStatus> {
+) -> Result<(&'a TransportTables<'a>, SlabPoint<f32>, &'a mut [T]), NepheleStatus> {
     let (t, at) = unsafe { (get(tables, "tables")?, get(at, "at")?) };
-    let g = t.tables.groups();
+    let g = t.owned.tables().groups();
     if out.is_null() {
         return Err(fail(NepheleStatus::NullPointer, "out is null"));
     }
@@ -336,7 +328,7 @@ unsafe fn per_group<'a, T>(
         ));
     }
     let out = unsafe { std::slice::from_raw_parts_mut(out, g) };
-    Ok((&t.tables, slab_point(at), out))
+    Ok((t.owned.tables(), slab_point(at), out))
 }
 
 /// T, c and σ of every group at `*at` into `out[0 .. groups)` (`capacity` ≥ the group count).
@@ -396,7 +388,7 @@ pub unsafe extern "C" fn nephele_order1(
     guarded(
         || match unsafe { (get(tables, "tables"), get(at, "at"), get_mut(out, "out")) } {
             (Ok(t), Ok(a), Ok(o)) => {
-                *o = t.tables.order1(&slab_point(a));
+                *o = t.owned.tables().order1(&slab_point(a));
                 NepheleStatus::Ok
             }
             (Err(s), _, _) | (_, Err(s), _) | (_, _, Err(s)) => s,

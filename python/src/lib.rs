@@ -9,7 +9,7 @@
 use nephele_runtime::embedded::MIE_10UM;
 use nephele_runtime::phase::{Draine, HenyeyGreenstein, HgDraine, Rayleigh, Schlick, TwoTermHg};
 use nephele_runtime::transport::{
-    column_names, evaluate_points, Quantities, TransportTables, POINT_COLUMNS,
+    column_names, evaluate_points, OwnedTables, Quantities, TransportTables, POINT_COLUMNS,
 };
 use nephele_runtime::PhaseFunction;
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyUntypedArrayMethods};
@@ -20,8 +20,8 @@ use pyo3::types::PyDict;
 /// Transport tables (a `.ntt`): T, c and σ per order group and order 1 in a slab.
 #[pyclass(frozen, module = "nephele")]
 struct Tables {
-    /// The file's bytes (checked at construction; parsed in place on every call).
-    bytes: Vec<u8>,
+    /// The file's bytes, loaded and checked once.
+    owned: OwnedTables,
     /// Where they came from, for repr.
     source: String,
 }
@@ -33,15 +33,22 @@ fn value_error(what: &str, e: impl std::fmt::Display) -> PyErr {
 
 impl Tables {
     fn with<R>(&self, f: impl FnOnce(&TransportTables) -> R) -> PyResult<R> {
-        let tab = TransportTables::from_bytes(&self.bytes)
-            .map_err(|e| value_error(&format!("transport tables {}", self.source), e))?;
-        Ok(f(&tab))
+        Ok(f(self.owned.tables()))
     }
 
     fn checked(bytes: Vec<u8>, source: String) -> PyResult<Self> {
-        let me = Tables { bytes, source };
-        me.with(|_| ())?;
-        Ok(me)
+        let owned = OwnedTables::from_bytes(bytes)
+            .map_err(|e| value_error(&format!("transport tables {source}"), e))?;
+        Ok(Tables { owned, source })
+    }
+
+    fn embedded() -> PyResult<Self> {
+        let owned = OwnedTables::from_static(MIE_10UM)
+            .map_err(|e| value_error("embedded transport tables", e))?;
+        Ok(Tables {
+            owned,
+            source: "(embedded Mie 10 um)".into(),
+        })
     }
 }
 
@@ -107,7 +114,7 @@ impl Tables {
     #[pyo3(signature = (path=None))]
     fn new(path: Option<std::path::PathBuf>) -> PyResult<Self> {
         match path {
-            None => Self::checked(MIE_10UM.to_vec(), "(embedded Mie 10 um)".into()),
+            None => Self::embedded(),
             Some(p) => {
                 let bytes = std::fs::read(&p).map_err(|e| {
                     value_error(&format!("cannot read tables '{}'", p.display()), e)

@@ -20,28 +20,20 @@
 //!   L − 4     4  u32    CRC-32 (IEEE 802.3, as zlib) of bytes [0, L − 4)
 //! ```
 
-/// The first 8 bytes of every container ("\r\n" catches text-mode mangling, as PNG does).
-pub const MAGIC: [u8; 8] = *b"NEPHTT\r\n";
 /// The version this writer writes. Version 2 stores the transport parameters feature-major
 /// ([`crate::transport::TransportTables`]); version 1 files, group-major, still load.
-pub const VERSION: u32 = 2;
+pub const FORMAT_VERSION: u32 = 2;
 /// The oldest version this reader loads.
-pub const OLDEST_VERSION: u32 = 1;
-/// Most arrays one container may hold.
-pub const MAX_ARRAYS: usize = 4096;
-/// Bytes of one directory entry.
-pub const ENTRY_BYTES: usize = 48;
-/// Bytes before the directory.
-pub const HEADER_BYTES: usize = 16;
-/// Longest array name.
-pub const NAME_BYTES: usize = 16;
+pub const OLDEST_FORMAT_VERSION: u32 = 1;
+
+use layout::{crc32, ENTRY_BYTES, HEADER_BYTES, MAGIC, MAX_ARRAYS, NAME_BYTES};
 
 /// Why a byte slice is not a valid container.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FormatError {
     /// Shorter than its header, directory, data or checksum say.
     Truncated,
-    /// Not starting with [`MAGIC`].
+    /// Not starting with the magic bytes `NEPHTT\r\n`.
     BadMagic,
     /// A version this reader does not know.
     UnsupportedVersion(u32),
@@ -65,7 +57,7 @@ impl core::fmt::Display for FormatError {
             FormatError::UnsupportedVersion(v) => {
                 write!(
                     f,
-                    "transport tables version {v} (this reader knows {OLDEST_VERSION} to {VERSION})"
+                    "transport tables version {v} (this reader knows {OLDEST_FORMAT_VERSION} to {FORMAT_VERSION})"
                 )
             }
             FormatError::BadChecksum => write!(f, "transport tables checksum mismatch (corrupt)"),
@@ -149,7 +141,7 @@ impl<'a> Container<'a> {
             return Err(FormatError::BadMagic);
         }
         let version = u32_at(bytes, 8).ok_or(FormatError::Truncated)?;
-        if !(OLDEST_VERSION..=VERSION).contains(&version) {
+        if !(OLDEST_FORMAT_VERSION..=FORMAT_VERSION).contains(&version) {
             return Err(FormatError::UnsupportedVersion(version));
         }
         let body = bytes.len() - 4;
@@ -175,9 +167,9 @@ impl<'a> Container<'a> {
         self.arrays
     }
 
-    /// The file's version ([`OLDEST_VERSION`] ..= [`VERSION`]).
+    /// The file's version ([`OLDEST_FORMAT_VERSION`] ..= [`FORMAT_VERSION`]).
     pub fn version(&self) -> u32 {
-        u32_at(self.bytes, 8).unwrap_or(VERSION)
+        u32_at(self.bytes, 8).unwrap_or(FORMAT_VERSION)
     }
 
     /// Whether it holds no array.
@@ -243,32 +235,47 @@ impl<'a> Container<'a> {
     }
 }
 
-/// The CRC-32 table (reflected IEEE polynomial 0xEDB88320), built at compile time.
-const CRC_TABLE: [u32; 256] = {
-    let mut table = [0u32; 256];
-    let mut i = 0;
-    while i < 256 {
-        let mut c = i as u32;
-        let mut k = 0;
-        while k < 8 {
-            c = if c & 1 != 0 {
-                0xEDB8_8320 ^ (c >> 1)
-            } else {
-                c >> 1
-            };
-            k += 1;
-        }
-        table[i] = c;
-        i += 1;
-    }
-    table
-};
+/// The container's byte layout (the table above) and its checksum: what a writer needs, not a
+/// renderer (the toolchain reaches it through `nephele_runtime::fitting`).
+pub(crate) mod layout {
+    /// The first 8 bytes of every container ("\r\n" catches text-mode mangling, as PNG does).
+    pub const MAGIC: [u8; 8] = *b"NEPHTT\r\n";
+    /// Most arrays one container may hold.
+    pub const MAX_ARRAYS: usize = 4096;
+    /// Bytes of one directory entry.
+    pub const ENTRY_BYTES: usize = 48;
+    /// Bytes before the directory.
+    pub const HEADER_BYTES: usize = 16;
+    /// Longest array name.
+    pub const NAME_BYTES: usize = 16;
 
-/// CRC-32 of `bytes` (IEEE 802.3, the checksum of zlib, PNG and gzip).
-pub fn crc32(bytes: &[u8]) -> u32 {
-    !bytes.iter().fold(!0u32, |c, &b| {
-        CRC_TABLE[((c ^ b as u32) & 0xFF) as usize] ^ (c >> 8)
-    })
+    /// The CRC-32 table (reflected IEEE polynomial 0xEDB88320), built at compile time.
+    const CRC_TABLE: [u32; 256] = {
+        let mut table = [0u32; 256];
+        let mut i = 0;
+        while i < 256 {
+            let mut c = i as u32;
+            let mut k = 0;
+            while k < 8 {
+                c = if c & 1 != 0 {
+                    0xEDB8_8320 ^ (c >> 1)
+                } else {
+                    c >> 1
+                };
+                k += 1;
+            }
+            table[i] = c;
+            i += 1;
+        }
+        table
+    };
+
+    /// CRC-32 of `bytes` (IEEE 802.3, the checksum of zlib, PNG and gzip).
+    pub fn crc32(bytes: &[u8]) -> u32 {
+        !bytes.iter().fold(!0u32, |c, &b| {
+            CRC_TABLE[((c ^ b as u32) & 0xFF) as usize] ^ (c >> 8)
+        })
+    }
 }
 
 #[cfg(test)]

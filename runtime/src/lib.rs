@@ -2,7 +2,7 @@
 //!
 //! `no_std` unless the default `std` feature is on; without `std` the math comes from `libm`
 //! when its feature is on (as with glam: `default-features = false, features = ["libm"]`), else
-//! from the small built-in [`soft_math`]; no other dependency; f32-first,
+//! from a small built-in implementation; no other dependency; f32-first,
 //! every evaluator also in f64. It owns every evaluator of the project (phase models, table
 //! lookups, collector search) so that the generators in `nephele` and the renderers that ship
 //! its tables run the very same code.
@@ -20,7 +20,9 @@ mod legendre;
 pub mod phase;
 pub mod presets;
 pub mod real;
-pub mod soft_math;
+// The math of a bare no_std build; compiled (and unit-tested) with std too.
+#[cfg_attr(any(feature = "std", feature = "libm"), allow(dead_code))]
+mod soft_math;
 pub mod transport;
 
 pub use phase::PhaseFunction;
@@ -34,11 +36,18 @@ pub use phase::PhaseFunction;
 pub mod fitting {
     /// The modules themselves, for their documentation (the equations of each form, the
     /// `.ntt` array table).
-    pub use crate::transport::{collector, log_additive, single, tables};
+    pub use crate::transport::{collector, format, log_additive, single, tables};
 
+    pub use crate::container::layout::{
+        crc32, ENTRY_BYTES, HEADER_BYTES, MAGIC, MAX_ARRAYS, NAME_BYTES,
+    };
     pub use crate::legendre::Legendre;
     pub use crate::transport::collector::{
         CollectorForm, Statistic, MAX_COLLECTOR_HARMONICS, MAX_COLLECTOR_LEGENDRE,
+    };
+    pub use crate::transport::format::{
+        names, pack_u_range, unpack_u_range, DEFAULT_GROUP_FIRST, MAX_GROUPS, MAX_NODES, MAX_Q,
+        U_STEPS,
     };
     pub use crate::transport::log_additive::{
         depth_fraction, depth_polynomial, legendre, ln_boundary, ln_t_position, stretched_u,
@@ -46,10 +55,7 @@ pub mod fitting {
         MAX_LEGENDRE, MAX_THETA_NODES, STRETCH_EXPONENT, STRETCH_SCALE,
     };
     pub use crate::transport::single::single_scattering_bin;
-    pub use crate::transport::tables::{
-        names, pack_u_range, unpack_u_range, CEILING_FACTOR, DEFAULT_GROUP_FIRST, MAX_GROUPS,
-        MAX_NODES, MAX_Q, U_STEPS,
-    };
+    pub use crate::transport::tables::CEILING_FACTOR;
 }
 pub use real::Real;
 

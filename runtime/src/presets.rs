@@ -61,6 +61,15 @@ fn cos(x: f64) -> f64 {
     Real::sin_cos(x).1
 }
 
+impl<F: Real> HgDraine<F> {
+    /// Jendersie & d'Eon's blend for water droplets of diameter `d_um` (µm), by the paper's
+    /// fits ([`jendersie_deon`]). Here, beside the fits, so that the phase models do not
+    /// depend on the presets.
+    pub fn from_diameter(d_um: f64) -> Self {
+        jendersie_deon(d_um).phase()
+    }
+}
+
 /// Jendersie & d'Eon's parameters at diameter `d_um` (> 0, µm).
 pub fn jendersie_deon(d_um: f64) -> HgDraineParams {
     let d = d_um;

@@ -1,7 +1,7 @@
 //! The floating-point types the runtime works in: `f32` (what renderers use) and `f64` (what
 //! the generators use), with the few math functions the evaluators need. They come from `std`
 //! (default), else from the `libm` crate (feature `libm`, as glam does), else from the small
-//! built-in [`crate::soft_math`] so that a bare `--no-default-features` build still works.
+//! built-in `soft_math` so that a bare `--no-default-features` build still works.
 
 use core::ops::{Add, Div, Mul, Neg, Sub};
 
@@ -138,6 +138,20 @@ impl_real!(
     libm::cbrt,
     libm::asin
 );
+
+/// eˣ − 1 without the cancellation of small x (a series below |x| = 0.01, truncation < 3e-17).
+pub(crate) fn exp_m1<F: Real>(x: F) -> F {
+    if x.abs() < F::of(0.01) {
+        let one = F::of(1.0);
+        x * (one
+            + x / F::of(2.0)
+                * (one
+                    + x / F::of(3.0)
+                        * (one + x / F::of(4.0) * (one + x / F::of(5.0) * (one + x / F::of(6.0))))))
+    } else {
+        x.exp() - F::of(1.0)
+    }
+}
 
 #[cfg(not(any(feature = "std", feature = "libm")))]
 use crate::soft_math as soft;

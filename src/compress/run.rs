@@ -825,7 +825,7 @@ fn manifest(
                 // trailer included, is the same constant for every file (CRC-32's residue).
                 crc32: format!(
                     "{:08x}",
-                    nephele_runtime::container::crc32(&bytes[..bytes.len().saturating_sub(4)])
+                    nephele_runtime::fitting::crc32(&bytes[..bytes.len().saturating_sub(4)])
                 ),
             })
         }

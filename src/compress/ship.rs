@@ -8,7 +8,7 @@ use super::LogAdditive;
 use crate::io::container::{container_bytes, versioned_container_bytes, Array};
 use crate::slab::SlabTables;
 use anyhow::{ensure, Result};
-use nephele_runtime::container::{Container, VERSION};
+use nephele_runtime::container::{Container, FORMAT_VERSION};
 use nephele_runtime::fitting::{names, pack_u_range, CollectorForm, Statistic};
 
 /// Angles (degrees) at which an analytic phase function is stored: 0.02° steps to 5° (a
@@ -145,8 +145,8 @@ fn feature_major(per_group: &[&[f64]], p: usize, q: usize) -> Result<Vec<f32>> {
 /// as it is (`cargo run --release --example ntt_relayout -- OLD.ntt NEW.ntt`).
 pub fn relayout(bytes: &[u8], version: u32) -> Result<Vec<u8>> {
     ensure!(
-        (1..=VERSION).contains(&version),
-        "no transport tables layout of version {version} (1 to {VERSION})"
+        (1..=FORMAT_VERSION).contains(&version),
+        "no transport tables layout of version {version} (1 to {FORMAT_VERSION})"
     );
     let c = Container::from_bytes(bytes).map_err(|e| anyhow::anyhow!("{e}"))?;
     let major = |v: u32| v >= 2;

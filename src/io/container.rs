@@ -2,9 +2,8 @@
 //! [`nephele_runtime::container`] reads (layout there and in docs/format.md).
 
 use anyhow::{bail, Result};
-use nephele_runtime::container::{
-    crc32, ENTRY_BYTES, HEADER_BYTES, MAGIC, MAX_ARRAYS, NAME_BYTES, VERSION,
-};
+use nephele_runtime::container::FORMAT_VERSION;
+use nephele_runtime::fitting::{crc32, ENTRY_BYTES, HEADER_BYTES, MAGIC, MAX_ARRAYS, NAME_BYTES};
 use std::path::Path;
 
 /// One array to store: a name (1–16 ASCII bytes, no NUL), its dimensions (1 to 4, none 0) and
@@ -20,7 +19,7 @@ pub struct Array<'a> {
 
 /// The bytes of a container holding `arrays`, in this order.
 pub fn container_bytes(arrays: &[Array]) -> Result<Vec<u8>> {
-    versioned_container_bytes(arrays, VERSION)
+    versioned_container_bytes(arrays, FORMAT_VERSION)
 }
 
 /// [`container_bytes`] stamped with another `version` (to write the older layout a test

@@ -15,7 +15,7 @@
 use super::polydisperse::MieJob;
 use crate::io::atomic::write_atomic;
 use anyhow::{ensure, Result};
-use nephele_runtime::container::crc32;
+use nephele_runtime::fitting::crc32;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 

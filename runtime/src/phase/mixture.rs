@@ -65,12 +65,6 @@ impl<F: Real> TwoTermHg<F> {
 pub type HgDraine<F> = Mixture<HenyeyGreenstein<F>, Draine<F>, F>;
 
 impl<F: Real> HgDraine<F> {
-    /// Jendersie & d'Eon's blend for water droplets of diameter `d_um` (µm), by the paper's
-    /// fits ([`crate::presets::jendersie_deon`]).
-    pub fn from_diameter(d_um: f64) -> Self {
-        crate::presets::jendersie_deon(d_um).phase()
-    }
-
     /// (1 − w_d) HG(g_hg) + w_d Draine(g_d, α).
     pub fn hg_draine(g_hg: F, g_d: F, alpha: F, w_d: F) -> Self {
         Self {

@@ -134,7 +134,7 @@ pub fn evaluate_points(
 
 /// One row out.
 fn evaluate_row(tables: &TransportTables, at: &SlabPoint<f32>, what: Quantities, o: &mut [f32]) {
-    const MOST: usize = crate::transport::tables::MAX_GROUPS;
+    const MOST: usize = crate::transport::format::MAX_GROUPS;
     o[0] = tables.order1(at);
     let groups = tables.groups().min(MOST);
     match what {

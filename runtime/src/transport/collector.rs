@@ -157,7 +157,7 @@ impl CollectorForm {
                     F::of(0.05)
                 };
                 let lam = F::of(8.0);
-                let reach = s_l * lam * -super::single::exp_m1(-depth / (mu_l * lam)) * inv_sigma;
+                let reach = s_l * lam * -crate::real::exp_m1(-depth / (mu_l * lam)) * inv_sigma;
                 push(Block::Theta(one));
                 push(Block::Depth(s_l));
                 for k in 1..=k_max {

@@ -22,10 +22,10 @@
 //! with [`Lerp`] weights. The toolchain fits it (`nephele compress`) with these very features.
 
 use super::geometry::SlabPoint;
-use super::single::{beam_scattered_once, exp_m1, scattering_cosine};
+use super::single::{beam_scattered_once, scattering_cosine};
 use crate::legendre::Legendre;
 use crate::phase::{Cosine, HenyeyGreenstein, PhaseFunction};
-use crate::real::Real;
+use crate::real::{exp_m1, Real};
 
 /// Most Legendre terms in depth.
 pub const MAX_LEGENDRE: usize = 16;
@@ -483,7 +483,11 @@ pub fn depth_polynomial<F: Real>(
     let step = F::of(EDGE_STEP);
     // One step back inside (the range itself if narrower), and the outward rate of change.
     let far = u > range.hi;
-    let inside = range.held(if far { range.hi - step } else { range.lo + step });
+    let inside = range.held(if far {
+        range.hi - step
+    } else {
+        range.lo + step
+    });
     let inner = at(inside);
     if !((edge - inside).abs() > F::of(0.0)) || !(inner > value) {
         return value;
@@ -494,11 +498,7 @@ pub fn depth_polynomial<F: Real>(
         let f = depth_fraction(u, thickness);
         thickness * if far { F::of(1.0) - f } else { f }
     };
-    value
-        + continued_toward_face(
-            inner - value,
-            (to_face(inside), to_face(edge), to_face(u)),
-        )
+    value + continued_toward_face(inner - value, (to_face(inside), to_face(edge), to_face(u)))
 }
 
 /// ln of T/B at distance `h` from a face relative to its value at the fitted edge (distance
@@ -713,7 +713,8 @@ mod tests {
         let v = depth_polynomial(&d, 2, 0.05, t, &range);
         assert!(v < edge && v.is_finite(), "{v}");
         let h = |u: f64| t * depth_fraction(u, t);
-        let exponential = edge - 4.0 / 15.0 * (h(0.25) - h(0.05)) / (h(0.25 + 1.0 / 15.0) - h(0.25));
+        let exponential =
+            edge - 4.0 / 15.0 * (h(0.25) - h(0.05)) / (h(0.25 + 1.0 / 15.0) - h(0.25));
         assert!(v <= exponential + 1e-12, "{v} vs {exponential}");
         assert!(depth_polynomial(&d, 2, 0.0, t, &range).is_finite());
         // A narrow range (one depth) holds.
@@ -742,7 +743,10 @@ mod tests {
             for h in [0.0, 0.5, 1.3, 8.0, 16.0] {
                 let got = continued_toward_face(rise, (h_inside, h_edge, h));
                 let want = ((h + z0) / (h_edge + z0)).ln();
-                assert!((got - want).abs() < 1e-12, "z0 {z0}, h {h}: {got} vs {want}");
+                assert!(
+                    (got - want).abs() < 1e-12,
+                    "z0 {z0}, h {h}: {got} vs {want}"
+                );
             }
         }
         for k in [0.3, 1.0] {
@@ -751,7 +755,10 @@ mod tests {
             for h in [1.0, 5.0, 12.0] {
                 let got = continued_toward_face(rise, (h_inside, h_edge, h));
                 let want = -k * (h_edge - h);
-                assert!(got <= want + 1e-12 && got > want + (0.95f64).ln(), "k {k}, h {h}");
+                assert!(
+                    got <= want + 1e-12 && got > want + (0.95f64).ln(),
+                    "k {k}, h {h}"
+                );
             }
         }
         let mut last = None;

@@ -19,21 +19,26 @@ macro_rules! form_module {
     )*};
 }
 
-form_module!(collector, log_additive, single, tables);
+form_module!(collector, format, log_additive, single, tables);
 pub mod batch;
 mod finite;
 mod geometry;
 pub mod leakage;
+#[cfg(feature = "std")]
+mod owned;
 mod search;
 
 #[cfg(feature = "std")]
 pub use batch::column_names;
 pub use batch::{evaluate_points, BatchError, Quantities, POINT_COLUMNS};
 pub use finite::{absorbed, finite_cloud, mean_cosine, FiniteCloud, Kept};
+pub use format::MAX_GROUPS;
 pub use geometry::SlabPoint;
+#[cfg(feature = "std")]
+pub use owned::OwnedTables;
 pub use search::{
     find_collector, find_collectors, local_slab, Clamps, Collector, FilteredSurface, Lateral,
     LitSurface, LocalSlab, SearchOptions, Viewpoint,
 };
 pub use single::{scattering_cosine, single_scattering, PhaseValue};
-pub use tables::{Domain, Transport, TransportTables, MAX_GROUPS};
+pub use tables::{Domain, Transport, TransportTables};

@@ -27,8 +27,9 @@
 //! geometric thickness a heterogeneous interior (voxel clouds, the fBm boundary layer) gets the
 //! slab it actually has along the light.
 
+use super::format::MAX_GROUPS;
 use super::geometry::SlabPoint;
-use super::tables::{Transport, TransportTables, MAX_GROUPS};
+use super::tables::{Transport, TransportTables};
 use crate::frame::{cross, dot, Vec3};
 use crate::real::Real;
 

@@ -20,7 +20,7 @@
 
 use super::geometry::SlabPoint;
 use crate::phase::{Cosine, PhaseFunction};
-use crate::real::Real;
+use crate::real::{exp_m1, Real};
 
 /// What order 1 needs of a phase function: its value at a scattering cosine (sr⁻¹). Every
 /// [`PhaseFunction`] has it; so do tabulated phase functions stored with compressed tables.
@@ -158,20 +158,6 @@ pub fn scattering_cosine<F: Real>(at: &SlabPoint<F>) -> Cosine<F> {
     let (dx, dz, dd) = (sin_v * s, sin_l - sin_v * c, mu_l + mu_v);
     let omm = F::of(0.5) * (dx * dx + dz * dz + dd * dd);
     Cosine::from_one_minus_mu(omm.clamp_to(F::of(0.0), F::of(2.0)))
-}
-
-/// eˣ − 1 without the cancellation of small x (a series below |x| = 0.01, truncation < 3e-17).
-pub(crate) fn exp_m1<F: Real>(x: F) -> F {
-    if x.abs() < F::of(0.01) {
-        let one = F::of(1.0);
-        x * (one
-            + x / F::of(2.0)
-                * (one
-                    + x / F::of(3.0)
-                        * (one + x / F::of(4.0) * (one + x / F::of(5.0) * (one + x / F::of(6.0))))))
-    } else {
-        x.exp() - F::of(1.0)
-    }
 }
 
 #[cfg(test)]
