@@ -1,0 +1,431 @@
+//! The WGSL phase models run on a real Vulkan driver (Mesa's lavapipe on the CPU in CI: `apt-get
+//! install mesa-vulkan-drivers`; any Vulkan, Metal or DX12 GPU elsewhere) and compared with the
+//! Rust runtime: eval on 10⁵ cosines over the whole sphere (the forward peak down to 1 − μ =
+//! 1e-8, both poles), HG + Draine's parameters from the droplet diameter, and sampling — the
+//! CDF of every GPU sample against its ξ, and the runtime's chi-square test (Mitsuba's
+//! `chi2.py` style, `nephele::stats::chi2`) on the GPU's samples.
+//!
+//! `cargo test --release -p nephele-wgsl -- --nocapture` prints the agreement per model.
+
+use nephele::stats::chi2::{chi2_sphere, Chi2Config};
+use nephele_runtime::phase::{Cosine, Draine, HenyeyGreenstein, HgDraine};
+use nephele_runtime::presets::jendersie_deon;
+use nephele_runtime::PhaseFunction;
+use std::sync::OnceLock;
+use wgpu::util::DeviceExt;
+
+/// The test kernel around the port: one dispatch evaluates (mode 0: inputs are (μ, 1 − μ)),
+/// samples (mode 1: inputs are (ξ, ·)) or gives HG + Draine's parameters (mode 2: inputs are
+/// (d, ·)) for one model: 0 HG(g), 1 Draine(g, α), 2 HG + Draine(g_HG, g_D, α, w_D),
+/// 3 HG + Draine of diameter p.x.
+const KERNEL: &str = r#"
+struct Job {
+    mode: u32,
+    model: u32,
+    n: u32,
+    pad: u32,
+    p: vec4<f32>,
+}
+@group(0) @binding(0) var<uniform> job: Job;
+@group(0) @binding(1) var<storage, read> inputs: array<vec2<f32>>;
+@group(0) @binding(2) var<storage, read_write> outputs: array<vec4<f32>>;
+
+fn blend(model: u32, p: vec4<f32>) -> HgDraine {
+    if model == 3u {
+        return hg_draine_from_diameter(p.x);
+    }
+    return HgDraine(p.x, p.y, p.z, p.w);
+}
+
+fn eval_model(model: u32, p: vec4<f32>, c: Cosine) -> f32 {
+    switch model {
+        case 0u: { return hg_eval(p.x, c); }
+        case 1u: { return draine_eval(p.x, p.y, c); }
+        default: { return hg_draine_eval(blend(model, p), c); }
+    }
+}
+
+fn sample_model(model: u32, p: vec4<f32>, xi: f32) -> Cosine {
+    switch model {
+        case 0u: { return hg_sample(p.x, xi); }
+        case 1u: { return draine_sample(p.x, p.y, xi); }
+        default: { return hg_draine_sample(blend(model, p), xi); }
+    }
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= job.n {
+        return;
+    }
+    let x = inputs[i];
+    var out = vec4<f32>(0.0);
+    if job.mode == 0u {
+        out.x = eval_model(job.model, job.p, Cosine(x.x, x.y));
+    } else if job.mode == 1u {
+        let c = sample_model(job.model, job.p, x.x);
+        out = vec4<f32>(c.mu, c.one_minus_mu, 0.0, 0.0);
+    } else {
+        let m = hg_draine_from_diameter(x.x);
+        out = vec4<f32>(m.g_hg, m.g_d, m.alpha, m.w_d);
+    }
+    outputs[i] = out;
+}
+"#;
+
+/// A device and the kernel's pipeline, made once for every test of this file.
+struct Gpu {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    pipeline: wgpu::ComputePipeline,
+    adapter: String,
+}
+
+fn gpu() -> &'static Gpu {
+    static GPU: OnceLock<Gpu> = OnceLock::new();
+    GPU.get_or_init(|| pollster::block_on(open()))
+}
+
+async fn open() -> Gpu {
+    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle());
+    let adapter = instance
+        .request_adapter(&wgpu::RequestAdapterOptions::default())
+        .await
+        .expect(
+            "no GPU adapter: install a Vulkan driver (Debian: apt-get install mesa-vulkan-drivers, \
+             which gives lavapipe on the CPU)",
+        );
+    let info = adapter.get_info();
+    let (device, queue) = adapter
+        .request_device(&wgpu::DeviceDescriptor {
+            label: Some("nephele-wgsl tests"),
+            required_features: wgpu::Features::empty(),
+            required_limits: wgpu::Limits::downlevel_defaults(),
+            experimental_features: wgpu::ExperimentalFeatures::disabled(),
+            memory_hints: wgpu::MemoryHints::Performance,
+            trace: wgpu::Trace::Off,
+        })
+        .await
+        .expect("a device on the adapter");
+    let source = format!("{}\n{}", nephele_wgsl::PHASE, KERNEL);
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("phase.wgsl + test kernel"),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    });
+    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some("phase kernel"),
+        layout: None,
+        module: &module,
+        entry_point: Some("main"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    Gpu {
+        device,
+        queue,
+        pipeline,
+        adapter: format!("{} ({:?}, {})", info.name, info.backend, info.driver),
+    }
+}
+
+/// Runs the kernel in `mode` for `model` with parameters `p` on `inputs`.
+fn run(mode: u32, model: u32, p: [f32; 4], inputs: &[[f32; 2]]) -> Vec<[f32; 4]> {
+    let g = gpu();
+    let n = inputs.len() as u32;
+    let mut job = [0u8; 32];
+    for (k, v) in [mode, model, n, 0].iter().enumerate() {
+        job[4 * k..4 * k + 4].copy_from_slice(&v.to_le_bytes());
+    }
+    for (k, v) in p.iter().enumerate() {
+        job[16 + 4 * k..20 + 4 * k].copy_from_slice(&v.to_le_bytes());
+    }
+    let init = |label, contents: &[u8], usage| {
+        g.device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage,
+            })
+    };
+    let uniform = init("job", &job, wgpu::BufferUsages::UNIFORM);
+    let input = init(
+        "inputs",
+        bytemuck::cast_slice(inputs),
+        wgpu::BufferUsages::STORAGE,
+    );
+    let size = 16 * inputs.len() as u64;
+    let output = g.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("outputs"),
+        size,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let staging = g.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("staging"),
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let bind = g.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &g.pipeline.get_bind_group_layout(0),
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: uniform.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: input.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: output.as_entire_binding(),
+            },
+        ],
+    });
+    let mut encoder = g.device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&g.pipeline);
+        pass.set_bind_group(0, &bind, &[]);
+        pass.dispatch_workgroups(n.div_ceil(64), 1, 1);
+    }
+    encoder.copy_buffer_to_buffer(&output, 0, &staging, 0, size);
+    g.queue.submit([encoder.finish()]);
+    staging.map_async(wgpu::MapMode::Read, .., |r| r.expect("map the outputs"));
+    g.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .expect("the kernel finishes");
+    let view = staging.get_mapped_range(..).expect("mapped outputs");
+    bytemuck::cast_slice::<u8, [f32; 4]>(&view).to_vec()
+}
+
+/// A model as the kernel takes it, and the runtime's f32 and f64 versions.
+struct Case {
+    name: String,
+    model: u32,
+    p: [f32; 4],
+    f32: Box<dyn PhaseFunction<f32> + Sync>,
+    f64: Box<dyn PhaseFunction<f64> + Sync>,
+    /// How far the CDF of a sample μ (f64) lies from the ξ it was drawn with, beyond what one
+    /// f32 ulp of μ spans there: for a mixture, the CDF of the lobe ξ picked, at ξ rescaled to
+    /// it.
+    cdf_error: Box<dyn Fn(f32, f32) -> f64 + Sync>,
+}
+
+/// |F(μ) − ξ| of a lobe of CDF `cdf` and pdf `pdf`, less the CDF one f32 ulp of μ spans.
+fn cdf_error(cdf: impl Fn(f64) -> f64, pdf: impl Fn(f64) -> f64, xi: f64, mu: f32) -> f64 {
+    let ulp = (f32::from_bits(mu.abs().to_bits() + 1) - mu.abs()) as f64;
+    let limit = 2.0 * std::f64::consts::PI * pdf(mu as f64) * ulp;
+    ((cdf(mu as f64) - xi).abs() - limit).max(0.0)
+}
+
+fn cases() -> Vec<Case> {
+    let mut v = Vec::new();
+    for g in [-0.7f32, 1e-6, 0.3, 0.85, 0.99] {
+        v.push(Case {
+            name: format!("HG g={g}"),
+            model: 0,
+            p: [g, 0.0, 0.0, 0.0],
+            f32: Box::new(HenyeyGreenstein::new(g)),
+            f64: Box::new(HenyeyGreenstein::new(g as f64)),
+            cdf_error: Box::new(move |xi, mu| {
+                let hg = HenyeyGreenstein::new(g as f64);
+                cdf_error(|m| hg.cdf(m), |m| hg.eval(m), xi as f64, mu)
+            }),
+        });
+    }
+    for (g, a) in [(0.5f32, 250.0f32), (0.9, 1.0), (-0.3, 10.0), (1e-6, 250.0)] {
+        let d64 = Draine::new(g as f64, a as f64);
+        v.push(Case {
+            name: format!("Draine g={g} a={a}"),
+            model: 1,
+            p: [g, a, 0.0, 0.0],
+            f32: Box::new(Draine::new(g, a)),
+            f64: Box::new(d64),
+            cdf_error: Box::new(move |xi, mu| {
+                cdf_error(|m| d64.cdf(m), |m| d64.eval(m), xi as f64, mu)
+            }),
+        });
+    }
+    for d in [0.05f32, 0.5, 2.0, 10.0, 40.0] {
+        // The runtime's parameters rounded to f32, as the kernel receives them.
+        let q = jendersie_deon(d as f64);
+        let p = [q.g_hg as f32, q.g_d as f32, q.alpha as f32, q.w_d as f32];
+        let m64 = HgDraine::hg_draine(p[0] as f64, p[1] as f64, p[2] as f64, p[3] as f64);
+        let (hg, dr) = (m64.first, m64.second);
+        let w = 1.0 - p[3];
+        v.push(Case {
+            name: format!("HG+Draine d={d}"),
+            model: 2,
+            p,
+            f32: Box::new(HgDraine::hg_draine(p[0], p[1], p[2], p[3])),
+            f64: Box::new(m64),
+            // The lobe ξ picks, at ξ rescaled to it as the kernel does (in f32).
+            cdf_error: Box::new(move |xi, mu| {
+                if xi < w {
+                    cdf_error(|m| hg.cdf(m), |m| hg.eval(m), (xi / w) as f64, mu)
+                } else {
+                    let x = ((xi - w) / (1.0 - w)).clamp(0.0, 1.0) as f64;
+                    cdf_error(|m| dr.cdf(m), |m| dr.eval(m), x, mu)
+                }
+            }),
+        });
+    }
+    v
+}
+
+/// 10⁵ / models cosines per model: uniform in μ, log-uniform in 1 − μ from 1e-8 (the peak),
+/// and the poles, as (μ, 1 − μ).
+fn cosines(n: usize) -> Vec<[f32; 2]> {
+    let mut s = 0x9E37_79B9_7F4A_7C15u64;
+    let mut r = || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 40) as f64 / (1u64 << 24) as f64
+    };
+    let mut v = vec![[1.0, 0.0], [-1.0, 2.0], [0.0, 1.0]];
+    while v.len() < n {
+        if v.len() % 2 == 0 {
+            let mu = (2.0 * r() - 1.0) as f32;
+            v.push([mu, 1.0 - mu]);
+        } else {
+            let omm = 10f64.powf(-8.0 + 8.3 * r()).min(2.0);
+            v.push([(1.0 - omm) as f32, omm as f32]);
+        }
+    }
+    v
+}
+
+#[test]
+fn phase_models_evaluate_as_the_runtime() {
+    let cases = cases();
+    let n = 100_000 / cases.len() + 1;
+    let at = cosines(n);
+    println!("adapter: {}", gpu().adapter);
+    let mut failures = Vec::new();
+    for c in &cases {
+        let out = run(0, c.model, c.p, &at);
+        let want: Vec<f32> = at
+            .iter()
+            .map(|x| {
+                c.f32.pdf_cosine(Cosine {
+                    mu: x[0],
+                    one_minus_mu: x[1],
+                })
+            })
+            .collect();
+        let top = want.iter().fold(0.0f32, |a, &b| a.max(b));
+        let (mut worst, mut at_worst) = (0.0f64, [0.0f32; 2]);
+        for ((x, o), w) in at.iter().zip(&out).zip(&want) {
+            if *w > 1e-6 * top {
+                let rel = ((o[0] - w) / w).abs() as f64;
+                if !(rel <= worst) {
+                    (worst, at_worst) = (rel, *x);
+                }
+            }
+        }
+        println!(
+            "{:<22} eval: largest relative difference {worst:.2e} (μ = {}, 1 − μ = {:.1e})",
+            c.name, at_worst[0], at_worst[1]
+        );
+        if !(worst <= 1e-5) {
+            failures.push(format!("{}: {worst:.2e}", c.name));
+        }
+    }
+    assert!(failures.is_empty(), "beyond 1e-5: {failures:?}");
+}
+
+#[test]
+fn hg_draine_by_diameter_follows_the_runtime() {
+    let ds: Vec<[f32; 2]> = (0..10_000)
+        .map(|i| [(0.02 * 2500f64.powf(i as f64 / 9999.0)) as f32, 0.0])
+        .collect();
+    let out = run(2, 0, [0.0; 4], &ds);
+    // Compared through what the parameters are for: the phase function at 64 cosines from the
+    // backward pole to the forward peak, GPU parameters against the runtime's.
+    let mut worst = (0.0f64, 0.0f32);
+    for (d, o) in ds.iter().zip(&out) {
+        let q = jendersie_deon(d[0] as f64);
+        let want = HgDraine::hg_draine(q.g_hg, q.g_d, q.alpha, q.w_d);
+        let got = HgDraine::hg_draine(o[0] as f64, o[1] as f64, o[2] as f64, o[3] as f64);
+        for k in 0..64 {
+            let omm = 2.0 * 1e-6f64.powf(k as f64 / 63.0);
+            let c = Cosine {
+                mu: 1.0 - omm,
+                one_minus_mu: omm,
+            };
+            let rel = (got.pdf_cosine(c) / want.pdf_cosine(c) - 1.0).abs();
+            if !(rel <= worst.0) {
+                worst = (rel, d[0]);
+            }
+        }
+    }
+    println!(
+        "HG+Draine by diameter (0.02–50 µm, 10⁴ diameters): phase function from the GPU's \
+         parameters within {:.2e} of the runtime's (worst at d = {} µm)",
+        worst.0, worst.1
+    );
+    // f32 parameters: g within an ulp or two of 0.99 moves the forward peak by ~2e-5.
+    assert!(worst.0 <= 1e-4, "{worst:?}");
+}
+
+#[test]
+fn gpu_samples_invert_the_cdf_and_pass_chi_square() {
+    let cases = cases();
+    let cfg = Chi2Config {
+        samples: 100_000,
+        seed: 7,
+        ..Chi2Config::default()
+    };
+    let mut failures = Vec::new();
+    for c in &cases {
+        // The ξ pairs chi2_sphere draws, recorded, then sampled on the GPU in one dispatch.
+        let xis = std::sync::Mutex::new(Vec::with_capacity(cfg.samples));
+        chi2_sphere(
+            &cfg,
+            |a, b| {
+                xis.lock().unwrap().push((a, b));
+                [0.0, 0.0, 1.0]
+            },
+            |_| 1.0,
+        );
+        let xis = xis.into_inner().unwrap();
+        let inputs: Vec<[f32; 2]> = xis.iter().map(|&(a, _)| [a as f32, 0.0]).collect();
+        let out = run(1, c.model, c.p, &inputs);
+        // CDF of each sample against its ξ, beyond what one f32 ulp of μ spans there.
+        let cdf_err = inputs
+            .iter()
+            .zip(&out)
+            .map(|(x, o)| (c.cdf_error)(x[0], o[0]))
+            .fold(0.0f64, f64::max);
+        let next = std::sync::atomic::AtomicUsize::new(0);
+        let result = chi2_sphere(
+            &cfg,
+            |_, b| {
+                let o = out[next.fetch_add(1, std::sync::atomic::Ordering::Relaxed)];
+                let (mu, sin) = (
+                    o[0] as f64,
+                    (o[1] as f64 * (2.0 - o[1] as f64)).max(0.0).sqrt(),
+                );
+                let phi = 2.0 * std::f64::consts::PI * b;
+                [sin * phi.cos(), sin * phi.sin(), mu]
+            },
+            |d| c.f64.eval(d[2]),
+        );
+        println!(
+            "{:<22} sample: CDF within {cdf_err:.1e} of ξ, chi-square p = {:.3} ({} dof)",
+            c.name, result.p_value, result.dof
+        );
+        if !result.passes(0.01, cases.len()) || !(cdf_err <= 1e-5) {
+            failures.push(format!(
+                "{}: p = {:.2e}, CDF error {cdf_err:.1e}",
+                c.name, result.p_value
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:?}");
+}
