@@ -13,7 +13,8 @@
 //! The port follows `nephele_runtime::phase` formula for formula in f32. It is checked by
 //! running it: `cargo test -p nephele-wgsl` evaluates and samples every model on a Vulkan
 //! device (Mesa's lavapipe on the CPU: `apt-get install mesa-vulkan-drivers`) against the Rust
-//! runtime, with the runtime's chi-square test on the GPU's samples. The transport tables and
+//! runtime, with the runtime's chi-square test on the GPU's samples, and its Naga translations
+//! to SPIR-V and GLSL through their validators. The transport tables and
 //! the collector search are not ported yet (docs/integration.md).
 
 /// The phase models in WGSL: `hg_eval`, `hg_sample`, `draine_eval`, `draine_cdf`,

@@ -1,0 +1,54 @@
+// The test kernel around the port (tests/lavapipe.rs, tests/naga_outputs.rs).
+struct Job {
+    mode: u32,
+    model: u32,
+    n: u32,
+    pad: u32,
+    p: vec4<f32>,
+}
+@group(0) @binding(0) var<uniform> job: Job;
+@group(0) @binding(1) var<storage, read> inputs: array<vec2<f32>>;
+@group(0) @binding(2) var<storage, read_write> outputs: array<vec4<f32>>;
+
+fn blend(model: u32, p: vec4<f32>) -> HgDraine {
+    if model == 3u {
+        return hg_draine_from_diameter(p.x);
+    }
+    return HgDraine(p.x, p.y, p.z, p.w);
+}
+
+fn eval_model(model: u32, p: vec4<f32>, c: Cosine) -> f32 {
+    switch model {
+        case 0u: { return hg_eval(p.x, c); }
+        case 1u: { return draine_eval(p.x, p.y, c); }
+        default: { return hg_draine_eval(blend(model, p), c); }
+    }
+}
+
+fn sample_model(model: u32, p: vec4<f32>, xi: f32) -> Cosine {
+    switch model {
+        case 0u: { return hg_sample(p.x, xi); }
+        case 1u: { return draine_sample(p.x, p.y, xi); }
+        default: { return hg_draine_sample(blend(model, p), xi); }
+    }
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= job.n {
+        return;
+    }
+    let x = inputs[i];
+    var out = vec4<f32>(0.0);
+    if job.mode == 0u {
+        out.x = eval_model(job.model, job.p, Cosine(x.x, x.y));
+    } else if job.mode == 1u {
+        let c = sample_model(job.model, job.p, x.x);
+        out = vec4<f32>(c.mu, c.one_minus_mu, 0.0, 0.0);
+    } else {
+        let m = hg_draine_from_diameter(x.x);
+        out = vec4<f32>(m.g_hg, m.g_d, m.alpha, m.w_d);
+    }
+    outputs[i] = out;
+}
