@@ -10,6 +10,10 @@
 //! let p = hg_draine_eval(hg_draine_from_diameter(10.0), c);      // sr⁻¹
 //! ```
 //!
+//! [`tabulated`] adds the tabulated phase function (a Mie table: f = 2π p sin θ linear between
+//! nodes in θ, exact inverse-CDF sampling) over a storage buffer that [`tabulated_buffer`] fills
+//! from the runtime's table.
+//!
 //! The port follows `nephele_runtime::phase` formula for formula in f32. It is checked by
 //! running it: `cargo test -p nephele-wgsl` evaluates and samples every model on a Vulkan
 //! device (Mesa's lavapipe on the CPU: `apt-get install mesa-vulkan-drivers`) against the Rust
@@ -21,3 +25,30 @@
 /// `draine_sample`, `hg_draine_eval`, `hg_draine_sample`, `hg_draine_from_diameter`, over the
 /// `Cosine` (μ, 1 − μ) and `HgDraine` (g_HG, g_D, α, w_D) structs.
 pub const PHASE: &str = include_str!("phase.wgsl");
+
+/// The tabulated phase function in WGSL (`tabulated_eval`, `tabulated_sample`), reading its
+/// table from `var<storage, read> nephele_tab: array<f32>` at `@group(group) @binding(binding)`;
+/// needs [`PHASE`] before it (for `Cosine`).
+pub fn tabulated(group: u32, binding: u32) -> String {
+    include_str!("tabulated.wgsl")
+        .replace("NEPHELE_TAB_GROUP", &group.to_string())
+        .replace("NEPHELE_TAB_BINDING", &binding.to_string())
+}
+
+/// The buffer [`tabulated`] reads, from the runtime's table: n, θ (radians), f and the CDF at
+/// the nodes, then a guide table of n − 1 interval indices (guide[k] the interval holding
+/// ξ = k/(n − 1)), all as f32 words (indices exact below 2²⁴ nodes).
+pub fn tabulated_buffer(table: &nephele_runtime::phase::Tabulated<f32>) -> Vec<f32> {
+    let (theta, f, cdf, _) = table.parts();
+    let n = theta.len();
+    let mut out = Vec::with_capacity(4 * n);
+    out.push(n as f32);
+    out.extend_from_slice(theta);
+    out.extend_from_slice(f);
+    out.extend_from_slice(cdf);
+    out.extend((0..n.saturating_sub(1)).map(|k| {
+        let xi = k as f32 / (n - 1) as f32;
+        (cdf.partition_point(|c| *c <= xi).clamp(1, n - 1) - 1) as f32
+    }));
+    out
+}

@@ -10,6 +10,26 @@
 const PI: f32 = 3.14159265358979;
 const INV_FOUR_PI: f32 = 0.0795774715459477;
 
+// asin(x), |x| ≤ 1, to a few f32 ulps (Cephes' asinf): a polynomial in x² up to |x| = 1/2,
+// π/2 − 2 asin(√((1 − |x|)/2)) beyond. Vulkan lets the built-in asin be off by 4096 ulps (it
+// is atan2's), far too coarse for the angle of a forward peak.
+fn nephele_asin(x: f32) -> f32 {
+    var a = abs(x);
+    var flip = false;
+    if a > 0.5 {
+        a = sqrt(0.5 * (1.0 - a));
+        flip = true;
+    }
+    let z = a * a;
+    let p = ((((4.2163199048e-2 * z + 2.4181311049e-2) * z + 4.5470025998e-2) * z
+        + 7.4953002686e-2) * z + 1.6666752422e-1) * z * a + a;
+    var r = p;
+    if flip {
+        r = 0.5 * PI - 2.0 * p;
+    }
+    return select(r, -r, x < 0.0);
+}
+
 struct Cosine {
     mu: f32,
     one_minus_mu: f32,

@@ -1,4 +1,7 @@
-// The test kernel around the port (tests/lavapipe.rs, tests/naga_outputs.rs).
+// The test kernel around the port (tests/lavapipe.rs, tests/naga_outputs.rs); the
+// tabulated model's table at @group(0) @binding(3) (nephele_wgsl::tabulated(0, 3)).
+// Models: 0 HG(g), 1 Draine(g, α), 2 HG + Draine(g_HG, g_D, α, w_D), 3 HG + Draine of
+// diameter p.x, 4 the tabulated table.
 struct Job {
     mode: u32,
     model: u32,
@@ -21,6 +24,7 @@ fn eval_model(model: u32, p: vec4<f32>, c: Cosine) -> f32 {
     switch model {
         case 0u: { return hg_eval(p.x, c); }
         case 1u: { return draine_eval(p.x, p.y, c); }
+        case 4u: { return tabulated_eval(c); }
         default: { return hg_draine_eval(blend(model, p), c); }
     }
 }
@@ -29,6 +33,7 @@ fn sample_model(model: u32, p: vec4<f32>, xi: f32) -> Cosine {
     switch model {
         case 0u: { return hg_sample(p.x, xi); }
         case 1u: { return draine_sample(p.x, p.y, xi); }
+        case 4u: { return tabulated_sample(xi); }
         default: { return hg_draine_sample(blend(model, p), xi); }
     }
 }

@@ -2,14 +2,19 @@
 //! other renderers take, each checked by the validator the registries offer: SPIR-V by
 //! `spirv-val` (Debian's spirv-tools), GLSL ES 3.10 and GLSL 4.50 compute shaders by
 //! `glslangValidator` (glslang-tools), and HLSL (shader model 6.0) and MSL written without error
-//! (no HLSL or MSL validator is packaged for Linux). The module is the phase models with the
-//! test kernel of tests/lavapipe.rs as its entry point.
+//! (no HLSL or MSL validator is packaged for Linux). The module is the phase models and the
+//! tabulated one with the test kernel of tests/lavapipe.rs as its entry point.
 
 use std::path::Path;
 use std::process::Command;
 
 fn module() -> (naga::Module, naga::valid::ModuleInfo) {
-    let source = format!("{}\n{}", nephele_wgsl::PHASE, include_str!("kernel.wgsl"));
+    let source = format!(
+        "{}\n{}\n{}",
+        nephele_wgsl::PHASE,
+        nephele_wgsl::tabulated(0, 3),
+        include_str!("kernel.wgsl")
+    );
     let module = naga::front::wgsl::parse_str(&source)
         .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
     let info = naga::valid::Validator::new(

@@ -63,6 +63,12 @@ impl<'a, F: Real> Tabulated<'a, F> {
         })
     }
 
+    /// The arrays: θ (radians), f, the CDF at the nodes, and the guide table (empty: none) —
+    /// what a port uploads to evaluate and sample the same distribution (a GPU buffer).
+    pub fn parts(&self) -> (&'a [F], &'a [F], &'a [F], &'a [u32]) {
+        (self.theta, self.f, self.cdf, self.guide)
+    }
+
     /// Interval containing θ.
     fn interval(&self, theta: F) -> usize {
         let n = self.theta.len();
