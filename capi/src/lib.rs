@@ -74,6 +74,12 @@ pub struct NepheleTables {
     owned: OwnedTables,
 }
 
+impl NepheleTables {
+    fn tables(&self) -> &TransportTables<'_> {
+        self.owned.tables()
+    }
+}
+
 /// A phase model (opaque): from one of the `nephele_phase_*` constructors, released by
 /// `nephele_phase_free`.
 pub struct NephelePhase {
@@ -239,7 +245,7 @@ pub unsafe extern "C" fn nephele_tables_groups(
     guarded(
         || match unsafe { (get(tables, "tables"), get_mut(out, "out")) } {
             (Ok(t), Ok(o)) => {
-                *o = t.owned.tables().groups();
+                *o = t.tables().groups();
                 NepheleStatus::Ok
             }
             (Err(s), _) | (_, Err(s)) => s,
@@ -259,8 +265,8 @@ pub unsafe extern "C" fn nephele_tables_group_first_order(
 ) -> NepheleStatus {
     guarded(
         || match unsafe { (get(tables, "tables"), get_mut(out, "out")) } {
-            (Ok(t), Ok(o)) => match t.owned.tables().group_first_order(group) {
-                Some(first) if group < t.owned.tables().groups() => {
+            (Ok(t), Ok(o)) => match t.tables().group_first_order(group) {
+                Some(first) if group < t.tables().groups() => {
                     *o = first;
                     NepheleStatus::Ok
                 }
@@ -274,10 +280,7 @@ pub unsafe extern "C" fn nephele_tables_group_first_order(
 fn bad_group(group: usize, t: &NepheleTables) -> NepheleStatus {
     fail(
         NepheleStatus::BadGroup,
-        format!(
-            "group {group} (the tables have {})",
-            t.owned.tables().groups()
-        ),
+        format!("group {group} (the tables have {})", t.tables().groups()),
     )
 }
 
@@ -298,10 +301,10 @@ pub unsafe extern "C" fn nephele_evaluate(
                 (Ok(t), Ok(a), Ok(o)) => (t, a, o),
                 (Err(s), _, _) | (_, Err(s), _) | (_, _, Err(s)) => return s,
             };
-        if group >= t.owned.tables().groups() {
+        if group >= t.tables().groups() {
             return bad_group(group, t);
         }
-        *out = transport(&t.owned.tables().evaluate(group, &slab_point(at)));
+        *out = transport(&t.tables().evaluate(group, &slab_point(at)));
         NepheleStatus::Ok
     })
 }
@@ -317,7 +320,7 @@ unsafe fn per_group<'a, T>(
     (out, capacity): (*mut T, usize),
 ) -> Result<(&'a TransportTables<'a>, SlabPoint<f32>, &'a mut [T]), NepheleStatus> {
     let (t, at) = unsafe { (get(tables, "tables")?, get(at, "at")?) };
-    let g = t.owned.tables().groups();
+    let g = t.tables().groups();
     if out.is_null() {
         return Err(fail(NepheleStatus::NullPointer, "out is null"));
     }
@@ -328,7 +331,7 @@ unsafe fn per_group<'a, T>(
         ));
     }
     let out = unsafe { std::slice::from_raw_parts_mut(out, g) };
-    Ok((t.owned.tables(), slab_point(at), out))
+    Ok((t.tables(), slab_point(at), out))
 }
 
 /// T, c and σ of every group at `*at` into `out[0 .. groups)` (`capacity` ≥ the group count).
@@ -388,7 +391,7 @@ pub unsafe extern "C" fn nephele_order1(
     guarded(
         || match unsafe { (get(tables, "tables"), get(at, "at"), get_mut(out, "out")) } {
             (Ok(t), Ok(a), Ok(o)) => {
-                *o = t.owned.tables().order1(&slab_point(a));
+                *o = t.tables().order1(&slab_point(a));
                 NepheleStatus::Ok
             }
             (Err(s), _, _) | (_, Err(s), _) | (_, _, Err(s)) => s,

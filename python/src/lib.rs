@@ -54,32 +54,34 @@ impl Tables {
 
 /// The rows of a (N, 5) float32 or float64 array as f32, row-major.
 fn point_rows(points: &Bound<'_, PyAny>) -> PyResult<Vec<f32>> {
-    let shape_ok = |shape: &[usize]| shape.len() == 2 && shape[1] == POINT_COLUMNS;
-    let names = "t, mu_L, depth, mu_V, psi_V (radians)";
     if let Ok(a) = points.downcast::<PyArray2<f64>>() {
-        let r = a.readonly();
-        if !shape_ok(r.shape()) {
-            return Err(value_error(
-                "points",
-                format!("shape {}, expected (N, 5): {names}", tuple(r.shape())),
-            ));
-        }
-        return Ok(r.as_array().iter().map(|&v| v as f32).collect());
+        return rows_of(a.readonly(), |v| v as f32);
     }
     if let Ok(a) = points.downcast::<PyArray2<f32>>() {
-        let r = a.readonly();
-        if !shape_ok(r.shape()) {
-            return Err(value_error(
-                "points",
-                format!("shape {}, expected (N, 5): {names}", tuple(r.shape())),
-            ));
-        }
-        return Ok(r.as_array().iter().copied().collect());
+        return rows_of(a.readonly(), |v| v);
     }
     Err(PyTypeError::new_err(format!(
-        "points: a 2-D float32 or float64 numpy array of rows ({names}) expected, got {}",
+        "points: a 2-D float32 or float64 numpy array of rows ({POINT_NAMES}) expected, got {}",
         describe(points)
     )))
+}
+
+/// The columns of a row of points, for messages.
+const POINT_NAMES: &str = "t, mu_L, depth, mu_V, psi_V (radians)";
+
+/// The values of a 2-D array of rows of points as f32 (`to`), its shape checked.
+fn rows_of<T: numpy::Element + Copy>(
+    r: numpy::PyReadonlyArray2<'_, T>,
+    to: impl Fn(T) -> f32,
+) -> PyResult<Vec<f32>> {
+    let shape = r.shape();
+    if shape.len() != 2 || shape[1] != POINT_COLUMNS {
+        return Err(value_error(
+            "points",
+            format!("shape {}, expected (N, 5): {POINT_NAMES}", tuple(shape)),
+        ));
+    }
+    Ok(r.as_array().iter().map(|&v| to(v)).collect())
 }
 
 /// A shape as Python prints it: (3, 4), (5,).
