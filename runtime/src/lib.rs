@@ -50,9 +50,9 @@ pub mod fitting {
         U_STEPS,
     };
     pub use crate::transport::log_additive::{
-        depth_fraction, depth_polynomial, legendre, ln_boundary, ln_t_position, stretched_u,
-        theta_hats, Cell, FittedDepths, Lerp, LogAdditive, LN_F1_FLOOR, MAX_CROSS, MAX_HARMONICS,
-        MAX_LEGENDRE, MAX_THETA_NODES, STRETCH_EXPONENT, STRETCH_SCALE,
+        depth_fraction, depth_polynomial, far_fraction, legendre, ln_boundary, ln_t_position,
+        stretched_u, theta_hats, Cell, FittedDepths, Lerp, LogAdditive, LN_F1_FLOOR, MAX_CROSS,
+        MAX_HARMONICS, MAX_LEGENDRE, MAX_THETA_NODES, STRETCH_EXPONENT, STRETCH_SCALE,
     };
     pub use crate::transport::single::single_scattering_bin;
     pub use crate::transport::tables::CEILING_FACTOR;

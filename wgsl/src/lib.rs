@@ -52,3 +52,59 @@ pub fn tabulated_buffer(table: &nephele_runtime::phase::Tabulated<f32>) -> Vec<f
     }));
     out
 }
+
+/// Order 1 in WGSL (`order1(at: SlabPoint) -> f32`, sr⁻¹, albedo 1) from the phase function
+/// of a `.ntt` uploaded whole: its words (`array<u32>`, [`NttGpu::words`]) at
+/// `@group(group) @binding(binding)` and its index ([`NttGpu::index`], a uniform of 4 u32) at
+/// `binding + 1`; needs [`PHASE`] before it.
+pub fn order1(group: u32, binding: u32) -> String {
+    include_str!("order1.wgsl")
+        .replace("NEPHELE_NTT_GROUP", &group.to_string())
+        .replace("NEPHELE_NTT_INDEX_BINDING", &(binding + 1).to_string())
+        .replace("NEPHELE_NTT_BINDING", &binding.to_string())
+}
+
+/// A `.ntt` as the WGSL port reads it: the whole file as little-endian u32 words, and the
+/// index of what the shaders read in it (word offsets of `phase_theta` and `phase`, the phase
+/// table's length, 0).
+#[derive(Clone, Debug)]
+pub struct NttGpu {
+    /// The file's bytes as words (storage buffer).
+    pub words: Vec<u32>,
+    /// [phase_theta offset, phase offset, phase nodes, 0] (uniform).
+    pub index: [u32; 4],
+}
+
+/// Checks `bytes` as the runtime does ([`TransportTables::from_bytes`]) and lays them out for
+/// the GPU ([`NttGpu`]).
+///
+/// [`TransportTables::from_bytes`]: nephele_runtime::transport::TransportTables::from_bytes
+pub fn ntt_for_gpu(bytes: &[u8]) -> Result<NttGpu, String> {
+    use nephele_runtime::container::Container;
+    use nephele_runtime::fitting::names;
+    nephele_runtime::transport::TransportTables::from_bytes(bytes)
+        .map_err(|e| format!("transport tables: {e}"))?;
+    let c = Container::from_bytes(bytes).map_err(|e| format!("transport tables: {e}"))?;
+    let word_of = |name: &str| -> Result<(u32, u32), String> {
+        let a = c.find(name).ok_or(format!("no array {name}"))?;
+        let offset = a.bytes().as_ptr() as usize - bytes.as_ptr() as usize;
+        if offset % 4 != 0 {
+            return Err(format!("array {name} at byte {offset}, not on a word"));
+        }
+        Ok(((offset / 4) as u32, a.len() as u32))
+    };
+    let (theta, n) = word_of(names::PHASE_THETA)?;
+    let (phase, _) = word_of(names::PHASE)?;
+    let words = bytes
+        .chunks(4)
+        .map(|b| {
+            let mut w = [0u8; 4];
+            w[..b.len()].copy_from_slice(b);
+            u32::from_le_bytes(w)
+        })
+        .collect();
+    Ok(NttGpu {
+        words,
+        index: [theta, phase, n, 0],
+    })
+}

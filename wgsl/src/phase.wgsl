@@ -30,6 +30,22 @@ fn nephele_asin(x: f32) -> f32 {
     return select(r, -r, x < 0.0);
 }
 
+// eˣ to a few f32 ulps (Cephes' expf: x = n ln 2 + r, |r| ≤ ln 2 / 2, a polynomial in r, then
+// 2ⁿ): Vulkan lets the built-in exp be 3 + 2|x| ulps off (lavapipe's was 8e-5 relative).
+// Below f32's normal range it is 0 (GPUs may flush subnormals).
+fn nephele_exp(x: f32) -> f32 {
+    if x < -87.336544 {
+        return 0.0;
+    }
+    let xc = min(x, 88.7);
+    let n = floor(xc * 1.44269504088896341 + 0.5);
+    let r = (xc - n * 0.693359375) + n * 2.12194440e-4;
+    let z = r * r;
+    let p = ((((( 1.9875691500e-4 * r + 1.3981999507e-3) * r + 8.3334519073e-3) * r
+        + 4.1665795894e-2) * r + 1.6666665459e-1) * r + 5.0000001201e-1) * z + r + 1.0;
+    return ldexp(p, i32(n));
+}
+
 struct Cosine {
     mu: f32,
     one_minus_mu: f32,

@@ -450,6 +450,18 @@ pub fn depth_fraction<F: Real>(u: F, t: F) -> F {
     exp_m1(beta * u) / exp_m1(beta)
 }
 
+/// 1 − d/t at stretched depth u in a slab of thickness t (mfp), the distance to the far face
+/// over t: e^{βu} (e^{β(1−u)} − 1)/(e^β − 1), without the cancellation of 1 − [`depth_fraction`]
+/// near the far face (in f32 a depth 1 mfp from the face of a 100 mfp slab would carry 1e-5).
+pub fn far_fraction<F: Real>(u: F, t: F) -> F {
+    let beta = F::of(STRETCH_SCALE) * (F::of(STRETCH_EXPONENT) * t.ln()).exp();
+    let one = F::of(1.0);
+    if beta < F::of(1e-6) {
+        return one - u;
+    }
+    (beta * u).exp() * exp_m1(beta * (one - u)) / exp_m1(beta)
+}
+
 /// The stretch of depth (in u) over which [`depth_polynomial`] measures the slope at the end of
 /// the fitted depths: one plane spacing of the default grid (16 planes).
 pub const EDGE_STEP: f64 = 1.0 / 15.0;
@@ -495,8 +507,12 @@ pub fn depth_polynomial<F: Real>(
     // Distances (mfp) to the face ahead: the far face d = t beyond `hi`, the lit face d = 0
     // below `lo`.
     let to_face = |u: F| {
-        let f = depth_fraction(u, thickness);
-        thickness * if far { F::of(1.0) - f } else { f }
+        thickness
+            * if far {
+                far_fraction(u, thickness)
+            } else {
+                depth_fraction(u, thickness)
+            }
     };
     value + continued_toward_face(inner - value, (to_face(inside), to_face(edge), to_face(u)))
 }

@@ -97,16 +97,19 @@ pub(crate) fn beam_scattered_once<F: Real>(p: F, at: &SlabPoint<F>) -> F {
             return zero;
         }
         let m = -mu_v;
-        let bd = (one / mu_l - one / m) * d;
+        // m/μ_L − 1 and 1/μ_L − 1/m from m − μ_L, exact where m is near μ_L (Sterbenz): the
+        // quotients first would cancel there, up to 1/|m/μ_L − 1| ulps off.
+        let ratio_m1 = (m - mu_l) / mu_l;
+        let bd = (m - mu_l) / (mu_l * m) * d;
         if bd.abs() < F::of(1e-3) {
             // (e^{bd} − 1)/(m/μ_L − 1) = (d/m) (e^{bd} − 1)/(bd), the latter by its series.
             source * (d / m) * (one + bd * F::of(0.5) * (one + bd / F::of(3.0)))
         } else if bd < one {
-            source * exp_m1(bd) / (m / mu_l - one)
+            source * exp_m1(bd) / ratio_m1
         } else {
             // e^{−d/μ_L}(e^{bd} − 1) = e^{−d/m} − e^{−d/μ_L}: e^{bd} alone would overflow
             // (a grazing sun deep in the slab) where the difference does not cancel.
-            p * ((-d / m).exp() - (-d / mu_l).exp()) / (m / mu_l - one)
+            p * ((-d / m).exp() - (-d / mu_l).exp()) / ratio_m1
         }
     }
 }
@@ -152,8 +155,14 @@ pub fn scattering_cosine<F: Real>(at: &SlabPoint<F>) -> Cosine<F> {
         mu_v, psi_v, mu_l, ..
     } = *at;
     let one = F::of(1.0);
-    let sin_l = (one - mu_l * mu_l).clamp_to(F::of(0.0), one).sqrt();
-    let sin_v = (one - mu_v * mu_v).clamp_to(F::of(0.0), one).sqrt();
+    // sin from (1 − |μ|)(1 + |μ|): 1 − μ² itself cancels near |μ| = 1 (the sun overhead, a
+    // view straight up or down), where 1 − |μ| is exact.
+    let sin = |mu: F| {
+        ((one - mu.abs()) * (one + mu.abs()))
+            .clamp_to(F::of(0.0), one)
+            .sqrt()
+    };
+    let (sin_l, sin_v) = (sin(mu_l), sin(mu_v));
     let (s, c) = psi_v.sin_cos();
     let (dx, dz, dd) = (sin_v * s, sin_l - sin_v * c, mu_l + mu_v);
     let omm = F::of(0.5) * (dx * dx + dz * dz + dd * dd);
@@ -232,6 +241,9 @@ mod tests {
         );
     }
 
+    /// f32 within a few ulps of f64 at the same (f32) point, also where the view looks down
+    /// at nearly the sun's angle (m = −μ_V → μ_L, where m/μ_L − 1 would cancel) and where eˣ − 1
+    /// is small (0.01 ≤ |x| < 0.5, where eˣ − 1 itself would lose up to 1.2e-5).
     #[test]
     fn f32_follows_f64() {
         let (h32, h64) = (
@@ -239,30 +251,43 @@ mod tests {
             HenyeyGreenstein::new(0.85f64),
         );
         let mut worst = 0.0f64;
-        for i in 0..40 {
-            let mu_v = -0.99 + 1.98 * i as f64 / 39.0;
+        let near = [0.2f32, 0.5, 1.0]
+            .into_iter()
+            .flat_map(|mu_l| (-40..=40).map(move |k| (mu_l, -mu_l * (1.0 + k as f32 * 1e-3))));
+        let spread = (0..40).flat_map(|i| {
+            [0.5f32, 1.0, 0.2, 0.1].map(|mu_l| (mu_l, -0.99 + 1.98 * i as f32 / 39.0))
+        });
+        for (mu_l, mu_v) in near.chain(spread) {
             for k in 0..12 {
-                let psi = 3.1 * k as f64 / 11.0;
-                for &(mu_l, t, d) in &[
-                    (0.5, 2.0, 0.7),
-                    (1.0, 16.0, 3.0),
-                    (0.2, 64.0, 0.1),
-                    (0.1, 30.0, 27.7), // e^{bd} beyond f32 for m > μ_L
+                let psi = 3.1 * k as f32 / 11.0;
+                for &(t, d) in &[
+                    (2.0f32, 0.7f32),
+                    (16.0, 3.0),
+                    (64.0, 0.1),
+                    (30.0, 27.7), // e^{bd} beyond f32 for m > μ_L
+                    (0.05, 0.02), // small exponents
                 ] {
-                    let a = single_scattering(&h64, 1.0, &at(mu_l, t, d, mu_v, psi));
-                    let b = single_scattering(
-                        &h32,
-                        1.0,
-                        &at(mu_l as f32, t as f32, d as f32, mu_v as f32, psi as f32),
-                    );
-                    assert!(b.is_finite(), "f32 T₁ = {b} at {mu_l} {t} {d} {mu_v}");
+                    let p = at(mu_l, t, d, mu_v.clamp(-1.0, 1.0), psi);
+                    let wide = at(mu_l as f64, t as f64, d as f64, p.mu_v as f64, psi as f64);
+                    let a = single_scattering(&h64, 1.0, &wide);
+                    let b = single_scattering(&h32, 1.0, &p);
+                    assert!(b.is_finite(), "f32 T₁ = {b} at {p:?}");
+                    // An f32 exponent x carries its own rounding, |x| ulp(1)/2 of relative
+                    // error in eˣ: the conditioning, which the tolerance allows for.
+                    let m = wide.mu_v.abs().max(1e-3);
+                    let exponent = (wide.depth / wide.mu_l).max(wide.thickness / m);
+                    let allowed = 1e-6 + 6e-8 * exponent;
                     if a > 1e-30 {
-                        worst = worst.max(((b as f64) - a).abs() / a);
+                        worst = worst.max(((b as f64) - a).abs() / a / allowed);
                     }
                 }
             }
         }
-        assert!(worst < 2e-5, "worst relative difference {worst}");
+        // In units of the allowance.
+        assert!(
+            worst < 1.0,
+            "worst relative difference {worst:.2} of the allowance"
+        );
     }
 
     #[test]
