@@ -14,17 +14,30 @@
 //! nodes in θ, exact inverse-CDF sampling) over a storage buffer that [`tabulated_buffer`] fills
 //! from the runtime's table.
 //!
-//! The port follows `nephele_runtime::phase` formula for formula in f32. It is checked by
-//! running it: `cargo test -p nephele-wgsl` evaluates and samples every model on a Vulkan
-//! device (Mesa's lavapipe on the CPU: `apt-get install mesa-vulkan-drivers`) against the Rust
-//! runtime, with the runtime's chi-square test on the GPU's samples, and its Naga translations
-//! to SPIR-V and GLSL through their validators. The transport tables and
-//! the collector search are not ported yet (docs/integration.md).
+//! [`tables`] adds the transport tables — T of each order group and order 1 at a slab point —
+//! from a `.ntt` uploaded whole to a storage buffer ([`ntt_for_gpu`] checks it as the runtime
+//! does and writes the index uniform):
+//!
+//! ```wgsl
+//! let at = SlabPoint(depth, thickness, mu_v, psi_v, mu_l);
+//! var t = order1(at);                        // sr⁻¹, albedo 1
+//! for (var g = 0u; g < nephele_ntt_index.groups; g++) { t += transport(g, at); }
+//! ```
+//!
+//! The port follows `nephele_runtime` formula for formula in f32, with its own exp, ln, sin, cos
+//! and asin (math.wgsl, Cephes': a driver's built-ins may be thousands of ulps off). It is
+//! checked by running it: `cargo test -p nephele-wgsl` evaluates and samples every model and
+//! evaluates the shipped tables at 10⁵ points on a Vulkan device (Mesa's lavapipe on the CPU:
+//! `apt-get install mesa-vulkan-drivers`) against the Rust runtime and an f64 evaluation, with
+//! the runtime's chi-square test on the GPU's samples, and its Naga translations to SPIR-V and
+//! GLSL through their validators. The collector search is not ported yet
+//! (docs/integration.md).
 
-/// The phase models in WGSL: `hg_eval`, `hg_sample`, `draine_eval`, `draine_cdf`,
+/// The elementary functions (`nephele_exp`, `nephele_ln`, `nephele_exp_m1`, `nephele_sin_cos`,
+/// `nephele_asin`) and the phase models in WGSL: `hg_eval`, `hg_sample`, `draine_eval`, `draine_cdf`,
 /// `draine_sample`, `hg_draine_eval`, `hg_draine_sample`, `hg_draine_from_diameter`, over the
 /// `Cosine` (μ, 1 − μ) and `HgDraine` (g_HG, g_D, α, w_D) structs.
-pub const PHASE: &str = include_str!("phase.wgsl");
+pub const PHASE: &str = concat!(include_str!("math.wgsl"), include_str!("phase.wgsl"));
 
 /// The tabulated phase function in WGSL (`tabulated_eval`, `tabulated_sample`), reading its
 /// table from `var<storage, read> nephele_tab: array<f32>` at `@group(group) @binding(binding)`;
@@ -53,26 +66,36 @@ pub fn tabulated_buffer(table: &nephele_runtime::phase::Tabulated<f32>) -> Vec<f
     out
 }
 
-/// Order 1 in WGSL (`order1(at: SlabPoint) -> f32`, sr⁻¹, albedo 1) from the phase function
-/// of a `.ntt` uploaded whole: its words (`array<u32>`, [`NttGpu::words`]) at
-/// `@group(group) @binding(binding)` and its index ([`NttGpu::index`], a uniform of 4 u32) at
-/// `binding + 1`; needs [`PHASE`] before it.
-pub fn order1(group: u32, binding: u32) -> String {
-    include_str!("order1.wgsl")
-        .replace("NEPHELE_NTT_GROUP", &group.to_string())
-        .replace("NEPHELE_NTT_INDEX_BINDING", &(binding + 1).to_string())
-        .replace("NEPHELE_NTT_BINDING", &binding.to_string())
+/// The transport tables in WGSL, from a `.ntt` uploaded whole: its words (`array<u32>`,
+/// [`NttGpu::words`]) at `@group(group) @binding(binding)` and its index ([`NttGpu::index`], a
+/// uniform struct `NttIndex` of [`NTT_INDEX_WORDS`] u32) at `binding + 1`; needs [`PHASE`]
+/// before it. It gives, over `SlabPoint` (depth, thickness, μ_V, ψ_V, μ_L):
+/// - `transport(g: u32, at: SlabPoint) -> f32`: T of order group g (orders ≥ 2, sr⁻¹), the
+///   runtime's `TransportTables::transport`;
+/// - `order1(at: SlabPoint) -> f32`: order 1 (sr⁻¹, albedo 1), `TransportTables::order1`.
+pub fn tables(group: u32, binding: u32) -> String {
+    [
+        include_str!("ntt.wgsl"),
+        include_str!("order1.wgsl"),
+        include_str!("transport.wgsl"),
+    ]
+    .concat()
+    .replace("NEPHELE_NTT_GROUP", &group.to_string())
+    .replace("NEPHELE_NTT_INDEX_BINDING", &(binding + 1).to_string())
+    .replace("NEPHELE_NTT_BINDING", &binding.to_string())
 }
 
-/// A `.ntt` as the WGSL port reads it: the whole file as little-endian u32 words, and the
-/// index of what the shaders read in it (word offsets of `phase_theta` and `phase`, the phase
-/// table's length, 0).
+/// Words of the index uniform ([`NttGpu::index`]).
+pub const NTT_INDEX_WORDS: usize = 28;
+
+/// A `.ntt` as the WGSL port reads it: the whole file as little-endian u32 words with the
+/// Θ-hat nodes appended, and the index of what the shaders read in it.
 #[derive(Clone, Debug)]
 pub struct NttGpu {
-    /// The file's bytes as words (storage buffer).
+    /// The file's bytes as words, then the Θ-hat nodes (storage buffer).
     pub words: Vec<u32>,
-    /// [phase_theta offset, phase offset, phase nodes, 0] (uniform).
-    pub index: [u32; 4],
+    /// The `NttIndex` uniform of ntt.wgsl: the form's sizes, word offsets and lengths.
+    pub index: [u32; NTT_INDEX_WORDS],
 }
 
 /// Checks `bytes` as the runtime does ([`TransportTables::from_bytes`]) and lays them out for
@@ -81,10 +104,11 @@ pub struct NttGpu {
 /// [`TransportTables::from_bytes`]: nephele_runtime::transport::TransportTables::from_bytes
 pub fn ntt_for_gpu(bytes: &[u8]) -> Result<NttGpu, String> {
     use nephele_runtime::container::Container;
+    use nephele_runtime::fitting::log_additive::LogAdditive;
     use nephele_runtime::fitting::names;
-    nephele_runtime::transport::TransportTables::from_bytes(bytes)
-        .map_err(|e| format!("transport tables: {e}"))?;
-    let c = Container::from_bytes(bytes).map_err(|e| format!("transport tables: {e}"))?;
+    let err = |e: &dyn std::fmt::Display| format!("transport tables: {e}");
+    nephele_runtime::transport::TransportTables::from_bytes(bytes).map_err(|e| err(&e))?;
+    let c = Container::from_bytes(bytes).map_err(|e| err(&e))?;
     let word_of = |name: &str| -> Result<(u32, u32), String> {
         let a = c.find(name).ok_or(format!("no array {name}"))?;
         let offset = a.bytes().as_ptr() as usize - bytes.as_ptr() as usize;
@@ -93,9 +117,30 @@ pub fn ntt_for_gpu(bytes: &[u8]) -> Result<NttGpu, String> {
         }
         Ok(((offset / 4) as u32, a.len() as u32))
     };
-    let (theta, n) = word_of(names::PHASE_THETA)?;
-    let (phase, _) = word_of(names::PHASE)?;
-    let words = bytes
+    // The loader has checked the sizes: whole numbers within its limits.
+    let form = c.find(names::FORM).ok_or("no form")?;
+    let size = |i: usize| form.get(i).unwrap_or(0.0) as usize;
+    let shape = LogAdditive {
+        legendre: size(0),
+        harmonics: size(1),
+        theta_nodes: size(2),
+        pairs: size(3) == 1,
+        cross: if form.len() == 6 { size(5) } else { 0 },
+    };
+    let q = size(4);
+    let (mu_l, n_l) = word_of(names::MU_L_NODES)?;
+    let (mu_v, n_v) = word_of(names::MU_V_NODES)?;
+    let (thickness, n_t) = word_of(names::THICKNESS)?;
+    let (_, groups) = word_of(names::GROUP_FIRST)?;
+    let p = shape.n_params(n_v as usize, n_l as usize);
+    // β is [P, G, Q] from version 2 on, [G, P, Q] before.
+    let (param_stride, group_stride) = if c.version() >= 2 {
+        (groups as usize * q, q)
+    } else {
+        (q, p * q)
+    };
+    let ceiling = word_of(names::T_CEILING).ok();
+    let mut words: Vec<u32> = bytes
         .chunks(4)
         .map(|b| {
             let mut w = [0u8; 4];
@@ -103,8 +148,43 @@ pub fn ntt_for_gpu(bytes: &[u8]) -> Result<NttGpu, String> {
             u32::from_le_bytes(w)
         })
         .collect();
-    Ok(NttGpu {
-        words,
-        index: [theta, phase, n, 0],
-    })
+    // The Θ-hat nodes as the runtime rounds them (π (i/(n − 1))² in f64, then f32).
+    let theta_hats = words.len() as u32;
+    let top = (shape.theta_nodes.max(2) - 1) as f64;
+    words.extend((0..shape.theta_nodes.max(2)).map(|i| {
+        let r = i as f64 / top;
+        ((std::f64::consts::PI * r * r) as f32).to_bits()
+    }));
+    let u32_of = |n: usize| n as u32;
+    let index = [
+        groups,
+        u32_of(q),
+        u32_of(shape.legendre),
+        u32_of(shape.harmonics),
+        u32_of(shape.theta_nodes),
+        u32::from(shape.pairs),
+        u32_of(shape.cross),
+        u32_of(shape.depth_terms()),
+        mu_l,
+        n_l,
+        mu_v,
+        n_v,
+        thickness,
+        n_t,
+        word_of(names::LN_T_RANGE)?.0,
+        word_of(names::BETA)?.0,
+        u32_of(param_stride),
+        u32_of(group_stride),
+        word_of(names::U_RANGE)?.0,
+        ceiling.map_or(0, |(w, _)| w),
+        u32::from(ceiling.is_some()),
+        word_of(names::PHASE_THETA)?.0,
+        word_of(names::PHASE)?.0,
+        word_of(names::PHASE_THETA)?.1,
+        theta_hats,
+        0,
+        0,
+        0,
+    ];
+    Ok(NttGpu { words, index })
 }

@@ -5,46 +5,7 @@
 // A cosine travels with 1 − μ (`Cosine`), exact near the forward peak where μ is not.
 //
 // Checked by running it: wgsl/tests/lavapipe.rs evaluates and samples every model on a Vulkan
-// driver (Mesa's lavapipe on the CPU in CI) against the Rust runtime.
-
-const PI: f32 = 3.14159265358979;
-const INV_FOUR_PI: f32 = 0.0795774715459477;
-
-// asin(x), |x| ≤ 1, to a few f32 ulps (Cephes' asinf): a polynomial in x² up to |x| = 1/2,
-// π/2 − 2 asin(√((1 − |x|)/2)) beyond. Vulkan lets the built-in asin be off by 4096 ulps (it
-// is atan2's), far too coarse for the angle of a forward peak.
-fn nephele_asin(x: f32) -> f32 {
-    var a = abs(x);
-    var flip = false;
-    if a > 0.5 {
-        a = sqrt(0.5 * (1.0 - a));
-        flip = true;
-    }
-    let z = a * a;
-    let p = ((((4.2163199048e-2 * z + 2.4181311049e-2) * z + 4.5470025998e-2) * z
-        + 7.4953002686e-2) * z + 1.6666752422e-1) * z * a + a;
-    var r = p;
-    if flip {
-        r = 0.5 * PI - 2.0 * p;
-    }
-    return select(r, -r, x < 0.0);
-}
-
-// eˣ to a few f32 ulps (Cephes' expf: x = n ln 2 + r, |r| ≤ ln 2 / 2, a polynomial in r, then
-// 2ⁿ): Vulkan lets the built-in exp be 3 + 2|x| ulps off (lavapipe's was 8e-5 relative).
-// Below f32's normal range it is 0 (GPUs may flush subnormals).
-fn nephele_exp(x: f32) -> f32 {
-    if x < -87.336544 {
-        return 0.0;
-    }
-    let xc = min(x, 88.7);
-    let n = floor(xc * 1.44269504088896341 + 0.5);
-    let r = (xc - n * 0.693359375) + n * 2.12194440e-4;
-    let z = r * r;
-    let p = ((((( 1.9875691500e-4 * r + 1.3981999507e-3) * r + 8.3334519073e-3) * r
-        + 4.1665795894e-2) * r + 1.6666665459e-1) * r + 5.0000001201e-1) * z + r + 1.0;
-    return ldexp(p, i32(n));
-}
+// driver (Mesa's lavapipe on the CPU in CI) against the Rust runtime. Needs math.wgsl first.
 
 struct Cosine {
     mu: f32,
@@ -57,6 +18,29 @@ fn cosine_from_mu(mu: f32) -> Cosine {
 
 fn cosine_from_one_minus_mu(omm: f32) -> Cosine {
     return Cosine(1.0 - omm, omm);
+}
+
+// θ and sin θ of a cosine, accurate near both poles.
+fn cosine_angle(c: Cosine) -> vec2<f32> {
+    let omm = clamp(c.one_minus_mu, 0.0, 2.0);
+    var theta: f32;
+    if c.mu >= 0.0 {
+        theta = 2.0 * nephele_asin(sqrt(omm / 2.0));
+    } else {
+        theta = PI - 2.0 * nephele_asin(sqrt(clamp(1.0 + c.mu, 0.0, 1.0) / 2.0));
+    }
+    return vec2<f32>(theta, sqrt(omm * (2.0 - omm)));
+}
+
+// A tabulated phase function between two nodes (θ_a, f_a), (θ_b, f_b) of f = 2π p sin θ, linear
+// in θ, at the angle `at` = (θ, sin θ): p (sr⁻¹); at the poles (sin θ = 0) the limit
+// |f_b − f_a| / (h 2π).
+fn phase_between(a: vec2<f32>, b: vec2<f32>, at: vec2<f32>) -> f32 {
+    let h = b.x - a.x;
+    if at.y <= 0.0 {
+        return abs(b.y - a.y) / h / (2.0 * PI);
+    }
+    return (a.y + (b.y - a.y) * (at.x - a.x) / h) / (2.0 * PI * at.y);
 }
 
 // ---- Henyey–Greenstein: p = (1 − g²) / (4π (1 + g² − 2gμ)^{3/2}) ----------------------------

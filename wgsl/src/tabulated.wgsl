@@ -28,18 +28,6 @@ fn tab_cdf(k: u32) -> f32 {
     return nephele_tab[1u + 2u * tab_n() + k];
 }
 
-// θ and sin θ of a cosine, accurate near both poles.
-fn tab_angle(c: Cosine) -> vec2<f32> {
-    let omm = clamp(c.one_minus_mu, 0.0, 2.0);
-    var theta: f32;
-    if c.mu >= 0.0 {
-        theta = 2.0 * nephele_asin(sqrt(omm / 2.0));
-    } else {
-        theta = PI - 2.0 * nephele_asin(sqrt(clamp(1.0 + c.mu, 0.0, 1.0) / 2.0));
-    }
-    return vec2<f32>(theta, sqrt(omm * (2.0 - omm)));
-}
-
 // The interval i with θ_i ≤ θ < θ_{i+1} (the first or the last outside them), by bisection.
 fn tab_interval(theta: f32) -> u32 {
     var lo = 0u;
@@ -56,16 +44,10 @@ fn tab_interval(theta: f32) -> u32 {
 }
 
 fn tabulated_eval(c: Cosine) -> f32 {
-    let a = tab_angle(c);
+    let a = cosine_angle(c);
     let i = tab_interval(a.x);
-    let ta = tab_theta(i);
-    let h = tab_theta(i + 1u) - ta;
-    let fa = tab_f(i);
-    let fb = tab_f(i + 1u);
-    if a.y <= 0.0 {
-        return abs(fb - fa) / h / (2.0 * PI);
-    }
-    return (fa + (fb - fa) * (a.x - ta) / h) / (2.0 * PI * a.y);
+    return phase_between(vec2<f32>(tab_theta(i), tab_f(i)),
+        vec2<f32>(tab_theta(i + 1u), tab_f(i + 1u)), a);
 }
 
 fn tabulated_sample(xi_in: f32) -> Cosine {

@@ -12,7 +12,6 @@ use nephele_runtime::phase::{Cosine, Draine, HenyeyGreenstein, HgDraine, Tabulat
 use nephele_runtime::presets::jendersie_deon;
 use nephele_runtime::PhaseFunction;
 use std::sync::OnceLock;
-use wgpu::util::DeviceExt;
 
 /// The test kernel around the port: one dispatch evaluates (mode 0: inputs are (μ, 1 − μ)),
 /// samples (mode 1: inputs are (ξ, ·)) or gives HG + Draine's parameters (mode 2: inputs are
@@ -20,70 +19,26 @@ use wgpu::util::DeviceExt;
 /// 3 HG + Draine of diameter p.x.
 const KERNEL: &str = include_str!("kernel.wgsl");
 
-/// A device and the kernel's pipeline, made once for every test of this file.
-struct Gpu {
-    device: wgpu::Device,
-    queue: wgpu::Queue,
-    pipeline: wgpu::ComputePipeline,
-    adapter: String,
-}
+mod common;
+use common::{dispatch, gpu, pipeline, Input};
 
-fn gpu() -> &'static Gpu {
-    static GPU: OnceLock<Gpu> = OnceLock::new();
-    GPU.get_or_init(|| pollster::block_on(open()))
-}
-
-async fn open() -> Gpu {
-    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle());
-    let adapter = instance
-        .request_adapter(&wgpu::RequestAdapterOptions::default())
-        .await
-        .expect(
-            "no GPU adapter: install a Vulkan driver (Debian: apt-get install mesa-vulkan-drivers, \
-             which gives lavapipe on the CPU)",
+/// The kernel's pipeline, made once for every test of this file.
+fn kernel() -> &'static wgpu::ComputePipeline {
+    static PIPELINE: OnceLock<wgpu::ComputePipeline> = OnceLock::new();
+    PIPELINE.get_or_init(|| {
+        let source = format!(
+            "{}\n{}\n{}",
+            nephele_wgsl::PHASE,
+            nephele_wgsl::tabulated(0, 3),
+            KERNEL
         );
-    let info = adapter.get_info();
-    let (device, queue) = adapter
-        .request_device(&wgpu::DeviceDescriptor {
-            label: Some("nephele-wgsl tests"),
-            required_features: wgpu::Features::empty(),
-            required_limits: wgpu::Limits::downlevel_defaults(),
-            experimental_features: wgpu::ExperimentalFeatures::disabled(),
-            memory_hints: wgpu::MemoryHints::Performance,
-            trace: wgpu::Trace::Off,
-        })
-        .await
-        .expect("a device on the adapter");
-    let source = format!(
-        "{}\n{}\n{}",
-        nephele_wgsl::PHASE,
-        nephele_wgsl::tabulated(0, 3),
-        KERNEL
-    );
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("phase.wgsl + test kernel"),
-        source: wgpu::ShaderSource::Wgsl(source.into()),
-    });
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("phase kernel"),
-        layout: None,
-        module: &module,
-        entry_point: Some("main"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
-    Gpu {
-        device,
-        queue,
-        pipeline,
-        adapter: format!("{} ({:?}, {})", info.name, info.backend, info.driver),
-    }
+        pipeline("phase.wgsl + test kernel", &source)
+    })
 }
 
 /// Runs the kernel in `mode` for `model` with parameters `p` on `inputs` (the tabulated model
 /// reads [`table`]'s buffer).
 fn run(mode: u32, model: u32, p: [f32; 4], inputs: &[[f32; 2]]) -> Vec<[f32; 4]> {
-    let g = gpu();
     let n = inputs.len() as u32;
     let mut job = [0u8; 32];
     for (k, v) in [mode, model, n, 0].iter().enumerate() {
@@ -92,75 +47,30 @@ fn run(mode: u32, model: u32, p: [f32; 4], inputs: &[[f32; 2]]) -> Vec<[f32; 4]>
     for (k, v) in p.iter().enumerate() {
         job[16 + 4 * k..20 + 4 * k].copy_from_slice(&v.to_le_bytes());
     }
-    let init = |label, contents: &[u8], usage| {
-        g.device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage,
-            })
-    };
-    let uniform = init("job", &job, wgpu::BufferUsages::UNIFORM);
-    let input = init(
-        "inputs",
-        bytemuck::cast_slice(inputs),
-        wgpu::BufferUsages::STORAGE,
-    );
-    let tab = init(
-        "table",
-        bytemuck::cast_slice(&nephele_wgsl::tabulated_buffer(&table().view())),
-        wgpu::BufferUsages::STORAGE,
-    );
-    let size = 16 * inputs.len() as u64;
-    let output = g.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("outputs"),
-        size,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let staging = g.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("staging"),
-        size,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let bind = g.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: None,
-        layout: &g.pipeline.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
+    let tab = nephele_wgsl::tabulated_buffer(&table().view());
+    let out = dispatch(
+        kernel(),
+        &[
+            Input {
                 binding: 0,
-                resource: uniform.as_entire_binding(),
+                bytes: &job,
+                uniform: true,
             },
-            wgpu::BindGroupEntry {
+            Input {
                 binding: 1,
-                resource: input.as_entire_binding(),
+                bytes: bytemuck::cast_slice(inputs),
+                uniform: false,
             },
-            wgpu::BindGroupEntry {
-                binding: 2,
-                resource: output.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
+            Input {
                 binding: 3,
-                resource: tab.as_entire_binding(),
+                bytes: bytemuck::cast_slice(&tab),
+                uniform: false,
             },
         ],
-    });
-    let mut encoder = g.device.create_command_encoder(&Default::default());
-    {
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&g.pipeline);
-        pass.set_bind_group(0, &bind, &[]);
-        pass.dispatch_workgroups(n.div_ceil(64), 1, 1);
-    }
-    encoder.copy_buffer_to_buffer(&output, 0, &staging, 0, size);
-    g.queue.submit([encoder.finish()]);
-    staging.map_async(wgpu::MapMode::Read, .., |r| r.expect("map the outputs"));
-    g.device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .expect("the kernel finishes");
-    let view = staging.get_mapped_range(..).expect("mapped outputs");
-    bytemuck::cast_slice::<u8, [f32; 4]>(&view).to_vec()
+        (2, 16 * inputs.len() as u64),
+        n,
+    );
+    bytemuck::cast_slice::<u8, [f32; 4]>(&out).to_vec()
 }
 
 /// The tabulated model's table: HG + Draine of 10 µm droplets tabulated as a Mie table would be
@@ -464,189 +374,4 @@ fn sampling_throughput_record() {
         gpu().adapter,
         n as f64 / cpu_s
     );
-}
-
-/// The order-1 test kernel: points (depth, thickness, μ_V, ψ_V, μ_L) in, T₁ out; the `.ntt` at
-/// bindings 3 (words) and 4 (index).
-const ORDER1_KERNEL: &str = r#"
-@group(0) @binding(0) var<uniform> o1_n: vec4<u32>;
-@group(0) @binding(1) var<storage, read> o1_points: array<f32>;
-@group(0) @binding(2) var<storage, read_write> o1_out: array<f32>;
-
-@compute @workgroup_size(64)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    let i = id.x;
-    if i >= o1_n.x {
-        return;
-    }
-    let b = 5u * i;
-    let at = SlabPoint(o1_points[b], o1_points[b + 1u], o1_points[b + 2u], o1_points[b + 3u],
-        o1_points[b + 4u]);
-    o1_out[i] = order1(at);
-}
-"#;
-
-const SHIPPED: &[u8] = include_bytes!("../../runtime/tables/mie10um/transport.ntt");
-
-/// Order 1 on the GPU from the shipped `.ntt` against `TransportTables::order1` at 10⁵ points
-/// over the whole domain: both faces, the horizon (±0), grazing and overhead suns, t = 0.3 …
-/// 200 (beyond the grid), every azimuth.
-#[test]
-fn order1_from_the_shipped_tables_follows_the_runtime() {
-    let g = gpu();
-    let ntt = nephele_wgsl::ntt_for_gpu(SHIPPED).expect("the shipped tables");
-    let source = format!(
-        "{}\n{}\n{}",
-        nephele_wgsl::PHASE,
-        nephele_wgsl::order1(0, 3),
-        ORDER1_KERNEL
-    );
-    let module = g.device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("order1"),
-        source: wgpu::ShaderSource::Wgsl(source.into()),
-    });
-    let pipeline = g
-        .device
-        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("order1"),
-            layout: None,
-            module: &module,
-            entry_point: Some("main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
-    let mut s = 0x2545_F491_4F6C_DD1Du64;
-    let mut r = || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        (s >> 40) as f32 / (1u64 << 24) as f32
-    };
-    let n = 100_000;
-    let points: Vec<nephele_runtime::transport::SlabPoint<f32>> = (0..n)
-        .map(|i| {
-            let t = [0.3, 128.0, 200.0].get(i % 13).copied().unwrap_or(0.5 * 256f32.powf(r()));
-            let depth = match i % 7 {
-                0 => 0.0,
-                1 => t,
-                _ => t * r(),
-            };
-            let mu_v = match i % 11 {
-                0 => 0.0,
-                1 => -0.0,
-                2 => 1.0,
-                3 => -1.0,
-                _ => 2.0 * r() - 1.0,
-            };
-            nephele_runtime::transport::SlabPoint {
-                depth,
-                thickness: t,
-                mu_v,
-                psi_v: std::f32::consts::PI * (2.0 * r() - 1.0),
-                mu_l: 0.02 + 0.98 * r(),
-            }
-        })
-        .collect();
-    let flat: Vec<f32> = points
-        .iter()
-        .flat_map(|p| [p.depth, p.thickness, p.mu_v, p.psi_v, p.mu_l])
-        .collect();
-    let init = |label, contents: &[u8], usage| {
-        g.device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage,
-            })
-    };
-    let count = [n as u32, 0, 0, 0];
-    let uniform = init("n", bytemuck::cast_slice(&count), wgpu::BufferUsages::UNIFORM);
-    let input = init("points", bytemuck::cast_slice(&flat), wgpu::BufferUsages::STORAGE);
-    let words = init("ntt", bytemuck::cast_slice(&ntt.words), wgpu::BufferUsages::STORAGE);
-    let index = init(
-        "ntt index",
-        bytemuck::cast_slice(&ntt.index),
-        wgpu::BufferUsages::UNIFORM,
-    );
-    let size = 4 * n as u64;
-    let output = g.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("order1"),
-        size,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let staging = g.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("staging"),
-        size,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let entries: Vec<wgpu::BindGroupEntry> = [&uniform, &input, &output, &words, &index]
-        .iter()
-        .enumerate()
-        .map(|(k, b)| wgpu::BindGroupEntry {
-            binding: k as u32,
-            resource: b.as_entire_binding(),
-        })
-        .collect();
-    let bind = g.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: None,
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &entries,
-    });
-    let mut encoder = g.device.create_command_encoder(&Default::default());
-    {
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &bind, &[]);
-        pass.dispatch_workgroups((n as u32).div_ceil(64), 1, 1);
-    }
-    encoder.copy_buffer_to_buffer(&output, 0, &staging, 0, size);
-    g.queue.submit([encoder.finish()]);
-    staging.map_async(wgpu::MapMode::Read, .., |r| r.expect("map"));
-    g.device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .expect("the kernel finishes");
-    let view = staging.get_mapped_range(..).expect("mapped");
-    let got: &[f32] = bytemuck::cast_slice(&view);
-    let tables = nephele_runtime::transport::TransportTables::from_bytes(SHIPPED).unwrap();
-    let want: Vec<f32> = points.iter().map(|p| tables.order1(p)).collect();
-    let top = want.iter().fold(0.0f32, |a, &b| a.max(b));
-    // Where the view looks down at nearly the sun's angle (m = −μ_V within 5 % of μ_L), T₁'s
-    // divisor m/μ_L − 1 cancels in f32 on both sides and a division's last bit (Vulkan allows
-    // 2.5 ulps) is amplified up to 1/|m/μ_L − 1|: those points are reported apart.
-    let cancels = |p: &nephele_runtime::transport::SlabPoint<f32>| {
-        p.mu_v < 0.0 && (-p.mu_v / p.mu_l - 1.0).abs() < 0.05
-    };
-    let (mut worst_cancel, mut n_cancel) = (0.0f64, 0);
-    let (mut worst, mut at, mut zero_mismatch) = (0.0f64, 0, 0);
-    for (i, (o, w)) in got.iter().zip(&want).enumerate() {
-        // Below f32's normal range the runtime (libm) keeps subnormals, which a GPU may flush
-        // to zero (Vulkan allows it): zero there either way.
-        let tiny = |v: f32| v.abs() < f32::MIN_POSITIVE;
-        if tiny(*o) != tiny(*w) {
-            zero_mismatch += 1;
-        }
-        if *w > 1e-6 * top {
-            let rel = ((o - w) / w).abs() as f64;
-            if cancels(&points[i]) {
-                n_cancel += 1;
-                worst_cancel = worst_cancel.max(rel);
-            } else if !(rel <= worst) {
-                (worst, at) = (rel, i);
-            }
-        }
-    }
-    println!(
-        "order 1 where m/μ_L − 1 cancels (|m/μ_L − 1| < 0.05, {n_cancel} of {n} points): \
-         largest relative difference {worst_cancel:.2e}"
-    );
-    println!(
-        "order 1 from the shipped .ntt, 10⁵ points: largest relative difference {worst:.2e} \
-         ({:?}: GPU {} runtime {}), {zero_mismatch} zero/non-zero mismatches (subnormals as zero)",
-        points[at], got[at], want[at]
-    );
-    assert_eq!(zero_mismatch, 0);
-    assert!(worst <= 1e-5, "{worst:.2e}");
-    assert!(worst_cancel <= 1e-3, "{worst_cancel:.2e} where m/μ_L − 1 cancels");
 }

@@ -1,0 +1,123 @@
+// A `.ntt` (nephele's compressed transport tables) in a storage buffer, as the WGSL port of
+// nephele-runtime's `transport` reads it: the file's bytes whole as `array<u32>`
+// (`nephele_wgsl::NttGpu::words`, with the Θ-hat nodes appended), and a uniform index of where
+// each array starts and the form's sizes (`NttGpu::index`, written by `nephele_wgsl::ntt_for_gpu`
+// after the runtime's own checks of the file). Needs math.wgsl and phase.wgsl before it.
+
+struct NttIndex {
+    groups: u32,
+    q: u32,            // Legendre terms in ln t
+    legendre: u32,     // J, Legendre terms in depth
+    harmonics: u32,    // K
+    theta_nodes: u32,
+    pairs: u32,        // 1: per-(μ_V, μ_L) γ, offset and slope
+    cross: u32,        // A, the interaction's degree (0: none)
+    depth_terms: u32,  // max(J, 2, 3 if A > 0)
+    mu_l: u32,         // word offset of the sun-cosine nodes
+    n_l: u32,
+    mu_v: u32,
+    n_v: u32,
+    thickness: u32,
+    n_t: u32,
+    ln_t_range: u32,   // [G, 2]
+    beta: u32,         // T's coefficients, β[p][g][k] at beta + g group_stride + p param_stride + k
+    param_stride: u32,
+    group_stride: u32,
+    u_range: u32,      // [G, N, L·M], packed fitted depths
+    t_ceiling: u32,    // [G, N, L], if has_ceiling
+    has_ceiling: u32,
+    phase_theta: u32,  // degrees
+    phase: u32,
+    n_phase: u32,
+    theta_hats: u32,   // the Θ-hat nodes π (i/(n − 1))² as the runtime rounds them (appended)
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
+}
+
+@group(NEPHELE_NTT_GROUP) @binding(NEPHELE_NTT_BINDING)
+var<storage, read> nephele_ntt: array<u32>;
+@group(NEPHELE_NTT_GROUP) @binding(NEPHELE_NTT_INDEX_BINDING)
+var<uniform> nephele_ntt_index: NttIndex;
+
+fn ntt_f32(word: u32) -> f32 {
+    return bitcast<f32>(nephele_ntt[word]);
+}
+
+// A point of the slab: depth d and thickness t (mean free paths), view cosine μ_V (> 0: the
+// light goes up), view azimuth ψ_V (radians, from the sun's horizontal travel), sun cosine μ_L.
+struct SlabPoint {
+    depth: f32,
+    thickness: f32,
+    mu_v: f32,
+    psi_v: f32,
+    mu_l: f32,
+}
+
+// x between two nodes of a grid: weight 1 − w on `lo`, w on `hi` (one node where lo = hi or
+// w = 0: `lerp_nodes`).
+struct Lerp {
+    lo: u32,
+    hi: u32,
+    w: f32,
+}
+
+// 1 or 2: the nodes a Lerp draws on.
+fn lerp_nodes(l: Lerp) -> u32 {
+    return select(1u, 2u, l.hi != l.lo && l.w > 0.0);
+}
+
+// The k-th node of `l` (k < lerp_nodes(l)).
+fn lerp_node(l: Lerp, k: u32) -> u32 {
+    return select(l.lo, l.hi, k == 1u);
+}
+
+// Its weight.
+fn lerp_weight(l: Lerp, k: u32) -> f32 {
+    if lerp_nodes(l) == 1u {
+        return 1.0;
+    }
+    return select(1.0 - l.w, l.w, k == 1u);
+}
+
+// The interval i of the n ≥ 2 increasing values at `offset` with a[i] ≤ x < a[i + 1], held
+// to the first and the last outside them.
+fn ntt_bracket(offset: u32, n: u32, x: f32) -> u32 {
+    var lo = 0u;
+    var hi = max(n, 2u) - 1u;
+    while hi - lo > 1u {
+        let mid = (lo + hi) / 2u;
+        if ntt_f32(offset + mid) <= x {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    return lo;
+}
+
+// Where x sits among the n increasing values at `offset` (held at the ends).
+fn ntt_lerp(offset: u32, n: u32, x: f32) -> Lerp {
+    if n <= 1u || !(x > ntt_f32(offset)) {
+        return Lerp(0u, 0u, 0.0);
+    }
+    if x >= ntt_f32(offset + n - 1u) {
+        return Lerp(n - 1u, n - 1u, 0.0);
+    }
+    let lo = ntt_bracket(offset, n, x);
+    let va = ntt_f32(offset + lo);
+    let vb = ntt_f32(offset + lo + 1u);
+    return Lerp(lo, lo + 1u, (x - va) / (vb - va));
+}
+
+// cos Θ between the sun's propagation direction and the view, 1 − cos Θ = |ω_L − ω_V|²/2, the
+// sines from (1 − |μ|)(1 + |μ|) (exact near |μ| = 1).
+fn scattering_cosine(at: SlabPoint) -> Cosine {
+    let sin_l = sqrt(clamp((1.0 - abs(at.mu_l)) * (1.0 + abs(at.mu_l)), 0.0, 1.0));
+    let sin_v = sqrt(clamp((1.0 - abs(at.mu_v)) * (1.0 + abs(at.mu_v)), 0.0, 1.0));
+    let sc = nephele_sin_cos(at.psi_v);
+    let dx = sin_v * sc.x;
+    let dz = sin_l - sin_v * sc.y;
+    let dd = at.mu_l + at.mu_v;
+    return cosine_from_one_minus_mu(clamp(0.5 * (dx * dx + dz * dz + dd * dd), 0.0, 2.0));
+}
