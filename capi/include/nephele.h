@@ -83,6 +83,154 @@ typedef struct NepheleTransport {
   float sigma;
 } NepheleTransport;
 
+/**
+ * The search's settings (`nephele_search_options_default` gives the runtime's): most table
+ * reads, the tolerance ε (converged when the collector moves less than ε σ across the light
+ * and σ changes by less than ε σ), the step clamp and the filtering at σ (1 on, 0 off).
+ */
+typedef struct NepheleSearchOptions {
+  uint32_t max_reads;
+  float tolerance;
+  int32_t step_clamp;
+  int32_t filter;
+} NepheleSearchOptions;
+
+/**
+ * The lit surface filtered at one place and scale (what `filtered` writes).
+ */
+typedef struct NepheleFilteredSurface {
+  /**
+   * The filtered lit face's point on the light line of the query (m, world).
+   */
+  float entry[3];
+  /**
+   * Its outward unit normal (toward the sun's side).
+   */
+  float normal[3];
+  /**
+   * Geometric length of the chord from the lit face to the far face along the light (m).
+   */
+  float length;
+  /**
+   * Optical length of the same chord (mean free paths).
+   */
+  float optical_length;
+} NepheleFilteredSurface;
+
+/**
+ * The cloud's cross-section across the light around a point, filtered (what `lateral`
+ * writes).
+ */
+typedef struct NepheleLateral {
+  /**
+   * The share of the footprint the cloud covers, in [0, 1].
+   */
+  float coverage;
+  /**
+   * The mean distance across the light to the cross-section's edge over the covered part
+   * of the footprint (m).
+   */
+  float edge_distance;
+} NepheleLateral;
+
+/**
+ * The renderer's cloud seen from the sun, as callbacks. Each returns 1 and writes `*out`
+ * where the cloud covers the light line through `at` (m, world), 0 where it does not; they
+ * are called from the searching thread only, and must not unwind.
+ */
+typedef struct NepheleLitSurface {
+  /**
+   * Passed back to the callbacks.
+   */
+  void *user;
+  /**
+   * The surface filtered at scale `sigma` (m) around the light line through `at`.
+   */
+  int32_t (*filtered)(void *user, const float *at, float sigma, struct NepheleFilteredSurface *out);
+  /**
+   * The cross-section filtered at `sigma` around the light line through `at`, for the
+   * finite-cloud correction; null: the surface knows no edge (an unbounded slab).
+   */
+  int32_t (*lateral)(void *user, const float *at, float sigma, struct NepheleLateral *out);
+  /**
+   * σ₀ (m, > 0): the scale of the first filtering, the cloud's size.
+   */
+  float initial_scale;
+} NepheleLitSurface;
+
+/**
+ * Where the light is seen: p (m, world), the direction the light travels toward the eye
+ * (unit), and the optical depth (mean free paths) the view ray holds beyond p, at least
+ * `behind_min` and at most `behind_max` (infinity when unknown).
+ */
+typedef struct NepheleViewpoint {
+  float position[3];
+  float view[3];
+  float behind_min;
+  float behind_max;
+} NepheleViewpoint;
+
+/**
+ * One group's search: `found` 0 where the surface has no cloud on the light line through p
+ * or the tables hold no light there (the rest 0); else T, c and σ of the last read, the slab
+ * it was read at, the collector's centre on the filtered lit face (m, world) and spread σ
+ * (m), the reads, whether it converged (1) before the cap, the parameters held at the
+ * tables' domain (bits: 1 thickness, 2 μ_L, 4 depth, 8 view) and κ̄ (1/m).
+ */
+typedef struct NepheleCollector {
+  int32_t found;
+  struct NepheleTransport transport;
+  struct NepheleSlabPoint at;
+  float centre[3];
+  float sigma;
+  uint32_t reads;
+  int32_t converged;
+  uint32_t clamps;
+  float extinction;
+} NepheleCollector;
+
+/**
+ * Which finite-cloud corrections apply and the medium's constants
+ * (`nephele_finite_cloud_for_tables` gives lateral leakage from diffusion theory with no
+ * fitted constant, for the tables' phase function).
+ */
+typedef struct NepheleFiniteCloud {
+  /**
+   * Lateral leakage through the cloud's sides (1 on, 0 off).
+   */
+  int32_t leakage;
+  /**
+   * T weighed by the share of the collector's footprint the cloud covers (1 on, 0 off).
+   */
+  int32_t coverage;
+  /**
+   * κ⊥ times this (1: diffusion theory as is).
+   */
+  float rate_scale;
+  /**
+   * The sides count from order n_c = this × (δ̄ + z_e)²/D on.
+   */
+  float delay_scale;
+  /**
+   * κ_a = −ln ϖ per scattering (0 for water clouds in the visible).
+   */
+  float absorption;
+  /**
+   * g, the phase function's mean cosine.
+   */
+  float mean_cosine;
+} NepheleFiniteCloud;
+
+/**
+ * What one group's collector keeps of T: the factor in [0, 1], the lateral radius R it used
+ * (mean free paths; infinity where the surface knows no edge) and the footprint's coverage.
+ */
+typedef struct NepheleKept {
+  float factor;
+  float radius;
+  float coverage;
+} NepheleKept;
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -256,6 +404,20 @@ enum NepheleStatus nephele_phase_schlick(float k, struct NephelePhase **out);
 enum NepheleStatus nephele_phase_vmf(float kappa, struct NephelePhase **out);
 
 /**
+ * A tabulated phase function (a Mie table) from p(θ) (1/sr, any normalisation) at `n` ≥ 2
+ * angles θ in degrees increasing from 0 to 180: f = 2π p sin θ linear in θ between the nodes,
+ * normalised exactly, sampled by its exact inverse CDF (the runtime's `TabulatedTable`; the
+ * caller's arrays are copied).
+ *
+ * # Safety
+ * `theta_deg` and `p` are valid for `n` reads (or null); `out` is valid for a write (or null).
+ */
+enum NepheleStatus nephele_phase_tabulated(const double *theta_deg,
+                                           const double *p,
+                                           size_t n,
+                                           struct NephelePhase **out);
+
+/**
  * Releases a phase model (null: nothing).
  *
  * # Safety
@@ -288,6 +450,69 @@ enum NepheleStatus nephele_phase_pdf(const struct NephelePhase *phase, float mu,
  * The pointers are valid (or null).
  */
 enum NepheleStatus nephele_phase_sample(const struct NephelePhase *phase, float xi, float *out);
+
+/**
+ * The runtime's default search settings into `*out`.
+ *
+ * # Safety
+ * `out` is valid for writes (or null).
+ */
+enum NepheleStatus nephele_search_options_default(struct NepheleSearchOptions *out);
+
+/**
+ * The collector of `group` seen from `*viewpoint`, the sun toward `sun` (unit, 3 floats), on
+ * the renderer's `*surface`, into `*out` (`found` 0 where there is none).
+ *
+ * # Safety
+ * The pointers are valid (or null; `sun` for 3 reads); the callbacks are valid for the
+ * arguments the runtime passes (a point of 3 floats, a scale, an output).
+ */
+enum NepheleStatus nephele_find_collector(const struct NepheleTables *tables,
+                                          size_t group,
+                                          const struct NepheleLitSurface *surface,
+                                          const struct NepheleViewpoint *viewpoint,
+                                          const float (*sun)[3],
+                                          const struct NepheleSearchOptions *options,
+                                          struct NepheleCollector *out);
+
+/**
+ * The collectors of every group (as `nephele_find_collector` gives each, bit for bit, with
+ * the first read shared) into `out[0 .. groups)` (`capacity` ≥ the group count).
+ *
+ * # Safety
+ * As `nephele_find_collector`; `out` is valid for `capacity` writes.
+ */
+enum NepheleStatus nephele_find_collectors(const struct NepheleTables *tables,
+                                           const struct NepheleLitSurface *surface,
+                                           const struct NepheleViewpoint *viewpoint,
+                                           const float (*sun)[3],
+                                           const struct NepheleSearchOptions *options,
+                                           struct NepheleCollector *out,
+                                           size_t capacity);
+
+/**
+ * Lateral leakage from diffusion theory, no fitted constant, for the tables' phase function,
+ * into `*out`.
+ *
+ * # Safety
+ * The pointers are valid (or null).
+ */
+enum NepheleStatus nephele_finite_cloud_for_tables(const struct NepheleTables *tables,
+                                                   struct NepheleFiniteCloud *out);
+
+/**
+ * The share of `group`'s T the cloud keeps at the collector `*found` (from
+ * `nephele_find_collector` on the same surface; `found` = 1) into `*out`.
+ *
+ * # Safety
+ * As `nephele_find_collector`.
+ */
+enum NepheleStatus nephele_finite_cloud(const struct NepheleTables *tables,
+                                        size_t group,
+                                        const struct NepheleLitSurface *surface,
+                                        const struct NepheleCollector *found,
+                                        const struct NepheleFiniteCloud *finite,
+                                        struct NepheleKept *out);
 
 #ifdef __cplusplus
 }  // extern "C"

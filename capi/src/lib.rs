@@ -10,13 +10,18 @@
 
 use nephele_runtime::embedded::MIE_10UM;
 use nephele_runtime::phase::{
-    Draine, HenyeyGreenstein, HgDraine, Rayleigh, Schlick, TwoTermHg, VonMisesFisher,
+    Cosine, Draine, HenyeyGreenstein, HgDraine, Rayleigh, Schlick, TableError, TabulatedTable,
+    TwoTermHg, VonMisesFisher,
 };
+use nephele_runtime::presets::FIT_MAX_DIAMETER_UM;
 use nephele_runtime::transport::{OwnedTables, SlabPoint, Transport, TransportTables};
 use nephele_runtime::PhaseFunction;
 use std::cell::RefCell;
 use std::ffi::{c_char, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
+
+mod collector;
+pub use collector::*;
 
 /// Most order groups tables hold: an array of this many `NepheleTransport` fits every
 /// `nephele_evaluate_all`.
@@ -134,6 +139,17 @@ unsafe fn get_mut<'a, T>(p: *mut T, what: &str) -> Result<&'a mut T, NepheleStat
 /// The runtime's point.
 fn slab_point(p: &NepheleSlabPoint) -> SlabPoint<f32> {
     SlabPoint {
+        thickness: p.thickness,
+        mu_l: p.mu_l,
+        depth: p.depth,
+        mu_v: p.mu_v,
+        psi_v: p.psi_v,
+    }
+}
+
+/// The C ABI's point.
+fn slab_point_of(p: &SlabPoint<f32>) -> NepheleSlabPoint {
+    NepheleSlabPoint {
         thickness: p.thickness,
         mu_l: p.mu_l,
         depth: p.depth,
@@ -320,6 +336,18 @@ unsafe fn per_group<'a, T>(
     (out, capacity): (*mut T, usize),
 ) -> Result<(&'a TransportTables<'a>, SlabPoint<f32>, &'a mut [T]), NepheleStatus> {
     let (t, at) = unsafe { (get(tables, "tables")?, get(at, "at")?) };
+    let out = unsafe { group_slice(t, (out, capacity))? };
+    Ok((t.tables(), slab_point(at), out))
+}
+
+/// `out` as one value per group of `t`, checked: not null, `capacity` ≥ the group count.
+///
+/// # Safety
+/// `out` is valid for `capacity` writes (or null).
+unsafe fn group_slice<'a, T>(
+    t: &NepheleTables,
+    (out, capacity): (*mut T, usize),
+) -> Result<&'a mut [T], NepheleStatus> {
     let g = t.tables().groups();
     if out.is_null() {
         return Err(fail(NepheleStatus::NullPointer, "out is null"));
@@ -330,8 +358,8 @@ unsafe fn per_group<'a, T>(
             format!("out holds {capacity} values, the tables have {g} groups"),
         ));
     }
-    let out = unsafe { std::slice::from_raw_parts_mut(out, g) };
-    Ok((t.tables(), slab_point(at), out))
+    // SAFETY: valid for capacity ≥ g writes (the caller's promise), not null.
+    Ok(unsafe { std::slice::from_raw_parts_mut(out, g) })
 }
 
 /// T, c and σ of every group at `*at` into `out[0 .. groups)` (`capacity` ≥ the group count).
@@ -514,10 +542,12 @@ pub unsafe extern "C" fn nephele_phase_hg_draine_diameter(
 ) -> NepheleStatus {
     unsafe {
         new_phase(out, || {
-            if d_um > 0.0 && d_um.is_finite() {
+            if d_um > 0.0 && d_um <= FIT_MAX_DIAMETER_UM {
                 Ok(Box::new(HgDraine::<f32>::from_diameter(d_um)))
             } else {
-                Err(format!("diameter = {d_um} um must be finite and > 0"))
+                Err(format!(
+                    "diameter = {d_um} um: the fits cover 0 < d <= {FIT_MAX_DIAMETER_UM} um"
+                ))
             }
         })
     }
@@ -579,6 +609,74 @@ pub unsafe extern "C" fn nephele_phase_vmf(
         new_phase(out, || {
             Ok(Box::new(VonMisesFisher::new(non_negative("kappa", kappa)?)))
         })
+    }
+}
+
+/// A tabulated phase function (a Mie table) from p(θ) (1/sr, any normalisation) at `n` ≥ 2
+/// angles θ in degrees increasing from 0 to 180: f = 2π p sin θ linear in θ between the nodes,
+/// normalised exactly, sampled by its exact inverse CDF (the runtime's `TabulatedTable`; the
+/// caller's arrays are copied).
+///
+/// # Safety
+/// `theta_deg` and `p` are valid for `n` reads (or null); `out` is valid for a write (or null).
+#[no_mangle]
+pub unsafe extern "C" fn nephele_phase_tabulated(
+    theta_deg: *const f64,
+    p: *const f64,
+    n: usize,
+    out: *mut *mut NephelePhase,
+) -> NepheleStatus {
+    if theta_deg.is_null() || p.is_null() {
+        return fail(NepheleStatus::NullPointer, "theta_deg or p is null");
+    }
+    // SAFETY: both are valid for n reads (the caller's promise), checked non-null above.
+    let (theta, phase) = unsafe {
+        (
+            std::slice::from_raw_parts(theta_deg, n),
+            std::slice::from_raw_parts(p, n),
+        )
+    };
+    unsafe {
+        new_phase(out, || {
+            let table = TabulatedTable::<f32>::from_phase(theta, phase).map_err(|e| {
+                let why = match e {
+                    TableError::Shape => "fewer than 2 nodes",
+                    TableError::Angles => "θ not increasing from 0 to 180 degrees",
+                    TableError::Values => "a negative or non-finite p",
+                };
+                format!("tabulated phase function: {why}")
+            })?;
+            Ok(Box::new(OwnedTabulated(table)))
+        })
+    }
+}
+
+/// A tabulated phase function that owns its table: the runtime's view of it, method for method.
+struct OwnedTabulated(TabulatedTable<f32>);
+
+impl PhaseFunction<f32> for OwnedTabulated {
+    fn eval(&self, mu: f32) -> f32 {
+        self.0.view().eval(mu)
+    }
+
+    fn pdf(&self, mu: f32) -> f32 {
+        self.0.view().pdf(mu)
+    }
+
+    fn sample_mu(&self, xi: f32) -> f32 {
+        self.0.view().sample_mu(xi)
+    }
+
+    fn sample_cosine(&self, xi: f32) -> Cosine<f32> {
+        self.0.view().sample_cosine(xi)
+    }
+
+    fn pdf_cosine(&self, c: Cosine<f32>) -> f32 {
+        self.0.view().pdf_cosine(c)
+    }
+
+    fn mean_cosine(&self) -> Option<f32> {
+        self.0.view().mean_cosine()
     }
 }
 

@@ -5,8 +5,11 @@
 
 use nephele_c::*;
 use nephele_runtime::embedded::{mie_10um, MIE_10UM};
-use nephele_runtime::phase::HgDraine;
-use nephele_runtime::transport::{SlabPoint, Transport};
+use nephele_runtime::phase::{HgDraine, TabulatedTable};
+use nephele_runtime::transport::{
+    find_collectors, finite_cloud, Clamps, Collector, FilteredSurface, FiniteCloud, Lateral,
+    LitSurface, SearchOptions, SlabPoint, Transport, TransportTables, Viewpoint,
+};
 use nephele_runtime::PhaseFunction;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -160,6 +163,31 @@ fn a_c_program_under_sanitizers_answers_as_the_runtime() {
         );
         assert_eq!(**line, want);
     }
+    let (theta, table): (Vec<f64>, Vec<f64>) = (0..=360)
+        .map(|i| {
+            let theta = 0.5 * i as f64;
+            let d = 1.0 + 0.85 * 0.85 - 2.0 * 0.85 * (theta * std::f64::consts::PI / 180.0).cos();
+            (
+                theta,
+                (1.0 - 0.85 * 0.85) / (4.0 * std::f64::consts::PI * d * d.sqrt()),
+            )
+        })
+        .unzip();
+    let tabulated = TabulatedTable::<f32>::from_phase(&theta, &table).unwrap();
+    let tab_lines: Vec<&&str> = lines
+        .iter()
+        .filter(|l| l.starts_with("tabulated "))
+        .collect();
+    assert_eq!(tab_lines.len(), 9);
+    for (i, line) in tab_lines.iter().enumerate() {
+        let (mu, xi) = (-1.0f32 + 0.25 * i as f32, 0.125f32 * i as f32);
+        let p = tabulated.view();
+        assert_eq!(
+            **line,
+            format!("tabulated {} {}", hex(p.eval(mu)), hex(p.sample_mu(xi)))
+        );
+    }
+    the_collectors_are_the_runtimes(&lines, &tab);
     let status = |case: &str| -> i32 {
         let line = lines
             .iter()
@@ -181,6 +209,13 @@ fn a_c_program_under_sanitizers_answers_as_the_runtime() {
         ("bad_g", NepheleStatus::BadArgument),
         ("bad_mu", NepheleStatus::BadArgument),
         ("bad_diameter", NepheleStatus::BadArgument),
+        ("null_surface", NepheleStatus::NullPointer),
+        ("null_callback", NepheleStatus::NullPointer),
+        ("collector_group", NepheleStatus::BadGroup),
+        ("not_unit_sun", NepheleStatus::BadArgument),
+        ("short_collectors", NepheleStatus::BadArgument),
+        ("not_found", NepheleStatus::BadArgument),
+        ("bad_table", NepheleStatus::BadArgument),
     ] {
         assert_eq!(status(case), code as i32, "{case}");
     }
@@ -190,6 +225,157 @@ fn a_c_program_under_sanitizers_answers_as_the_runtime() {
         .unwrap();
     assert!(version.contains("version 9"), "{version}");
     std::fs::remove_dir_all(&tmp).unwrap();
+}
+
+/// The C example's sphere of cloud (examples/c/nephele_example.c), the same f32 operations in
+/// the same order: radius (m), extinction (1/m), the sun.
+struct Sphere {
+    radius: f32,
+    kappa: f32,
+}
+
+const SUN: [f32; 3] = [0.0, 0.6, 0.8];
+
+impl Sphere {
+    fn line_disc(&self, at: [f32; 3]) -> (f32, f32) {
+        let b = at[0] * SUN[0] + at[1] * SUN[1] + at[2] * SUN[2];
+        let c = at[0] * at[0] + at[1] * at[1] + at[2] * at[2] - self.radius * self.radius;
+        (b * b - c, b)
+    }
+}
+
+impl LitSurface for Sphere {
+    fn filtered(&self, at: [f32; 3], _sigma: f32) -> Option<FilteredSurface> {
+        let (disc, b) = self.line_disc(at);
+        if !(disc > 0.0) {
+            return None;
+        }
+        let h = disc.sqrt();
+        let entry: [f32; 3] = std::array::from_fn(|k| at[k] + (h - b) * SUN[k]);
+        Some(FilteredSurface {
+            entry,
+            normal: entry.map(|e| e / self.radius),
+            length: 2.0 * h,
+            optical_length: self.kappa * (2.0 * h),
+        })
+    }
+
+    fn initial_scale(&self) -> f32 {
+        self.radius
+    }
+
+    fn lateral(&self, at: [f32; 3], _sigma: f32) -> Option<Lateral> {
+        let (disc, b) = self.line_disc(at);
+        if !(disc > 0.0) {
+            return None;
+        }
+        let rho2 = at[0] * at[0] + at[1] * at[1] + at[2] * at[2] - b * b;
+        Some(Lateral {
+            coverage: 1.0,
+            edge_distance: self.radius - rho2.max(0.0).sqrt(),
+        })
+    }
+}
+
+/// The C example's viewpoint `i`.
+fn viewpoint(i: usize) -> Viewpoint {
+    let views = [
+        [0.0, 0.0, 1.0],
+        [0.6, 0.0, 0.8],
+        [0.0, -0.6, -0.8],
+        [1.0, 0.0, 0.0],
+    ];
+    let k = (i / 4) as f32;
+    Viewpoint::new(
+        [120.0 * k - 150.0, 60.0 * k - 80.0, 50.0 * k - 100.0],
+        views[i % 4],
+    )
+}
+
+/// The C program's "collector" lines against the runtime's search and finite-cloud correction
+/// on the same sphere, bit for bit.
+fn the_collectors_are_the_runtimes(lines: &[&str], tab: &TransportTables) {
+    let sphere = Sphere {
+        radius: 500.0,
+        kappa: 0.05,
+    };
+    let finite = FiniteCloud::for_tables(tab);
+    let hex = |v: f32| format!("{:08x}", v.to_bits());
+    let got: Vec<&&str> = lines
+        .iter()
+        .filter(|l| l.starts_with("collector "))
+        .collect();
+    let mut want = Vec::new();
+    let mut found = 0;
+    for i in 0..16 {
+        let mut all = [None; 8];
+        find_collectors(
+            tab,
+            &sphere,
+            &viewpoint(i),
+            SUN,
+            &SearchOptions::default(),
+            &mut all,
+        );
+        for (g, c) in all.iter().enumerate() {
+            let mut line = format!("collector {i} {g}");
+            let (c, kept) = match c {
+                Some(c) => {
+                    found += 1;
+                    let k = finite_cloud(tab, g, &sphere, c, &finite);
+                    let clamps = u32::from(c.clamps.thickness)
+                        | u32::from(c.clamps.mu_l) << 1
+                        | u32::from(c.clamps.depth) << 2
+                        | u32::from(c.clamps.view) << 3;
+                    line += &format!(" 1 {} {} {clamps}", c.reads, u32::from(c.converged));
+                    (*c, [k.factor, k.radius, k.coverage])
+                }
+                None => {
+                    line += " 0 0 0 0";
+                    let zero = Collector {
+                        transport: Transport::default(),
+                        at: SlabPoint {
+                            depth: 0.0,
+                            thickness: 0.0,
+                            mu_v: 0.0,
+                            psi_v: 0.0,
+                            mu_l: 0.0,
+                        },
+                        centre: [0.0; 3],
+                        sigma: 0.0,
+                        reads: 0,
+                        converged: false,
+                        clamps: Clamps::default(),
+                        extinction: 0.0,
+                    };
+                    (zero, [1.0, f32::INFINITY, 1.0])
+                }
+            };
+            let t = c.transport;
+            for v in [
+                t.t,
+                t.c_x,
+                t.c_z,
+                t.sigma,
+                c.centre[0],
+                c.centre[1],
+                c.centre[2],
+            ]
+            .into_iter()
+            .chain([c.sigma, c.extinction])
+            .chain(kept)
+            {
+                line += &format!(" {}", hex(v));
+            }
+            want.push(line);
+        }
+    }
+    assert_eq!(got.len(), want.len());
+    for (g, w) in got.iter().zip(&want) {
+        assert_eq!(**g, w.as_str());
+    }
+    // The sphere is lit from above and the viewpoints are inside it: most groups find one.
+    assert!(found > want.len() / 2, "{found} of {} found", want.len());
 }
 
 /// Every 97th truncation and 3000 bit flips of the shipped file through the ABI: each refused

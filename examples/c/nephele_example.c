@@ -7,8 +7,10 @@
  *
  * stdin: one point per line, five f32 as hexadecimal bits (t, mu_L, depth, mu_V, psi_V).
  * stdout: per point "order1 T c_x c_z sigma ..." as hexadecimal bits; then one line per
- * phase value; then "status <case> <code>" lines for the bad input. */
+ * phase value and per tabulated phase value; then one "collector ..." line per viewpoint and group of the collector search
+ * on a sphere of cloud (below); then "status <case> <code>" lines for the bad input. */
 #include <inttypes.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -50,6 +52,67 @@ static int check(NepheleStatus s, const char *what) {
         return 1;
     }
     return 0;
+}
+
+/* The renderer's cloud for the collector search: a sphere of radius R (m) and extinction
+ * kappa (1/m) at the origin, lit by a sun toward SUN. A renderer's maps would answer from
+ * textures filtered at sigma; a sphere is smooth at every scale. */
+typedef struct {
+    float radius;
+    float kappa;
+} Sphere;
+
+static const float SUN[3] = {0.0f, 0.6f, 0.8f};
+
+/* The light line through at (toward the sun) against the sphere: b = at . sun, and
+ * disc = b^2 - (|at|^2 - R^2) > 0 where it crosses. */
+static float line_disc(const Sphere *s, const float *at, float *b) {
+    *b = at[0] * SUN[0] + at[1] * SUN[1] + at[2] * SUN[2];
+    float c = at[0] * at[0] + at[1] * at[1] + at[2] * at[2] - s->radius * s->radius;
+    return *b * *b - c;
+}
+
+/* Where the light line enters (the sun's side), the normal there, the chord. */
+static int32_t sphere_filtered(void *user, const float *at, float sigma,
+                               NepheleFilteredSurface *out) {
+    const Sphere *s = user;
+    (void)sigma;
+    float b = 0;
+    float disc = line_disc(s, at, &b);
+    if (!(disc > 0.0f)) return 0;
+    float h = sqrtf(disc);
+    for (int k = 0; k < 3; k++) {
+        out->entry[k] = at[k] + (h - b) * SUN[k];
+        out->normal[k] = out->entry[k] / s->radius;
+    }
+    out->length = 2.0f * h;
+    out->optical_length = s->kappa * out->length;
+    return 1;
+}
+
+/* The sphere's disk across the light: covered, at R - rho from its edge. */
+static int32_t sphere_lateral(void *user, const float *at, float sigma, NepheleLateral *out) {
+    const Sphere *s = user;
+    (void)sigma;
+    float b = 0;
+    if (!(line_disc(s, at, &b) > 0.0f)) return 0;
+    float rho2 = at[0] * at[0] + at[1] * at[1] + at[2] * at[2] - b * b;
+    out->coverage = 1.0f;
+    out->edge_distance = s->radius - sqrtf(rho2 > 0.0f ? rho2 : 0.0f);
+    return 1;
+}
+
+/* The viewpoints of the collector search: four points inside the sphere, four views. */
+static void viewpoint(int i, NepheleViewpoint *v) {
+    static const float views[4][3] = {
+        {0.0f, 0.0f, 1.0f}, {0.6f, 0.0f, 0.8f}, {0.0f, -0.6f, -0.8f}, {1.0f, 0.0f, 0.0f}};
+    float k = (float)(i / 4);
+    v->position[0] = 120.0f * k - 150.0f;
+    v->position[1] = 60.0f * k - 80.0f;
+    v->position[2] = 50.0f * k - 100.0f;
+    memcpy(v->view, views[i % 4], sizeof v->view);
+    v->behind_min = 0.0f;
+    v->behind_max = INFINITY;
 }
 
 int main(int argc, char **argv) {
@@ -96,6 +159,56 @@ int main(int argc, char **argv) {
         printf("phase %08" PRIx32 " %08" PRIx32 " %08" PRIx32 "\n", bits(p_mu), bits(pdf), bits(s));
     }
 
+    /* A tabulated phase function (as a Mie table would come): HG g = 0.85 every 0.5 degrees. */
+    double theta[361], table[361];
+    for (int i = 0; i <= 360; i++) {
+        theta[i] = 0.5 * (double)i;
+        double d = 1.0 + 0.85 * 0.85 - 2.0 * 0.85 * cos(theta[i] * 3.14159265358979323846 / 180.0);
+        table[i] = (1.0 - 0.85 * 0.85) / (4.0 * 3.14159265358979323846 * d * sqrt(d));
+    }
+    NephelePhase *tabulated = NULL;
+    if (check(nephele_phase_tabulated(theta, table, 361, &tabulated), "tabulated")) return 1;
+    for (int i = 0; i <= 8; i++) {
+        float mu = -1.0f + 0.25f * (float)i, xi = 0.125f * (float)i, p_mu = 0, s = 0;
+        if (check(nephele_phase_eval(tabulated, mu, &p_mu), "tabulated eval") ||
+            check(nephele_phase_sample(tabulated, xi, &s), "tabulated sample"))
+            return 1;
+        printf("tabulated %08" PRIx32 " %08" PRIx32 "\n", bits(p_mu), bits(s));
+    }
+    nephele_phase_free(tabulated);
+
+    /* The collector search of every group on the sphere, and what the finite cloud keeps. */
+    Sphere sphere = {500.0f, 0.05f};
+    NepheleLitSurface surface = {&sphere, sphere_filtered, sphere_lateral, sphere.radius};
+    NepheleSearchOptions options;
+    NepheleFiniteCloud finite;
+    NepheleCollector found[NEPHELE_MAX_GROUPS];
+    if (check(nephele_search_options_default(&options), "options") ||
+        check(nephele_finite_cloud_for_tables(tables, &finite), "finite"))
+        return 1;
+    for (int i = 0; i < 16; i++) {
+        NepheleViewpoint v;
+        viewpoint(i, &v);
+        if (check(nephele_find_collectors(tables, &surface, &v, &SUN, &options, found,
+                                          NEPHELE_MAX_GROUPS),
+                  "find_collectors"))
+            return 1;
+        for (size_t g = 0; g < groups; g++) {
+            const NepheleCollector *c = &found[g];
+            NepheleKept kept = {1.0f, INFINITY, 1.0f};
+            if (c->found && check(nephele_finite_cloud(tables, g, &surface, c, &finite, &kept),
+                                  "finite_cloud"))
+                return 1;
+            printf("collector %d %zu %d %u %d %u", i, g, c->found, c->reads, c->converged,
+                   c->clamps);
+            const float f[] = {c->transport.t, c->transport.c_x, c->transport.c_z,
+                               c->transport.sigma, c->centre[0], c->centre[1], c->centre[2],
+                               c->sigma, c->extinction, kept.factor, kept.radius, kept.coverage};
+            for (size_t k = 0; k < sizeof f / sizeof f[0]; k++) printf(" %08" PRIx32, bits(f[k]));
+            printf("\n");
+        }
+    }
+
     /* Bad input: each call must return its status code, never crash. */
     NepheleTables *bad = NULL;
     NepheleSlabPoint at = {4.0f, 0.5f, 1.0f, 0.3f, 0.0f};
@@ -122,6 +235,27 @@ int main(int argc, char **argv) {
     printf("status bad_g %d\n", (int)nephele_phase_hg(1.5f, &phase));
     printf("status bad_mu %d\n", (int)nephele_phase_eval(phase, 2.0f, &v));
     printf("status bad_diameter %d\n", (int)nephele_phase_hg_draine_diameter(-1.0, &phase));
+    NepheleViewpoint v0;
+    viewpoint(0, &v0);
+    NepheleLitSurface no_callback = surface;
+    no_callback.filtered = NULL;
+    const float tilted[3] = {0.0f, 0.7f, 0.8f};
+    NepheleCollector none = {0};
+    NepheleKept kept;
+    printf("status null_surface %d\n",
+           (int)nephele_find_collector(tables, 0, NULL, &v0, &SUN, &options, found));
+    printf("status null_callback %d\n",
+           (int)nephele_find_collector(tables, 0, &no_callback, &v0, &SUN, &options, found));
+    printf("status collector_group %d\n",
+           (int)nephele_find_collector(tables, groups, &surface, &v0, &SUN, &options, found));
+    printf("status not_unit_sun %d\n",
+           (int)nephele_find_collector(tables, 0, &surface, &v0, &tilted, &options, found));
+    printf("status short_collectors %d\n",
+           (int)nephele_find_collectors(tables, &surface, &v0, &SUN, &options, found, 1));
+    theta[10] = theta[9]; /* not increasing */
+    printf("status bad_table %d\n", (int)nephele_phase_tabulated(theta, table, 361, &tabulated));
+    printf("status not_found %d\n",
+           (int)nephele_finite_cloud(tables, 0, &surface, &none, &finite, &kept));
     if (bad != NULL) {
         fprintf(stderr, "a refused load wrote its output\n");
         return 1;

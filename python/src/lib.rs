@@ -8,6 +8,7 @@
 
 use nephele_runtime::embedded::MIE_10UM;
 use nephele_runtime::phase::{Draine, HenyeyGreenstein, HgDraine, Rayleigh, Schlick, TwoTermHg};
+use nephele_runtime::presets::FIT_MAX_DIAMETER_UM;
 use nephele_runtime::transport::{
     column_names, evaluate_points, OwnedTables, Quantities, TransportTables, POINT_COLUMNS,
 };
@@ -286,9 +287,10 @@ fn phase_model(
         "hg_draine" if get("diameter")?.is_some() => {
             known(&["diameter"])?;
             let d = need("diameter")?;
-            if !(d > 0.0 && d.is_finite()) {
+            if !(d > 0.0 && d <= FIT_MAX_DIAMETER_UM) {
                 return Err(PyValueError::new_err(format!(
-                    "hg_draine: diameter = {d} um must be > 0"
+                    "hg_draine: diameter = {d} um must be > 0 and at most \
+                     {FIT_MAX_DIAMETER_UM} um (the fits' range)"
                 )));
             }
             Box::new(HgDraine::from_diameter(d))

@@ -70,7 +70,13 @@ impl<F: Real> HgDraine<F> {
     }
 }
 
-/// Jendersie & d'Eon's parameters at diameter `d_um` (> 0, µm).
+/// The largest diameter (µm) Jendersie & d'Eon's fits were made on (their Mie range): beyond it
+/// they extrapolate with nothing to check them against, and from about 10⁶ µm the f32 g of the
+/// HG lobe rounds to 1 (the lobe becomes a delta, NaN off it). The ports refuse larger ones.
+pub const FIT_MAX_DIAMETER_UM: f64 = 50.0;
+
+/// Jendersie & d'Eon's parameters at diameter `d_um` (> 0, µm; fitted up to
+/// [`FIT_MAX_DIAMETER_UM`]).
 pub fn jendersie_deon(d_um: f64) -> HgDraineParams {
     let d = d_um;
     let exp = |x: f64| Real::exp(x);

@@ -32,3 +32,19 @@ impl<F: Copy> SlabPoint<F> {
         }
     }
 }
+
+impl SlabPoint<f32> {
+    /// Whether the point is in a slab the tables can be read at: t finite and > 0,
+    /// 0 ≤ d ≤ t, μ_L finite and > 0, μ_V and ψ_V finite (μ_L above 1 or |μ_V| above 1 by
+    /// rounding are read as 1). Elsewhere every T and order 1 is 0.
+    pub fn in_slab(&self) -> bool {
+        self.thickness > 0.0
+            && self.thickness.is_finite()
+            && self.depth >= 0.0
+            && self.depth <= self.thickness
+            && self.mu_l > 0.0
+            && self.mu_l.is_finite()
+            && self.mu_v.is_finite()
+            && self.psi_v.is_finite()
+    }
+}

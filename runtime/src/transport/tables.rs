@@ -277,15 +277,19 @@ impl<'a> TransportTables<'a> {
         self.phase_at(Cosine::from_mu(mu.clamp(-1.0, 1.0)))
     }
 
-    /// Order 1 (single scattering of the sun beam, sr⁻¹) at `at`, albedo 1.
+    /// Order 1 (single scattering of the sun beam, sr⁻¹) at `at`, albedo 1; 0 outside the
+    /// slab ([`SlabPoint::in_slab`]), as T is.
     pub fn order1(&self, at: &SlabPoint<f32>) -> f32 {
+        if !at.in_slab() {
+            return 0.0;
+        }
         single_scattering(&StoredPhase(self), 1.0, at)
     }
 
     /// The geometry of T at a point, or None where every group is 0.
     fn point(&self, at: &SlabPoint<f32>) -> Option<Point> {
         let (t, d) = (at.thickness, at.depth);
-        if !(t > 0.0) || !(d >= 0.0 && d <= t) {
+        if !at.in_slab() {
             return None;
         }
         let ln_t = Real::ln(t);
