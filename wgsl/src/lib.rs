@@ -14,7 +14,8 @@
 //! nodes in θ, exact inverse-CDF sampling) over a storage buffer that [`tabulated_buffer`] fills
 //! from the runtime's table.
 //!
-//! [`tables`] adds the transport tables — T of each order group and order 1 at a slab point —
+//! [`tables`] adds the transport tables — T, c and σ of each order group and order 1 at a slab
+//! point —
 //! from a `.ntt` uploaded whole to a storage buffer ([`ntt_for_gpu`] checks it as the runtime
 //! does and writes the index uniform):
 //!
@@ -30,7 +31,7 @@
 //! evaluates the shipped tables at 10⁵ points on a Vulkan device (Mesa's lavapipe on the CPU:
 //! `apt-get install mesa-vulkan-drivers`) against the Rust runtime and an f64 evaluation, with
 //! the runtime's chi-square test on the GPU's samples, and its Naga translations to SPIR-V and
-//! GLSL through their validators. The collector search is not ported yet
+//! GLSL through their validators. The collector search itself is not ported yet
 //! (docs/integration.md).
 
 /// The elementary functions (`nephele_exp`, `nephele_ln`, `nephele_exp_m1`, `nephele_sin_cos`,
@@ -72,12 +73,15 @@ pub fn tabulated_buffer(table: &nephele_runtime::phase::Tabulated<f32>) -> Vec<f
 /// before it. It gives, over `SlabPoint` (depth, thickness, μ_V, ψ_V, μ_L):
 /// - `transport(g: u32, at: SlabPoint) -> f32`: T of order group g (orders ≥ 2, sr⁻¹), the
 ///   runtime's `TransportTables::transport`;
+/// - `evaluate(g: u32, at: SlabPoint) -> NepheleTransport`: T, the collector (c_x, c_z) and
+///   its spread σ (mfp) of group g, `TransportTables::evaluate`;
 /// - `order1(at: SlabPoint) -> f32`: order 1 (sr⁻¹, albedo 1), `TransportTables::order1`.
 pub fn tables(group: u32, binding: u32) -> String {
     [
         include_str!("ntt.wgsl"),
         include_str!("order1.wgsl"),
         include_str!("transport.wgsl"),
+        include_str!("collector.wgsl"),
     ]
     .concat()
     .replace("NEPHELE_NTT_GROUP", &group.to_string())
@@ -86,7 +90,7 @@ pub fn tables(group: u32, binding: u32) -> String {
 }
 
 /// Words of the index uniform ([`NttGpu::index`]).
-pub const NTT_INDEX_WORDS: usize = 28;
+pub const NTT_INDEX_WORDS: usize = 40;
 
 /// A `.ntt` as the WGSL port reads it: the whole file as little-endian u32 words with the
 /// Θ-hat nodes appended, and the index of what the shaders read in it.
@@ -105,7 +109,7 @@ pub struct NttGpu {
 pub fn ntt_for_gpu(bytes: &[u8]) -> Result<NttGpu, String> {
     use nephele_runtime::container::Container;
     use nephele_runtime::fitting::log_additive::LogAdditive;
-    use nephele_runtime::fitting::names;
+    use nephele_runtime::fitting::{names, CollectorForm, Statistic};
     let err = |e: &dyn std::fmt::Display| format!("transport tables: {e}");
     nephele_runtime::transport::TransportTables::from_bytes(bytes).map_err(|e| err(&e))?;
     let c = Container::from_bytes(bytes).map_err(|e| err(&e))?;
@@ -149,12 +153,58 @@ pub fn ntt_for_gpu(bytes: &[u8]) -> Result<NttGpu, String> {
         })
         .collect();
     // The Θ-hat nodes as the runtime rounds them (π (i/(n − 1))² in f64, then f32).
-    let theta_hats = words.len() as u32;
-    let top = (shape.theta_nodes.max(2) - 1) as f64;
-    words.extend((0..shape.theta_nodes.max(2)).map(|i| {
-        let r = i as f64 / top;
-        ((std::f64::consts::PI * r * r) as f32).to_bits()
-    }));
+    let hats = |words: &mut Vec<u32>, nodes: usize| {
+        let at = words.len() as u32;
+        let top = (nodes.max(2) - 1) as f64;
+        words.extend((0..nodes.max(2)).map(|i| {
+            let r = i as f64 / top;
+            ((std::f64::consts::PI * r * r) as f32).to_bits()
+        }));
+        at
+    };
+    let theta_hats = hats(&mut words, shape.theta_nodes);
+    let collector = match c.find(names::COLLECTOR_FORM) {
+        Some(sizes) => {
+            let size = |i: usize| sizes.get(i).unwrap_or(0.0) as usize;
+            let form = CollectorForm {
+                legendre: size(0),
+                harmonics: size(1),
+                theta_nodes: size(2),
+            };
+            let q_c = size(3);
+            let (n_v, n_l) = (n_v as usize, n_l as usize);
+            let mut beta = [0u32; 3];
+            let mut group_stride = [0u32; 3];
+            for (k, (stat, name)) in Statistic::ALL.iter().zip(names::COLLECTOR_BETA).enumerate() {
+                beta[k] = word_of(name)?.0;
+                let p = form.n_params(*stat, n_v, n_l);
+                group_stride[k] = (if c.version() >= 2 { q_c } else { p * q_c }) as u32;
+            }
+            let param = if c.version() >= 2 {
+                groups as usize * q_c
+            } else {
+                q_c
+            };
+            [
+                1,
+                form.legendre as u32,
+                form.harmonics as u32,
+                form.theta_nodes as u32,
+                q_c as u32,
+                form.depth_terms() as u32,
+                beta[0],
+                beta[1],
+                beta[2],
+                param as u32,
+                group_stride[0],
+                group_stride[1],
+                group_stride[2],
+                form.cz_reach_start(n_v, n_l) as u32,
+                hats(&mut words, form.theta_nodes),
+            ]
+        }
+        None => [0; 15],
+    };
     let u32_of = |n: usize| n as u32;
     let index = [
         groups,
@@ -182,9 +232,9 @@ pub fn ntt_for_gpu(bytes: &[u8]) -> Result<NttGpu, String> {
         word_of(names::PHASE)?.0,
         word_of(names::PHASE_THETA)?.1,
         theta_hats,
-        0,
-        0,
-        0,
     ];
-    Ok(NttGpu { words, index })
+    let mut all = [0u32; NTT_INDEX_WORDS];
+    all[..index.len()].copy_from_slice(&index);
+    all[index.len()..].copy_from_slice(&collector);
+    Ok(NttGpu { words, index: all })
 }

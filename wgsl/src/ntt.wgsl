@@ -30,9 +30,21 @@ struct NttIndex {
     phase: u32,
     n_phase: u32,
     theta_hats: u32,   // the Θ-hat nodes π (i/(n − 1))² as the runtime rounds them (appended)
-    pad0: u32,
-    pad1: u32,
-    pad2: u32,
+    has_collector: u32,
+    c_legendre: u32,   // the collector form's J, K, Θ nodes, Q, depth terms
+    c_harmonics: u32,
+    c_theta_nodes: u32,
+    c_q: u32,
+    c_depth_terms: u32,
+    sigma_beta: u32,   // ln σ's, c_z's and c_x's coefficients
+    cz_beta: u32,
+    cx_beta: u32,
+    c_param_stride: u32,
+    sigma_group_stride: u32,
+    cz_group_stride: u32,
+    cx_group_stride: u32,
+    cz_reach: u32,     // the first column of c_z's ℓ/σ̂ terms
+    c_theta_hats: u32, // the collector's Θ-hat nodes (appended)
 }
 
 @group(NEPHELE_NTT_GROUP) @binding(NEPHELE_NTT_BINDING)
@@ -52,6 +64,15 @@ struct SlabPoint {
     mu_v: f32,
     psi_v: f32,
     mu_l: f32,
+}
+
+// Whether the tables can be read at `at` (the runtime's `SlabPoint::in_slab`): t finite and
+// > 0, 0 ≤ d ≤ t, μ_L finite and > 0, μ_V and ψ_V finite. Elsewhere T and order 1 are 0.
+fn in_slab(at: SlabPoint) -> bool {
+    let top = 3.4028234e38;
+    return at.thickness > 0.0 && at.thickness <= top && at.depth >= 0.0
+        && at.depth <= at.thickness && at.mu_l > 0.0 && at.mu_l <= top
+        && abs(at.mu_v) <= top && abs(at.psi_v) <= top;
 }
 
 // x between two nodes of a grid: weight 1 − w on `lo`, w on `hi` (one node where lo = hi or

@@ -55,5 +55,8 @@ fn beam_scattered_once(p: f32, at: SlabPoint) -> f32 {
 
 // Order 1 at `at` (sr⁻¹, albedo 1): the runtime's `TransportTables::order1`.
 fn order1(at: SlabPoint) -> f32 {
+    if !in_slab(at) {
+        return 0.0;
+    }
     return beam_scattered_once(stored_phase(scattering_cosine(at)), at);
 }

@@ -17,16 +17,56 @@ const NT_EDGE_STEP: f32 = 0.0666666666666666667;  // 1/15, one plane of the defa
 const NT_CEILING_FACTOR: f32 = 1.5;
 
 // The running sums of one group: acc[j Q + k] = Σ over the features of depth degree j of
-// v β[col][k], summed in the order the features come (as the runtime's `Sums`).
+// v β[col][k], summed in the order the features come (as the runtime's `Sums`), for the
+// parameters being summed (T's, or one collector statistic's: `nt_pass`), columns in
+// [col_lo, col_hi) only (c_z's ℓ/σ̂ terms are summed apart).
+struct NtPass {
+    beta: u32,
+    param_stride: u32,
+    group_stride: u32,
+    q: u32,
+    col_lo: u32,
+    col_hi: u32,
+}
+
 var<private> nt_acc: array<f32, 256>;
 var<private> nt_group: u32;
+var<private> nt_pass: NtPass;
+
+// Starts a pass of group g: zero sums.
+fn nt_begin(g: u32, sums: NtPass) {
+    for (var i = 0u; i < 256u; i++) {
+        nt_acc[i] = 0.0;
+    }
+    nt_group = g;
+    nt_pass = sums;
+}
 
 fn nt_add(col: u32, v: f32, j: u32) {
-    let x = nephele_ntt_index;
-    let start = x.beta + nt_group * x.group_stride + col * x.param_stride;
-    for (var k = 0u; k < x.q; k++) {
-        nt_acc[j * x.q + k] += v * ntt_f32(start + k);
+    let p = nt_pass;
+    if col < p.col_lo || col >= p.col_hi {
+        return;
     }
+    let start = p.beta + nt_group * p.group_stride + col * p.param_stride;
+    for (var k = 0u; k < p.q; k++) {
+        nt_acc[j * p.q + k] += v * ntt_f32(start + k);
+    }
+}
+
+// d_j = Σ_k acc[j Q + k] L_k(s) for j < n: the coefficients of the depth polynomial at the
+// group's place s in its ln t span.
+fn nt_depth_sums(s: f32, n: u32) -> array<f32, 16> {
+    let q = nt_pass.q;
+    let lq = nt_legendre(s, q);
+    var d: array<f32, 16>;
+    for (var j = 0u; j < min(n, NT_MAX_LEGENDRE); j++) {
+        var sum = 0.0;
+        for (var k = 0u; k < q; k++) {
+            sum += nt_acc[j * q + k] * lq[k];
+        }
+        d[j] = sum;
+    }
+    return d;
 }
 
 // P_0(x) … P_{n−1}(x) by Bonnet's recurrence (n ≤ 16, the rest 0).
@@ -101,25 +141,25 @@ fn nt_on_nodes(c: NtCell, col: u32, val: f32, j: u32) {
     }
 }
 
-// The Θ hats h_i(Θ) (P_0, P_1)(2u − 1) at columns col + 2i + j, nodes Θ_i = π (i/(n − 1))².
-fn nt_theta_hats(c: NtCell, col: u32) {
-    let x = nephele_ntt_index;
-    let n = max(x.theta_nodes, 2u);
+// The Θ hats val h_i(Θ) (P_0, P_1)(2u − 1) at columns col + 2i + j, nodes Θ_i = π (i/(n − 1))²
+// (n = `nodes`, as the runtime rounds them at word `table`).
+fn nt_theta_hats(c: NtCell, col: u32, val: f32, nodes: u32, table: u32) {
+    let n = max(nodes, 2u);
     let top = f32(n - 1u);
     let theta = c.theta;
     var i = clamp(u32(sqrt(max(theta / PI, 0.0)) * top), 1u, n - 1u);
-    while i > 1u && ntt_f32(x.theta_hats + i - 1u) >= theta {
+    while i > 1u && ntt_f32(table + i - 1u) >= theta {
         i -= 1u;
     }
-    while i < n - 1u && ntt_f32(x.theta_hats + i) < theta {
+    while i < n - 1u && ntt_f32(table + i) < theta {
         i += 1u;
     }
-    let a = ntt_f32(x.theta_hats + i - 1u);
-    let b = ntt_f32(x.theta_hats + i);
+    let a = ntt_f32(table + i - 1u);
+    let b = ntt_f32(table + i);
     let w = clamp((theta - a) / (b - a), 0.0, 1.0);
     for (var j = 0u; j < 2u; j++) {
-        nt_add(col + 2u * (i - 1u) + j, 1.0 - w, j);
-        nt_add(col + 2u * i + j, w, j);
+        nt_add(col + 2u * (i - 1u) + j, val * (1.0 - w), j);
+        nt_add(col + 2u * i + j, val * w, j);
     }
 }
 
@@ -165,7 +205,7 @@ fn nt_features(c: NtCell) -> bool {
         }
         col += nm;
     }
-    nt_theta_hats(c, col);
+    nt_theta_hats(c, col, 1.0, x.theta_nodes, x.theta_hats);
     col += 2u * x.theta_nodes;
     let mu_v = c.at.mu_v;
     let mu_l = c.at.mu_l;
@@ -340,54 +380,60 @@ fn nt_depth_polynomial(d: array<f32, 16>, n: u32, u: f32, thickness: f32, r: vec
     return value + nt_continued_toward_face(inner - value, h_inside, h_edge, h);
 }
 
-// T (sr⁻¹) of group g at `at`; 0 where the tables resolve nothing or g is not a group.
-fn transport(g: u32, at: SlabPoint) -> f32 {
+// T of group g at a point, with what the collector needs of it.
+struct NtT {
+    t: f32,
+    cell: NtCell,
+    range: vec3<f32>,  // the fitted depths (lo, hi, share)
+    s: f32,            // the place of ln t in the group's span
+}
+
+// The place of ln t in group g's span of ln t, in [−1, 1] (0 for an empty span).
+fn nt_span_position(g: u32, ln_t: f32) -> f32 {
     let x = nephele_ntt_index;
+    let a = ntt_f32(x.ln_t_range + 2u * g);
+    let b = ntt_f32(x.ln_t_range + 2u * g + 1u);
+    if b > a {
+        return clamp(2.0 * (ln_t - a) / (b - a) - 1.0, -1.0, 1.0);
+    }
+    return 0.0;
+}
+
+fn nt_transport(g: u32, at: SlabPoint) -> NtT {
+    let x = nephele_ntt_index;
+    var r: NtT;
+    r.t = 0.0;
     let t = at.thickness;
-    let d = at.depth;
-    if g >= x.groups || !(t > 0.0) || !(d >= 0.0 && d <= t) {
-        return 0.0;
+    if g >= x.groups || !in_slab(at) {
+        return r;
     }
     let ln_t = nephele_ln(t);
     let omm = scattering_cosine(at).one_minus_mu;
-    let c = NtCell(at, ntt_lerp(x.mu_l, x.n_l, at.mu_l), ntt_lerp(x.mu_v, x.n_v, at.mu_v),
-        nt_stretched_u(d, t, ln_t), 2.0 * nephele_asin(min(sqrt(0.5 * omm), 1.0)));
+    r.cell = NtCell(at, ntt_lerp(x.mu_l, x.n_l, at.mu_l), ntt_lerp(x.mu_v, x.n_v, at.mu_v),
+        nt_stretched_u(at.depth, t, ln_t), 2.0 * nephele_asin(min(sqrt(0.5 * omm), 1.0)));
     let boundary = nt_ln_boundary(at);
     if boundary.y == 0.0 {
-        return 0.0;
+        return r;
     }
     let near_t = ntt_lerp(x.thickness, x.n_t, t);
-    for (var i = 0u; i < 256u; i++) {
-        nt_acc[i] = 0.0;
+    nt_begin(g, NtPass(x.beta, x.param_stride, x.group_stride, x.q, 0u, 0xffffffffu));
+    if !nt_features(r.cell) {
+        return r;
     }
-    nt_group = g;
-    if !nt_features(c) {
-        return 0.0;
+    r.range = nt_fitted_depths(g, near_t, r.cell);
+    if !(r.range.z > 0.0) {
+        return r;
     }
-    let range = nt_fitted_depths(g, near_t, c);
-    if !(range.z > 0.0) {
-        return 0.0;
-    }
-    let span_a = ntt_f32(x.ln_t_range + 2u * g);
-    let span_b = ntt_f32(x.ln_t_range + 2u * g + 1u);
-    var s = 0.0;
-    if span_b > span_a {
-        s = clamp(2.0 * (ln_t - span_a) / (span_b - span_a) - 1.0, -1.0, 1.0);
-    }
-    let lq = nt_legendre(s, x.q);
-    var dj: array<f32, 16>;
-    for (var j = 0u; j < min(x.depth_terms, NT_MAX_LEGENDRE); j++) {
-        var sum = 0.0;
-        for (var k = 0u; k < x.q; k++) {
-            sum += nt_acc[j * x.q + k] * lq[k];
-        }
-        dj[j] = sum;
-    }
-    let depth = nt_depth_polynomial(dj, x.depth_terms, c.u, t, range);
-    let v = range.z * nephele_exp(boundary.x + depth);
-    let top = nt_ceiling(g, near_t, c);
-    if top >= 0.0 && v > top {
-        return top;
-    }
-    return v;
+    r.s = nt_span_position(g, ln_t);
+    let dj = nt_depth_sums(r.s, x.depth_terms);
+    let depth = nt_depth_polynomial(dj, x.depth_terms, r.cell.u, t, r.range);
+    let v = r.range.z * nephele_exp(boundary.x + depth);
+    let top = nt_ceiling(g, near_t, r.cell);
+    r.t = select(v, top, top >= 0.0 && v > top);
+    return r;
+}
+
+// T (sr⁻¹) of group g at `at`; 0 where the tables resolve nothing or g is not a group.
+fn transport(g: u32, at: SlabPoint) -> f32 {
+    return nt_transport(g, at).t;
 }

@@ -8,7 +8,7 @@
 
 mod common;
 use common::{dispatch, gpu, pipeline, Input};
-use nephele_runtime::transport::{SlabPoint, TransportTables};
+use nephele_runtime::transport::{SlabPoint, Transport, TransportTables};
 use std::time::Instant;
 
 const SHIPPED: &[u8] = include_bytes!("../../runtime/tables/mie10um/transport.ntt");
@@ -262,7 +262,7 @@ fn on_gpu(points: &[SlabPoint<f32>], groups: usize) -> (Vec<f32>, f64) {
                 uniform: true,
             },
         ],
-        (2, 4 * (groups as u64 + 1) * points.len() as u64),
+        (2, 4 * (4 * groups as u64 + 1) * points.len() as u64),
         points.len() as u32,
     );
     let seconds = start.elapsed().as_secs_f64();
@@ -308,6 +308,17 @@ impl Agreement {
     }
 }
 
+/// The median, 99th and 99.9th percentiles and the largest of the sorted `v`.
+fn row(v: &[f64]) -> String {
+    format!(
+        "median {:.1e}, 99 % {:.1e}, 99.9 % {:.1e}, max {:.1e}",
+        quantile(v, 0.5),
+        quantile(v, 0.99),
+        quantile(v, 0.999),
+        quantile(v, 1.0)
+    )
+}
+
 /// The value below which a share `p` of the sorted `v` lies.
 fn quantile(v: &[f64], p: f64) -> f64 {
     v.get(((v.len() as f64 * p) as usize).min(v.len().saturating_sub(1)))
@@ -330,10 +341,10 @@ fn tables_on_the_gpu_follow_the_runtime() {
     let pts = points(100_000);
     let (got, gpu_s) = on_gpu(&pts, groups);
     let reference = Wide::new(SHIPPED);
-    let stride = groups + 1;
+    let stride = 4 * groups + 1;
     println!("adapter: {}", gpu().adapter);
     let mut failures = Vec::new();
-    for q in 0..stride {
+    for q in 0..=groups {
         let want: Vec<f32> = pts
             .iter()
             .map(|p| match q {
@@ -348,7 +359,12 @@ fn tables_on_the_gpu_follow_the_runtime() {
                 g => reference.transport(g - 1, p),
             })
             .collect();
-        let a = Agreement::of(got.iter().skip(q).step_by(stride).copied(), &want, &wide);
+        let column = if q == 0 { 0 } else { 1 + 4 * (q - 1) };
+        let a = Agreement::of(
+            got.iter().skip(column).step_by(stride).copied(),
+            &want,
+            &wide,
+        );
         let name = match q {
             0 => "order 1".to_string(),
             g => format!(
@@ -356,15 +372,6 @@ fn tables_on_the_gpu_follow_the_runtime() {
                 g - 1,
                 tables.group_first_order(g - 1).unwrap()
             ),
-        };
-        let row = |v: &[f64]| {
-            format!(
-                "median {:.1e}, 99 % {:.1e}, 99.9 % {:.1e}, max {:.1e}",
-                quantile(v, 0.5),
-                quantile(v, 0.99),
-                quantile(v, 0.999),
-                quantile(v, 1.0)
-            )
         };
         let within = a.between.partition_point(|&d| d <= 1e-5);
         println!(
@@ -384,6 +391,47 @@ fn tables_on_the_gpu_follow_the_runtime() {
         if !(close(0.99) && close(1.0)) || a.zero_mismatch > 0 {
             failures.push(name);
         }
+    }
+    // c and σ against the runtime's, where T is above 1e-6 of its largest: σ relative, c in
+    // units of σ (c crosses zero); 99 % within 1e-5.
+    let mut evaluated = vec![Transport::default(); groups];
+    let (mut d_sigma, mut d_c, mut zero) = (Vec::new(), Vec::new(), 0);
+    let tops: Vec<f32> = (0..groups)
+        .map(|g| {
+            pts.iter()
+                .map(|p| tables.transport(g, p))
+                .fold(0.0f32, f32::max)
+        })
+        .collect();
+    for (i, p) in pts.iter().enumerate() {
+        tables.evaluate_all(p, &mut evaluated);
+        for (g, w) in evaluated.iter().enumerate() {
+            let o = &got[stride * i + 1 + 4 * g..stride * i + 5 + 4 * g];
+            // σ zero on one side only where T counts, or σ where the runtime has no light
+            // (a subnormal T flushed to zero on the GPU takes its c and σ along: not counted).
+            let counts = w.t > 1e-6 * tops[g];
+            if counts && (w.sigma == 0.0) != (o[3] == 0.0) || w.t == 0.0 && o[3] != 0.0 {
+                zero += 1;
+            }
+            if w.t > 1e-6 * tops[g] && w.sigma > 0.0 {
+                d_sigma.push(((o[3] - w.sigma) / w.sigma).abs() as f64);
+                let dc = (o[1] - w.c_x).abs().max((o[2] - w.c_z).abs());
+                d_c.push((dc / w.sigma) as f64);
+            }
+        }
+    }
+    for v in [&mut d_sigma, &mut d_c] {
+        v.sort_by(f64::total_cmp);
+    }
+    println!(
+        "collector, every group ({} values; {zero} zero/non-zero mismatches of σ):\n  \
+         σ, GPU from runtime (relative): {}\n  c, GPU from runtime (in σ):     {}",
+        d_sigma.len(),
+        row(&d_sigma),
+        row(&d_c)
+    );
+    if zero > 0 || quantile(&d_sigma, 0.99) > 1e-5 || quantile(&d_c, 0.99) > 1e-5 {
+        failures.push("collector".into());
     }
     // A record, not a GPU claim: lavapipe runs the kernel on this machine's CPU.
     let start = Instant::now();
