@@ -31,8 +31,10 @@
 //! evaluates the shipped tables at 10⁵ points on a Vulkan device (Mesa's lavapipe on the CPU:
 //! `apt-get install mesa-vulkan-drivers`) against the Rust runtime and an f64 evaluation, with
 //! the runtime's chi-square test on the GPU's samples, and its Naga translations to SPIR-V and
-//! GLSL through their validators. The collector search itself is not ported yet
-//! (docs/integration.md).
+//! GLSL through their validators.
+//!
+//! [`SEARCH`] adds the collector search and the finite-cloud correction over the renderer's lit
+//! surface, which the renderer's shader supplies as three functions (docs/integration.md).
 
 /// The elementary functions (`nephele_exp`, `nephele_ln`, `nephele_exp_m1`, `nephele_sin_cos`,
 /// `nephele_asin`) and the phase models in WGSL: `hg_eval`, `hg_sample`, `draine_eval`, `draine_cdf`,
@@ -89,8 +91,16 @@ pub fn tables(group: u32, binding: u32) -> String {
     .replace("NEPHELE_NTT_BINDING", &binding.to_string())
 }
 
+/// The collector search and the finite-cloud correction in WGSL (`find_collector(g, viewpoint,
+/// sun, options) -> NepheleCollector`, `finite_cloud(g, collector, finite) -> Kept`), for
+/// after [`tables`]. The renderer supplies its lit surface as three functions of its module:
+/// `nephele_surface_filtered(at: vec3<f32>, sigma: f32) -> LitSample`,
+/// `nephele_surface_lateral(at: vec3<f32>, sigma: f32) -> LateralSample` and
+/// `nephele_surface_initial_scale() -> f32` (search.wgsl has the structs).
+pub const SEARCH: &str = concat!(include_str!("search.wgsl"), include_str!("finite.wgsl"));
+
 /// Words of the index uniform ([`NttGpu::index`]).
-pub const NTT_INDEX_WORDS: usize = 40;
+pub const NTT_INDEX_WORDS: usize = 44;
 
 /// A `.ntt` as the WGSL port reads it: the whole file as little-endian u32 words with the
 /// Θ-hat nodes appended, and the index of what the shaders read in it.
@@ -235,6 +245,7 @@ pub fn ntt_for_gpu(bytes: &[u8]) -> Result<NttGpu, String> {
     ];
     let mut all = [0u32; NTT_INDEX_WORDS];
     all[..index.len()].copy_from_slice(&index);
-    all[index.len()..].copy_from_slice(&collector);
+    all[index.len()..index.len() + collector.len()].copy_from_slice(&collector);
+    all[index.len() + collector.len()] = word_of(names::GROUP_FIRST)?.0;
     Ok(NttGpu { words, index: all })
 }

@@ -45,6 +45,10 @@ struct NttIndex {
     cx_group_stride: u32,
     cz_reach: u32,     // the first column of c_z's ℓ/σ̂ terms
     c_theta_hats: u32, // the collector's Θ-hat nodes (appended)
+    group_first: u32,  // the first order of each group
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 
 @group(NEPHELE_NTT_GROUP) @binding(NEPHELE_NTT_BINDING)

@@ -2,14 +2,15 @@
 //! other renderers take, each checked by the validator the registries offer: SPIR-V by
 //! `spirv-val` (Debian's spirv-tools), GLSL ES 3.10 and GLSL 4.50 compute shaders by
 //! `glslangValidator` (glslang-tools), and HLSL (shader model 6.0) and MSL written without error
-//! (no HLSL or MSL validator is packaged for Linux). Two modules: the phase models and the
-//! tabulated one with the test kernel of tests/lavapipe.rs as entry point, and the transport
-//! tables (T and order 1 from a `.ntt` in a storage buffer) with that of tests/tables.rs.
+//! (no HLSL or MSL validator is packaged for Linux). Three modules: the phase models and the
+//! tabulated one with the test kernel of tests/lavapipe.rs as entry point, the transport
+//! tables (T, c, σ and order 1 from a `.ntt` in a storage buffer) with that of
+//! tests/tables.rs, and the collector search on the sphere of tests/search.rs.
 
 use std::path::Path;
 use std::process::Command;
 
-/// The two modules by name: the phase models, the transport tables.
+/// The modules by name: the phase models, the transport tables, the collector search.
 fn modules() -> Vec<(&'static str, naga::Module, naga::valid::ModuleInfo)> {
     let phase = format!(
         "{}\n{}\n{}",
@@ -23,7 +24,14 @@ fn modules() -> Vec<(&'static str, naga::Module, naga::valid::ModuleInfo)> {
         nephele_wgsl::tables(0, 3),
         include_str!("tables_kernel.wgsl")
     );
-    [("phase", phase), ("tables", tables)]
+    let search = format!(
+        "{}\n{}\n{}\n{}",
+        nephele_wgsl::PHASE,
+        nephele_wgsl::tables(0, 3),
+        nephele_wgsl::SEARCH,
+        include_str!("search_kernel.wgsl")
+    );
+    [("phase", phase), ("tables", tables), ("search", search)]
         .into_iter()
         .map(|(name, source)| {
             let module = naga::front::wgsl::parse_str(&source)

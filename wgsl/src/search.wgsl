@@ -1,0 +1,251 @@
+// The collector search of Bouthors et al. 2008, §6.1, on the GPU: nephele-runtime's
+// `find_collector`, step for step. Where, on the cloud's lit surface, the light of one order
+// group seen at p entered: the fixed point of (c, σ) with the surface filtered at σ
+// (docs/collector.md):
+//
+//   c₀ = p, σ₀ = the surface's initial scale;
+//   step i: S = the surface filtered at σ_{i−1} on the light line through c_{i−1}; the local
+//           slab of p under S; (c, σ) from the tables there mapped to the world (c_i, σ_i);
+//           the move across the light clamped to σ_i from step 2 on;
+//   stop when the move across the light and the change of σ are both ≤ ε σ_i, or after N reads.
+//
+// The renderer supplies its lit surface (its light-space maps) as three functions of this
+// module, which the port calls:
+//
+//   fn nephele_surface_filtered(at: vec3<f32>, sigma: f32) -> LitSample
+//   fn nephele_surface_lateral(at: vec3<f32>, sigma: f32) -> LateralSample
+//   fn nephele_surface_initial_scale() -> f32
+//
+// (positions in metres, world; `hit` 0 where no cloud covers the light line through `at`).
+// Needs ntt.wgsl, order1.wgsl, transport.wgsl and collector.wgsl before it.
+
+// The lit surface filtered at one place and scale: the lit face's point on the light line,
+// its outward unit normal, the chord's geometric (m) and optical (mfp) lengths.
+struct LitSample {
+    entry: vec3<f32>,
+    normal: vec3<f32>,
+    length: f32,
+    optical_length: f32,
+    hit: u32,
+}
+
+// The cloud's cross-section across the light, filtered: the share of the footprint covered,
+// the mean distance to its edge over the covered part (m).
+struct LateralSample {
+    coverage: f32,
+    edge_distance: f32,
+    hit: u32,
+}
+
+// p (m, world), the direction the light travels toward the eye (unit), and the optical depth
+// the view ray holds beyond p: at least `behind_min`, at most `behind_max` (mfp).
+struct Viewpoint {
+    position: vec3<f32>,
+    view: vec3<f32>,
+    behind_min: f32,
+    behind_max: f32,
+}
+
+// Most reads N, tolerance ε, the step clamp and the filtering at σ (1 on).
+struct SearchOptions {
+    max_reads: u32,
+    tolerance: f32,
+    step_clamp: u32,
+    filtering: u32,
+}
+
+// One group's search (the runtime's `Collector`): `found` 0 where none; T, c, σ (mfp) of the
+// last read, the slab it was read at, the centre on the filtered lit face (m, world) and σ (m),
+// the reads, convergence, the clamps (bits: 1 thickness, 2 μ_L, 4 depth, 8 view) and κ̄ (1/m).
+struct NepheleCollector {
+    found: u32,
+    transport: NepheleTransport,
+    at: SlabPoint,
+    centre: vec3<f32>,
+    sigma: f32,
+    reads: u32,
+    converged: u32,
+    clamps: u32,
+    extinction: f32,
+}
+
+// The local slab of a viewpoint under a filtered surface and its horizontal frame.
+struct LocalSlab {
+    at: SlabPoint,
+    clamps: u32,
+    foot: vec3<f32>,
+    z_axis: vec3<f32>,
+    x_axis: vec3<f32>,
+    extinction: f32,
+}
+
+// Vector steps in the runtime's order of operations.
+fn ns_dot(a: vec3<f32>, b: vec3<f32>) -> f32 {
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+
+fn ns_add(a: vec3<f32>, b: vec3<f32>, s: f32) -> vec3<f32> {
+    return vec3<f32>(a.x + s * b.x, a.y + s * b.y, a.z + s * b.z);
+}
+
+fn ns_length(a: vec3<f32>) -> f32 {
+    return sqrt(ns_dot(a, a));
+}
+
+fn ns_clamp(x: f32, lo: f32, hi: f32) -> f32 {
+    if x < lo {
+        return lo;
+    }
+    if x > hi {
+        return hi;
+    }
+    return x;
+}
+
+fn ns_cross(a: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+
+// A unit vector ⊥ n (Duff et al. 2017's first basis vector).
+fn ns_perpendicular(n: vec3<f32>) -> vec3<f32> {
+    let sign = select(1.0, -1.0, n.z < 0.0);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    return vec3<f32>(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+}
+
+// The angle in [0, π] from its cosine and sine (≥ 0) up to a common positive factor.
+fn ns_angle(c: f32, s: f32) -> f32 {
+    let r = sqrt(c * c + s * s);
+    if r <= 0.0 {
+        return 0.0;
+    }
+    if s < abs(c) {
+        let a = nephele_asin(s / r);
+        return select(PI - a, a, c >= 0.0);
+    }
+    return 0.5 * PI - nephele_asin(c / r);
+}
+
+// The slab tangent to `s` that holds the viewpoint, the sun toward `sun`: μ_L = n̄·ω_L,
+// t = τ_chord μ_L, d = κ̄ (entry − p)·n̄ held within the view ray's own medium, μ_V = ω_V·n̄,
+// ψ_V between the horizontal parts of the beam's travel and of ω_V; t and μ_L held within the
+// tables' grid (the runtime's `local_slab`).
+fn local_slab(s: LitSample, v: Viewpoint, sun: vec3<f32>) -> LocalSlab {
+    let x = nephele_ntt_index;
+    let p = v.position;
+    let n = s.normal;
+    var clamps = 0u;
+    let mu_l_raw = ns_dot(n, sun);
+    let mu_l = ns_clamp(mu_l_raw, ntt_f32(x.mu_l), ntt_f32(x.mu_l + x.n_l - 1u));
+    clamps |= select(0u, 2u, mu_l != mu_l_raw);
+    var extinction = 0.0;
+    if s.length > 0.0 {
+        extinction = s.optical_length / s.length;
+    }
+    let t_raw = s.optical_length * mu_l;
+    let thickness = ns_clamp(t_raw, ntt_f32(x.thickness), ntt_f32(x.thickness + x.n_t - 1u));
+    clamps |= select(0u, 1u, thickness != t_raw);
+    let below = ns_dot(vec3<f32>(s.entry.x - p.x, s.entry.y - p.y, s.entry.z - p.z), n);
+    let d_raw = extinction * below;
+    let depth = ns_clamp(d_raw, 0.0, thickness);
+    clamps |= select(0u, 4u, depth != d_raw);
+    let mu_v = ns_clamp(ns_dot(v.view, n), -1.0, 1.0);
+    var lo = 0.0;
+    var hi = thickness;
+    if mu_v > 0.0 {
+        lo = thickness - mu_v * v.behind_max;
+        hi = thickness - mu_v * v.behind_min;
+    } else if mu_v < 0.0 {
+        lo = -mu_v * v.behind_min;
+        hi = -mu_v * v.behind_max;
+    }
+    lo = ns_clamp(lo, 0.0, thickness);
+    hi = ns_clamp(hi, 0.0, thickness);
+    let depth_v = ns_clamp(depth, lo, max(hi, lo));
+    clamps |= select(0u, 8u, depth_v != depth);
+    let beam_h = ns_add(-sun, n, mu_l_raw);
+    let view_h = ns_add(v.view, n, -mu_v);
+    let bl = ns_length(beam_h);
+    let vl = ns_length(view_h);
+    var z_axis: vec3<f32>;
+    if bl > 1e-6 {
+        z_axis = beam_h / bl;
+    } else if vl > 1e-6 {
+        z_axis = view_h / vl;
+    } else {
+        z_axis = ns_perpendicular(n);
+    }
+    let cos_psi = ns_dot(view_h, z_axis);
+    let across = ns_add(view_h, z_axis, -cos_psi);
+    let al = ns_length(across);
+    var x_axis: vec3<f32>;
+    if al > 1e-6 * max(vl, 1e-30) && al > 0.0 {
+        x_axis = across / al;
+    } else {
+        x_axis = ns_cross(n, z_axis);
+    }
+    return LocalSlab(SlabPoint(depth_v, thickness, mu_v, ns_angle(cos_psi, al), mu_l), clamps,
+        ns_add(p, n, below), z_axis, x_axis, extinction);
+}
+
+// The surface at c; where no cloud covers it, halfway back toward the last collector, at
+// most four times.
+fn ns_query(c_in: vec3<f32>, scale: f32, last: NepheleCollector) -> LitSample {
+    var c = c_in;
+    for (var i = 0; i < 4; i++) {
+        let s = nephele_surface_filtered(c, scale);
+        if s.hit != 0u {
+            return s;
+        }
+        if last.found == 0u {
+            return s;
+        }
+        let prev = last.centre;
+        c = vec3<f32>(0.5 * (c.x + prev.x), 0.5 * (c.y + prev.y), 0.5 * (c.z + prev.z));
+    }
+    return nephele_surface_filtered(c, scale);
+}
+
+// The collector of group g seen from `v`, the sun toward `sun` (unit).
+fn find_collector(g: u32, v: Viewpoint, sun: vec3<f32>, opts: SearchOptions) -> NepheleCollector {
+    var c = v.position;
+    var sigma = nephele_surface_initial_scale();
+    var last: NepheleCollector;
+    var reads = 0u;
+    loop {
+        let scale = select(0.0, sigma, opts.filtering != 0u);
+        let s = ns_query(c, scale, last);
+        if s.hit == 0u {
+            return last;
+        }
+        let slab = local_slab(s, v, sun);
+        let tr = evaluate(g, slab.at);
+        reads += 1u;
+        if !(tr.t > 0.0 && tr.sigma > 0.0 && slab.extinction > 0.0) {
+            return last;
+        }
+        let k = 1.0 / slab.extinction;
+        let aim = ns_add(ns_add(slab.foot, slab.z_axis, tr.c_z * k), slab.x_axis, tr.c_x * k);
+        let new_sigma = tr.sigma * k;
+        let delta = vec3<f32>(aim.x - c.x, aim.y - c.y, aim.z - c.z);
+        let along = ns_dot(delta, sun);
+        var across = ns_add(delta, sun, -along);
+        var moved = ns_length(across);
+        if opts.step_clamp != 0u && reads > 1u && moved > new_sigma {
+            across = across * new_sigma / moved;
+            moved = new_sigma;
+        }
+        let converged = reads > 1u && moved <= opts.tolerance * new_sigma
+            && abs(new_sigma - sigma) <= opts.tolerance * new_sigma;
+        c = ns_add(ns_add(c, across, 1.0), sun, along);
+        sigma = new_sigma;
+        let found = NepheleCollector(1u, tr, slab.at, c, sigma, reads, select(0u, 1u, converged),
+            slab.clamps, slab.extinction);
+        if converged || reads >= max(opts.max_reads, 1u) {
+            return found;
+        }
+        last = found;
+    }
+    return last; // not reached: every step returns or reads once more, up to N reads
+}
