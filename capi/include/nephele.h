@@ -364,7 +364,8 @@ enum NepheleStatus nephele_phase_hg_draine(float g_hg,
                                            struct NephelePhase **out);
 
 /**
- * HG + Draine for water droplets of diameter `d_um` µm > 0 by Jendersie & d'Eon's fits.
+ * HG + Draine for water droplets of diameter `d_um` µm by Jendersie & d'Eon's fits
+ * (0 < `d_um` ≤ 50, the range they were fitted on).
  *
  * # Safety
  * `out` is valid for a write (or null).
@@ -465,7 +466,8 @@ enum NepheleStatus nephele_search_options_default(struct NepheleSearchOptions *o
  *
  * # Safety
  * The pointers are valid (or null; `sun` for 3 reads); the callbacks are valid for the
- * arguments the runtime passes (a point of 3 floats, a scale, an output).
+ * arguments the runtime passes (a point of 3 floats, a scale, an output), and neither free
+ * the tables nor write the outputs of the call they are called from.
  */
 enum NepheleStatus nephele_find_collector(const struct NepheleTables *tables,
                                           size_t group,
@@ -502,7 +504,8 @@ enum NepheleStatus nephele_finite_cloud_for_tables(const struct NepheleTables *t
 
 /**
  * The share of `group`'s T the cloud keeps at the collector `*found` (from
- * `nephele_find_collector` on the same surface; `found` = 1) into `*out`.
+ * `nephele_find_collector` on the same surface; `found` = 1) into `*out`. Only the surface's
+ * `lateral` callback is called (none: the surface knows no edge).
  *
  * # Safety
  * As `nephele_find_collector`.

@@ -265,7 +265,8 @@ pub unsafe extern "C" fn nephele_search_options_default(
 ///
 /// # Safety
 /// The pointers are valid (or null; `sun` for 3 reads); the callbacks are valid for the
-/// arguments the runtime passes (a point of 3 floats, a scale, an output).
+/// arguments the runtime passes (a point of 3 floats, a scale, an output), and neither free
+/// the tables nor write the outputs of the call they are called from.
 #[no_mangle]
 pub unsafe extern "C" fn nephele_find_collector(
     tables: *const NepheleTables,
@@ -281,12 +282,15 @@ pub unsafe extern "C" fn nephele_find_collector(
             let t = unsafe { get(tables, "tables")? };
             let (s, v) = unsafe { (get(surface, "surface")?, get(viewpoint, "viewpoint")?) };
             let (sun, o) = unsafe { (get(sun, "sun")?, get(options, "options")?) };
-            let out = unsafe { get_mut(out, "out")? };
+            // Checked now, written after the search: no reference to `out` is alive while the
+            // caller's callbacks run (they may reach that memory through `user`).
+            unsafe { get_mut(out, "out")? };
             if group >= t.tables().groups() {
                 return Err(crate::bad_group(group, t));
             }
             let (surface, v, opts) = search_inputs(s, v, sun, o)?;
-            *out = collector(find_collector(t.tables(), group, &surface, &v, *sun, &opts));
+            let found = collector(find_collector(t.tables(), group, &surface, &v, *sun, &opts));
+            *unsafe { get_mut(out, "out")? } = found;
             Ok(())
         })
     })
@@ -312,10 +316,12 @@ pub unsafe extern "C" fn nephele_find_collectors(
             let t = unsafe { get(tables, "tables")? };
             let (s, v) = unsafe { (get(surface, "surface")?, get(viewpoint, "viewpoint")?) };
             let (sun, o) = unsafe { (get(sun, "sun")?, get(options, "options")?) };
-            let out = unsafe { crate::group_slice(t, (out, capacity))? };
+            // Checked now, written after the search (as in `nephele_find_collector`).
+            let groups = unsafe { crate::group_slice(t, (out, capacity))? }.len();
             let (surface, v, opts) = search_inputs(s, v, sun, o)?;
             let mut all = [None; NEPHELE_MAX_GROUPS];
-            find_collectors(t.tables(), &surface, &v, *sun, &opts, &mut all[..out.len()]);
+            find_collectors(t.tables(), &surface, &v, *sun, &opts, &mut all[..groups]);
+            let out = unsafe { crate::group_slice(t, (out, capacity))? };
             for (o, c) in out.iter_mut().zip(all) {
                 *o = collector(c);
             }
@@ -359,7 +365,8 @@ pub unsafe extern "C" fn nephele_finite_cloud_for_tables(
 }
 
 /// The share of `group`'s T the cloud keeps at the collector `*found` (from
-/// `nephele_find_collector` on the same surface; `found` = 1) into `*out`.
+/// `nephele_find_collector` on the same surface; `found` = 1) into `*out`. Only the surface's
+/// `lateral` callback is called (none: the surface knows no edge).
 ///
 /// # Safety
 /// As `nephele_find_collector`.
@@ -376,7 +383,8 @@ pub unsafe extern "C" fn nephele_finite_cloud(
         done(|| {
             let t = unsafe { get(tables, "tables")? };
             let (s, c) = unsafe { (get(surface, "surface")?, get(found, "found")?) };
-            let (f, out) = unsafe { (get(finite, "finite")?, get_mut(out, "out")?) };
+            let f = unsafe { get(finite, "finite")? };
+            unsafe { get_mut(out, "out")? };
             if group >= t.tables().groups() {
                 return Err(crate::bad_group(group, t));
             }
@@ -385,9 +393,6 @@ pub unsafe extern "C" fn nephele_finite_cloud(
                     NepheleStatus::BadArgument,
                     "found: no collector (found = 0)",
                 ));
-            }
-            if s.filtered.is_none() {
-                return Err(fail(NepheleStatus::NullPointer, "surface.filtered is null"));
             }
             let collector = Collector {
                 transport: nephele_runtime::transport::Transport {
@@ -418,7 +423,7 @@ pub unsafe extern "C" fn nephele_finite_cloud(
                 mean_cosine: f.mean_cosine,
             };
             let k = finite_cloud(t.tables(), group, &CSurface(*s), &collector, &finite);
-            *out = NepheleKept {
+            *unsafe { get_mut(out, "out")? } = NepheleKept {
                 factor: k.factor,
                 radius: k.radius,
                 coverage: k.coverage,

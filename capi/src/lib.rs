@@ -531,7 +531,8 @@ pub unsafe extern "C" fn nephele_phase_hg_draine(
     }
 }
 
-/// HG + Draine for water droplets of diameter `d_um` µm > 0 by Jendersie & d'Eon's fits.
+/// HG + Draine for water droplets of diameter `d_um` µm by Jendersie & d'Eon's fits
+/// (0 < `d_um` ≤ 50, the range they were fitted on).
 ///
 /// # Safety
 /// `out` is valid for a write (or null).

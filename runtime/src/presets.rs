@@ -72,7 +72,8 @@ impl<F: Real> HgDraine<F> {
 
 /// The largest diameter (µm) Jendersie & d'Eon's fits were made on (their Mie range): beyond it
 /// they extrapolate with nothing to check them against, and from about 10⁶ µm the f32 g of the
-/// HG lobe rounds to 1 (the lobe becomes a delta, NaN off it). The ports refuse larger ones.
+/// HG lobe rounds to 1 (the lobe becomes a delta, NaN off it). The C ABI and the Python
+/// module refuse larger ones.
 pub const FIT_MAX_DIAMETER_UM: f64 = 50.0;
 
 /// Jendersie & d'Eon's parameters at diameter `d_um` (> 0, µm; fitted up to

@@ -16,8 +16,8 @@ struct FiniteCloud {
     mean_cosine: f32,
 }
 
-// What a group's collector keeps: the factor on T_g, the lateral radius (mfp; +inf where the
-// surface knows no edge) and the footprint's coverage.
+// What a group's collector keeps: the factor on T_g, the lateral radius (mfp; the largest f32
+// where the surface knows no edge: the runtime's +inf) and the footprint's coverage.
 struct Kept {
     factor: f32,
     radius: f32,
@@ -31,7 +31,6 @@ struct Loss {
     delay: f32,
 }
 
-const NF_INF_BITS: u32 = 0x7f800000u;
 const NF_J0_SQUARED: f32 = 5.783185962946784;
 
 fn nf_diffusion(g: f32) -> f32 {
@@ -43,7 +42,7 @@ fn nf_extrapolation(g: f32) -> f32 {
 }
 
 fn nf_lateral_rate(radius: f32, g: f32) -> f32 {
-    if !(radius >= 0.0) || radius == bitcast<f32>(NF_INF_BITS) {
+    if !(radius >= 0.0) || radius >= NEPHELE_F32_MAX {
         return 0.0;
     }
     let re = radius + nf_extrapolation(g);
@@ -170,7 +169,7 @@ fn group_survival(first: f32, last: f32, open: bool, depth: f32, thickness: f32,
 // The share of group g's T the cloud keeps at the collector `c` (found = 1).
 fn finite_cloud(g: u32, c: NepheleCollector, opts: FiniteCloud) -> Kept {
     let x = nephele_ntt_index;
-    var kept = Kept(1.0, bitcast<f32>(NF_INF_BITS), 1.0);
+    var kept = Kept(1.0, NEPHELE_F32_MAX, 1.0);
     if opts.leakage == 0u && opts.coverage == 0u && !(opts.absorption > 0.0) {
         return kept;
     }
@@ -179,7 +178,7 @@ fn finite_cloud(g: u32, c: NepheleCollector, opts: FiniteCloud) -> Kept {
     let side = nephele_surface_lateral(c.centre, c.sigma);
     if side.hit != 0u {
         kept.coverage = ns_clamp(side.coverage, 0.0, 1.0);
-        if opts.leakage != 0u && abs(side.edge_distance) <= 3.4028234e38 {
+        if opts.leakage != 0u && abs(side.edge_distance) < NEPHELE_F32_MAX {
             let edge = side.edge_distance * c.extinction;
             kept.radius = 3.0 * edge;
             l.lateral = opts.rate_scale * nf_lateral_rate(kept.radius, g_mean);

@@ -102,18 +102,19 @@ pub const SEARCH: &str = concat!(include_str!("search.wgsl"), include_str!("fini
 /// Words of the index uniform ([`NttGpu::index`]).
 pub const NTT_INDEX_WORDS: usize = 44;
 
-/// A `.ntt` as the WGSL port reads it: the whole file as little-endian u32 words with the
-/// Θ-hat nodes appended, and the index of what the shaders read in it.
+/// A `.ntt` as the WGSL port reads it: the arrays the shaders read as f32 bits, the Θ-hat nodes
+/// after them, and the index of where each starts.
 #[derive(Clone, Debug)]
 pub struct NttGpu {
-    /// The file's bytes as words, then the Θ-hat nodes (storage buffer).
+    /// The arrays' f32 bits, then the Θ-hat nodes (storage buffer).
     pub words: Vec<u32>,
     /// The `NttIndex` uniform of ntt.wgsl: the form's sizes, word offsets and lengths.
     pub index: [u32; NTT_INDEX_WORDS],
 }
 
 /// Checks `bytes` as the runtime does ([`TransportTables::from_bytes`]) and lays them out for
-/// the GPU ([`NttGpu`]).
+/// the GPU ([`NttGpu`]): the arrays the shaders read, each copied to whole words (the format
+/// does not align them), then the Θ-hat nodes.
 ///
 /// [`TransportTables::from_bytes`]: nephele_runtime::transport::TransportTables::from_bytes
 pub fn ntt_for_gpu(bytes: &[u8]) -> Result<NttGpu, String> {
@@ -123,14 +124,8 @@ pub fn ntt_for_gpu(bytes: &[u8]) -> Result<NttGpu, String> {
     let err = |e: &dyn std::fmt::Display| format!("transport tables: {e}");
     nephele_runtime::transport::TransportTables::from_bytes(bytes).map_err(|e| err(&e))?;
     let c = Container::from_bytes(bytes).map_err(|e| err(&e))?;
-    let word_of = |name: &str| -> Result<(u32, u32), String> {
-        let a = c.find(name).ok_or(format!("no array {name}"))?;
-        let offset = a.bytes().as_ptr() as usize - bytes.as_ptr() as usize;
-        if offset % 4 != 0 {
-            return Err(format!("array {name} at byte {offset}, not on a word"));
-        }
-        Ok(((offset / 4) as u32, a.len() as u32))
-    };
+    let mut words = Vec::new();
+    let mut word_of = |name: &str| put(&mut words, &c, name);
     // The loader has checked the sizes: whole numbers within its limits.
     let form = c.find(names::FORM).ok_or("no form")?;
     let size = |i: usize| form.get(i).unwrap_or(0.0) as usize;
@@ -145,7 +140,7 @@ pub fn ntt_for_gpu(bytes: &[u8]) -> Result<NttGpu, String> {
     let (mu_l, n_l) = word_of(names::MU_L_NODES)?;
     let (mu_v, n_v) = word_of(names::MU_V_NODES)?;
     let (thickness, n_t) = word_of(names::THICKNESS)?;
-    let (_, groups) = word_of(names::GROUP_FIRST)?;
+    let (group_first, groups) = word_of(names::GROUP_FIRST)?;
     let p = shape.n_params(n_v as usize, n_l as usize);
     // β is [P, G, Q] from version 2 on, [G, P, Q] before.
     let (param_stride, group_stride) = if c.version() >= 2 {
@@ -154,14 +149,12 @@ pub fn ntt_for_gpu(bytes: &[u8]) -> Result<NttGpu, String> {
         (q, p * q)
     };
     let ceiling = word_of(names::T_CEILING).ok();
-    let mut words: Vec<u32> = bytes
-        .chunks(4)
-        .map(|b| {
-            let mut w = [0u8; 4];
-            w[..b.len()].copy_from_slice(b);
-            u32::from_le_bytes(w)
-        })
-        .collect();
+    let (ln_t_range, _) = word_of(names::LN_T_RANGE)?;
+    let (beta, _) = word_of(names::BETA)?;
+    let (u_range, _) = word_of(names::U_RANGE)?;
+    let (phase_theta, n_phase) = word_of(names::PHASE_THETA)?;
+    let (phase, _) = word_of(names::PHASE)?;
+    let collector_beta = names::COLLECTOR_BETA.map(|name| word_of(name).map(|(at, _)| at));
     // The Θ-hat nodes as the runtime rounds them (π (i/(n − 1))² in f64, then f32).
     let hats = |words: &mut Vec<u32>, nodes: usize| {
         let at = words.len() as u32;
@@ -185,8 +178,8 @@ pub fn ntt_for_gpu(bytes: &[u8]) -> Result<NttGpu, String> {
             let (n_v, n_l) = (n_v as usize, n_l as usize);
             let mut beta = [0u32; 3];
             let mut group_stride = [0u32; 3];
-            for (k, (stat, name)) in Statistic::ALL.iter().zip(names::COLLECTOR_BETA).enumerate() {
-                beta[k] = word_of(name)?.0;
+            for (k, stat) in Statistic::ALL.iter().enumerate() {
+                beta[k] = collector_beta[k].clone()?;
                 let p = form.n_params(*stat, n_v, n_l);
                 group_stride[k] = (if c.version() >= 2 { q_c } else { p * q_c }) as u32;
             }
@@ -231,21 +224,35 @@ pub fn ntt_for_gpu(bytes: &[u8]) -> Result<NttGpu, String> {
         n_v,
         thickness,
         n_t,
-        word_of(names::LN_T_RANGE)?.0,
-        word_of(names::BETA)?.0,
+        ln_t_range,
+        beta,
         u32_of(param_stride),
         u32_of(group_stride),
-        word_of(names::U_RANGE)?.0,
+        u_range,
         ceiling.map_or(0, |(w, _)| w),
         u32::from(ceiling.is_some()),
-        word_of(names::PHASE_THETA)?.0,
-        word_of(names::PHASE)?.0,
-        word_of(names::PHASE_THETA)?.1,
+        phase_theta,
+        phase,
+        n_phase,
         theta_hats,
     ];
     let mut all = [0u32; NTT_INDEX_WORDS];
     all[..index.len()].copy_from_slice(&index);
     all[index.len()..index.len() + collector.len()].copy_from_slice(&collector);
-    all[index.len() + collector.len()] = word_of(names::GROUP_FIRST)?.0;
+    all[index.len() + collector.len()] = group_first;
     Ok(NttGpu { words, index: all })
+}
+
+/// Appends array `name` of `c` to `words` as f32 bits: (its first word, its length).
+fn put(
+    words: &mut Vec<u32>,
+    c: &nephele_runtime::container::Container,
+    name: &str,
+) -> Result<(u32, u32), String> {
+    let a = c
+        .find(name)
+        .ok_or(format!("transport tables: no array {name}"))?;
+    let at = words.len() as u32;
+    words.extend(a.iter().map(f32::to_bits));
+    Ok((at, a.len() as u32))
 }

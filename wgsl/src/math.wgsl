@@ -5,6 +5,10 @@
 // out; they use only +, −, ×, floor, frexp and ldexp, which are exact or correctly rounded.
 
 const PI: f32 = 3.14159265358979;
+// The largest f32. WGSL forbids infinities and NaNs as constants (a shader with one fails to
+// compile on Tint and WebKit) and lets a driver assume none at run time, so the port
+// saturates where the runtime would overflow, and its callers pass finite values.
+const NEPHELE_F32_MAX: f32 = 3.40282347e38;
 const INV_FOUR_PI: f32 = 0.0795774715459477;
 
 // asin(x), |x| ≤ 1, to a few f32 ulps (Cephes' asinf): a polynomial in x² up to |x| = 1/2,
@@ -29,13 +33,14 @@ fn nephele_asin(x: f32) -> f32 {
 
 // eˣ to a few f32 ulps (Cephes' expf: x = n ln 2 + r, |r| ≤ ln 2 / 2, a polynomial in r, then
 // 2ⁿ): Vulkan lets the built-in exp be 3 + 2|x| ulps off (lavapipe's was 8e-5 relative).
-// Below f32's normal range it is 0 (GPUs may flush subnormals).
+// Below f32's normal range it is 0 (GPUs may flush subnormals); above its range, the largest
+// f32.
 fn nephele_exp(x: f32) -> f32 {
     if x < -87.336544 {
         return 0.0;
     }
     if x > 88.72283 {
-        return bitcast<f32>(0x7f800000u);
+        return NEPHELE_F32_MAX;
     }
     let n = floor(x * 1.44269504088896341 + 0.5);
     let r = (x - n * 0.693359375) + n * 2.12194440e-4;
@@ -49,11 +54,11 @@ fn nephele_exp(x: f32) -> f32 {
     return ldexp(p, i32(n));
 }
 
-// ln x (x > 0; −inf at 0, NaN below), Cephes' logf: x = f 2ᵉ with f ∈ [√½, √2), a
+// ln x (x > 0; at 0 and below, minus the largest f32), Cephes' logf: x = f 2ᵉ with f ∈ [√½, √2), a
 // polynomial in f − 1, e ln 2 added in two parts.
 fn nephele_ln(x_in: f32) -> f32 {
     if x_in <= 0.0 {
-        return select(bitcast<f32>(0x7fc00000u), bitcast<f32>(0xff800000u), x_in == 0.0);
+        return -NEPHELE_F32_MAX;
     }
     let parts = frexp(x_in);
     var x = parts.fract;

@@ -71,9 +71,10 @@ struct SlabPoint {
 }
 
 // Whether the tables can be read at `at` (the runtime's `SlabPoint::in_slab`): t finite and
-// > 0, 0 ≤ d ≤ t, μ_L finite and > 0, μ_V and ψ_V finite. Elsewhere T and order 1 are 0.
+// > 0, 0 ≤ d ≤ t, μ_L finite and > 0, μ_V and ψ_V finite. Elsewhere T and order 1 are 0. (A
+// driver may assume no NaN or infinity: pass finite values.)
 fn in_slab(at: SlabPoint) -> bool {
-    let top = 3.4028234e38;
+    let top = NEPHELE_F32_MAX;
     return at.thickness > 0.0 && at.thickness <= top && at.depth >= 0.0
         && at.depth <= at.thickness && at.mu_l > 0.0 && at.mu_l <= top
         && abs(at.mu_v) <= top && abs(at.psi_v) <= top;

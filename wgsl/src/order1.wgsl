@@ -43,7 +43,7 @@ fn beam_scattered_once(p: f32, at: SlabPoint) -> f32 {
     }
     let m = -at.mu_v;
     let ratio_m1 = (m - at.mu_l) / at.mu_l;
-    let bd = (m - at.mu_l) / (at.mu_l * m) * d;
+    let bd = ratio_m1 / m * d;
     if abs(bd) < 1e-3 {
         return source * (d / m) * (1.0 + bd * 0.5 * (1.0 + bd / 3.0));
     }

@@ -17,6 +17,8 @@
 //   fn nephele_surface_initial_scale() -> f32
 //
 // (positions in metres, world; `hit` 0 where no cloud covers the light line through `at`).
+// They are called in non-uniform control flow: sample textures with `textureSampleLevel`
+// (the level of σ), not `textureSample`.
 // Needs ntt.wgsl, order1.wgsl, transport.wgsl and collector.wgsl before it.
 
 // The lit surface filtered at one place and scale: the lit face's point on the light line,
@@ -38,7 +40,8 @@ struct LateralSample {
 }
 
 // p (m, world), the direction the light travels toward the eye (unit), and the optical depth
-// the view ray holds beyond p: at least `behind_min`, at most `behind_max` (mfp).
+// the view ray holds beyond p: at least `behind_min`, at most `behind_max` (mfp; unknown:
+// NEPHELE_F32_MAX, as WGSL has no infinity constant).
 struct Viewpoint {
     position: vec3<f32>,
     view: vec3<f32>,

@@ -209,7 +209,8 @@ fn the_search_on_the_gpu_follows_the_runtime() {
                 c.sigma,
                 c.extinction,
                 kept.factor,
-                kept.radius,
+                // The port's stand-in for the runtime's +inf (no edge): the largest f32.
+                kept.radius.min(f32::MAX),
                 kept.coverage,
             ];
             if o.iter()

@@ -51,9 +51,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let b = 6u * k;
     let v = Viewpoint(vec3<f32>(viewpoints[b], viewpoints[b + 1u], viewpoints[b + 2u]),
         vec3<f32>(viewpoints[b + 3u], viewpoints[b + 4u], viewpoints[b + 5u]), 0.0,
-        bitcast<f32>(0x7f800000u));
+        NEPHELE_F32_MAX);
     let c = find_collector(g, v, SUN, SearchOptions(8u, 0.1, 1u, 1u));
-    var kept = Kept(1.0, bitcast<f32>(0x7f800000u), 1.0);
+    var kept = Kept(1.0, NEPHELE_F32_MAX, 1.0);
     if c.found != 0u {
         kept = finite_cloud(g, c, FiniteCloud(1u, 0u, 1.0, 0.0, 0.0, bitcast<f32>(job.z)));
     }

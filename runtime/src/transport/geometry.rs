@@ -35,8 +35,10 @@ impl<F: Copy> SlabPoint<F> {
 
 impl SlabPoint<f32> {
     /// Whether the point is in a slab the tables can be read at: t finite and > 0,
-    /// 0 ≤ d ≤ t, μ_L finite and > 0, μ_V and ψ_V finite (μ_L above 1 or |μ_V| above 1 by
-    /// rounding are read as 1). Elsewhere every T and order 1 is 0.
+    /// 0 ≤ d ≤ t, μ_L finite and > 0, μ_V and ψ_V finite. Elsewhere every T and order 1 is 0,
+    /// so a caller computing d or μ_L from positions clamps them first (d a few ulps below 0
+    /// at the lit face, μ_L at +0 for a grazing sun: `local_slab` does). Cosines past 1 by
+    /// rounding are taken as they are (finite, within rounding of the value at 1).
     pub fn in_slab(&self) -> bool {
         self.thickness > 0.0
             && self.thickness.is_finite()

@@ -100,7 +100,7 @@ pub(crate) fn beam_scattered_once<F: Real>(p: F, at: &SlabPoint<F>) -> F {
         // m/μ_L − 1 and 1/μ_L − 1/m from m − μ_L, exact where m is near μ_L (Sterbenz): the
         // quotients first would cancel there, up to 1/|m/μ_L − 1| ulps off.
         let ratio_m1 = (m - mu_l) / mu_l;
-        let bd = (m - mu_l) / (mu_l * m) * d;
+        let bd = ratio_m1 / m * d;
         if bd.abs() < F::of(1e-3) {
             // (e^{bd} − 1)/(m/μ_L − 1) = (d/m) (e^{bd} − 1)/(bd), the latter by its series.
             source * (d / m) * (one + bd * F::of(0.5) * (one + bd / F::of(3.0)))
