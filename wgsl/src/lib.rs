@@ -15,9 +15,8 @@
 //! from the runtime's table.
 //!
 //! [`tables`] adds the transport tables — T, c and σ of each order group and order 1 at a slab
-//! point —
-//! from a `.ntt` uploaded whole to a storage buffer ([`ntt_for_gpu`] checks it as the runtime
-//! does and writes the index uniform):
+//! point — from a `.ntt` in a storage buffer ([`ntt_for_gpu`] checks the file as the runtime
+//! does, copies the arrays the shaders read and writes the index uniform):
 //!
 //! ```wgsl
 //! let at = SlabPoint(depth, thickness, mu_v, psi_v, mu_l);
@@ -69,7 +68,7 @@ pub fn tabulated_buffer(table: &nephele_runtime::phase::Tabulated<f32>) -> Vec<f
     out
 }
 
-/// The transport tables in WGSL, from a `.ntt` uploaded whole: its words (`array<u32>`,
+/// The transport tables in WGSL, from a `.ntt` laid out by [`ntt_for_gpu`]: its words (`array<u32>`,
 /// [`NttGpu::words`]) at `@group(group) @binding(binding)` and its index ([`NttGpu::index`], a
 /// uniform struct `NttIndex` of [`NTT_INDEX_WORDS`] u32) at `binding + 1`; needs [`PHASE`]
 /// before it. It gives, over `SlabPoint` (depth, thickness, μ_V, ψ_V, μ_L):
