@@ -51,7 +51,7 @@ pub fn tabulated(group: u32, binding: u32) -> String {
 }
 
 /// The buffer [`tabulated`] reads, from the runtime's table: n, θ (radians), f and the CDF at
-/// the nodes, then a guide table of n − 1 interval indices (guide[k] the interval holding
+/// the nodes, then a guide table of n − 1 interval indices (`guide[k]` the interval holding
 /// ξ = k/(n − 1)), all as f32 words (indices exact below 2²⁴ nodes).
 pub fn tabulated_buffer(table: &nephele_runtime::phase::Tabulated<f32>) -> Vec<f32> {
     let (theta, f, cdf, _) = table.parts();
