@@ -3,7 +3,7 @@
 //! ulps, where the drivers' built-ins may be thousands off.
 
 mod common;
-use common::{dispatch, pipeline, Input};
+use common::{pipeline, run_kernel};
 
 const KERNEL: &str = r#"
 @group(0) @binding(0) var<uniform> job: vec4<u32>;
@@ -53,21 +53,12 @@ fn elementary_functions_within_a_few_ulps() {
     xs.extend([0.0, -0.0, 1.0, -1.0, 0.01, -0.01, 0.5, -0.5, 1e-30]);
     let job = [xs.len() as u32, 0, 0, 0];
     let kernel = pipeline("math", &format!("{}\n{}", nephele_wgsl::PHASE, KERNEL));
-    let out = dispatch(
+    let out = run_kernel(
         &kernel,
-        &[
-            Input {
-                binding: 0,
-                bytes: bytemuck::cast_slice(&job),
-                uniform: true,
-            },
-            Input {
-                binding: 1,
-                bytes: bytemuck::cast_slice(&xs),
-                uniform: false,
-            },
-        ],
-        (2, 32 * xs.len() as u64),
+        job,
+        &xs,
+        None,
+        32 * xs.len() as u64,
         xs.len() as u32,
     );
     let got: &[[f32; 4]] = bytemuck::cast_slice(&out);

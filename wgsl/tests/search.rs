@@ -7,7 +7,7 @@
 //! `cargo test --release -p nephele-wgsl --test search -- --nocapture` prints the agreement.
 
 mod common;
-use common::{dispatch, pipeline, Input};
+use common::{pipeline, run_kernel};
 use nephele_runtime::transport::{
     find_collector, finite_cloud, mean_cosine, FilteredSurface, FiniteCloud, Lateral, LitSurface,
     SearchOptions, TransportTables, Viewpoint,
@@ -124,33 +124,7 @@ fn the_search_on_the_gpu_follows_the_runtime() {
     ];
     let n = (vps.len() * groups) as u32;
     let start = std::time::Instant::now();
-    let out = dispatch(
-        &kernel,
-        &[
-            Input {
-                binding: 0,
-                bytes: bytemuck::cast_slice(&job),
-                uniform: true,
-            },
-            Input {
-                binding: 1,
-                bytes: bytemuck::cast_slice(&flat),
-                uniform: false,
-            },
-            Input {
-                binding: 3,
-                bytes: bytemuck::cast_slice(&ntt.words),
-                uniform: false,
-            },
-            Input {
-                binding: 4,
-                bytes: bytemuck::cast_slice(&ntt.index),
-                uniform: true,
-            },
-        ],
-        (2, 4 * 24 * n as u64),
-        n,
-    );
+    let out = run_kernel(&kernel, job, &flat, Some(&ntt), 4 * 24 * n as u64, n);
     let gpu_s = start.elapsed().as_secs_f64();
     let got: &[f32] = bytemuck::cast_slice(&out);
     let start = std::time::Instant::now();

@@ -7,7 +7,7 @@
 //! `cargo test --release -p nephele-wgsl --test tables -- --nocapture` prints the agreement.
 
 mod common;
-use common::{dispatch, gpu, pipeline, Input};
+use common::{gpu, pipeline, run_kernel};
 use nephele_runtime::transport::{SlabPoint, Transport, TransportTables};
 use std::time::Instant;
 
@@ -238,31 +238,12 @@ fn on_gpu(points: &[SlabPoint<f32>], groups: usize) -> (Vec<f32>, f64) {
         .collect();
     let job = [points.len() as u32, groups as u32, 0, 0];
     let start = Instant::now();
-    let out = dispatch(
+    let out = run_kernel(
         &kernel,
-        &[
-            Input {
-                binding: 0,
-                bytes: bytemuck::cast_slice(&job),
-                uniform: true,
-            },
-            Input {
-                binding: 1,
-                bytes: bytemuck::cast_slice(&flat),
-                uniform: false,
-            },
-            Input {
-                binding: 3,
-                bytes: bytemuck::cast_slice(&ntt.words),
-                uniform: false,
-            },
-            Input {
-                binding: 4,
-                bytes: bytemuck::cast_slice(&ntt.index),
-                uniform: true,
-            },
-        ],
-        (2, 4 * (4 * groups as u64 + 1) * points.len() as u64),
+        job,
+        &flat,
+        Some(&ntt),
+        4 * (4 * groups as u64 + 1) * points.len() as u64,
         points.len() as u32,
     );
     let seconds = start.elapsed().as_secs_f64();

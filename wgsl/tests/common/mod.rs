@@ -143,3 +143,42 @@ pub fn dispatch(
     let view = staging.get_mapped_range(..).expect("mapped outputs");
     view.to_vec()
 }
+
+/// Runs `pipeline` with the test kernels' layout: the job (4 u32) as a uniform at binding 0,
+/// `data` (f32) at binding 1, the output (`out_bytes`) at binding 2 and, given one, a `.ntt`
+/// laid out for the GPU at bindings 3 (words) and 4 (index).
+#[allow(dead_code)] // not every test binary reads a .ntt
+pub fn run_kernel(
+    pipeline: &wgpu::ComputePipeline,
+    job: [u32; 4],
+    data: &[f32],
+    ntt: Option<&nephele_wgsl::NttGpu>,
+    out_bytes: u64,
+    invocations: u32,
+) -> Vec<u8> {
+    let mut inputs = vec![
+        Input {
+            binding: 0,
+            bytes: bytemuck::cast_slice(&job),
+            uniform: true,
+        },
+        Input {
+            binding: 1,
+            bytes: bytemuck::cast_slice(data),
+            uniform: false,
+        },
+    ];
+    if let Some(ntt) = ntt {
+        inputs.push(Input {
+            binding: 3,
+            bytes: bytemuck::cast_slice(&ntt.words),
+            uniform: false,
+        });
+        inputs.push(Input {
+            binding: 4,
+            bytes: bytemuck::cast_slice(&ntt.index),
+            uniform: true,
+        });
+    }
+    dispatch(pipeline, &inputs, (2, out_bytes), invocations)
+}
