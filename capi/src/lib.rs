@@ -10,8 +10,8 @@
 
 use nephele_runtime::embedded::MIE_10UM;
 use nephele_runtime::phase::{
-    Cosine, Draine, HenyeyGreenstein, HgDraine, Rayleigh, Schlick, TableError, TabulatedTable,
-    TwoTermHg, VonMisesFisher,
+    Draine, HenyeyGreenstein, HgDraine, Rayleigh, Schlick, TableError, TabulatedTable, TwoTermHg,
+    VonMisesFisher,
 };
 use nephele_runtime::presets::FIT_MAX_DIAMETER_UM;
 use nephele_runtime::transport::{OwnedTables, SlabPoint, Transport, TransportTables};
@@ -647,37 +647,8 @@ pub unsafe extern "C" fn nephele_phase_tabulated(
                 };
                 format!("tabulated phase function: {why}")
             })?;
-            Ok(Box::new(OwnedTabulated(table)))
+            Ok(Box::new(table))
         })
-    }
-}
-
-/// A tabulated phase function that owns its table: the runtime's view of it, method for method.
-struct OwnedTabulated(TabulatedTable<f32>);
-
-impl PhaseFunction<f32> for OwnedTabulated {
-    fn eval(&self, mu: f32) -> f32 {
-        self.0.view().eval(mu)
-    }
-
-    fn pdf(&self, mu: f32) -> f32 {
-        self.0.view().pdf(mu)
-    }
-
-    fn sample_mu(&self, xi: f32) -> f32 {
-        self.0.view().sample_mu(xi)
-    }
-
-    fn sample_cosine(&self, xi: f32) -> Cosine<f32> {
-        self.0.view().sample_cosine(xi)
-    }
-
-    fn pdf_cosine(&self, c: Cosine<f32>) -> f32 {
-        self.0.view().pdf_cosine(c)
-    }
-
-    fn mean_cosine(&self) -> Option<f32> {
-        self.0.view().mean_cosine()
     }
 }
 

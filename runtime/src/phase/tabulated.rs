@@ -228,3 +228,24 @@ impl<F: Real> TabulatedTable<F> {
         }
     }
 }
+
+/// The owned table is the phase function its view is, call for call: a renderer or a port can
+/// keep one without borrowing.
+#[cfg(feature = "std")]
+impl<F: Real> PhaseFunction<F> for TabulatedTable<F> {
+    fn eval(&self, mu: F) -> F {
+        self.view().eval(mu)
+    }
+
+    fn pdf_cosine(&self, c: Cosine<F>) -> F {
+        self.view().pdf_cosine(c)
+    }
+
+    fn sample_cosine(&self, xi: F) -> Cosine<F> {
+        self.view().sample_cosine(xi)
+    }
+
+    fn mean_cosine(&self) -> Option<F> {
+        self.view().mean_cosine()
+    }
+}
