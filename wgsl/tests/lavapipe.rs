@@ -3,14 +3,14 @@
 //! Rust runtime: eval on 10⁵ cosines over the whole sphere (the forward peak down to 1 − μ =
 //! 1e-8, both poles), HG + Draine's parameters from the droplet diameter, and sampling — the
 //! CDF of every GPU sample against its ξ, and the runtime's chi-square test (Mitsuba's
-//! `chi2.py` style, `nephele::stats::chi2`) on the GPU's samples.
+//! `chi2.py` style, `nephele_stats::chi2`) on the GPU's samples.
 //!
 //! `cargo test --release -p nephele-wgsl -- --nocapture` prints the agreement per model.
 
-use nephele::stats::chi2::{chi2_sphere, Chi2Config};
 use nephele_runtime::phase::{Cosine, Draine, HenyeyGreenstein, HgDraine, TabulatedTable};
 use nephele_runtime::presets::jendersie_deon;
 use nephele_runtime::PhaseFunction;
+use nephele_stats::chi2::{chi2_sphere, Chi2Config};
 use std::sync::OnceLock;
 
 /// The test kernel around the port: one dispatch evaluates (mode 0: inputs are (μ, 1 − μ)),

@@ -7,7 +7,7 @@
 //! into one; the statistic Σ (O − E)²/E has (cells − 1) degrees of freedom. A test passes when
 //! its p-value exceeds the Šidák-corrected significance 1 − (1 − α)^{1/m} for m tests.
 
-use super::adaptive_simpson;
+use crate::adaptive_simpson;
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use statrs::distribution::{ChiSquared, ContinuousCDF};
