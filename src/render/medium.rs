@@ -2,6 +2,7 @@
 //! bounds, and majorants σ̄ ≥ σ_t for delta tracking (a coarse grid for the heterogeneous
 //! media, see `majorant.rs`).
 
+use super::fbm::Fbm;
 use super::geometry::{box_clip, slab_clip, Affine, Vec3};
 use super::majorant::{Bounds, MajorantGrid, Majorants};
 
@@ -86,7 +87,7 @@ pub struct Cloud {
     edge: f64,
     amplitude: f64,
     frequency: f64,
-    fbm: noise::Fbm<noise::Perlin>,
+    fbm: Fbm,
     sigma_t: f64,
     lo: Vec3,
     hi: Vec3,
@@ -135,10 +136,10 @@ impl Cloud {
                 hi[k] = hi[k].max(b.center[k] + grow * b.radii[k]);
             }
         }
-        let fbm = noise::Fbm::<noise::Perlin>::new(seed).set_octaves(octaves);
-        let slope = fbm_slope(&fbm) * frequency;
+        let definition = noise::Fbm::<noise::Perlin>::new(seed).set_octaves(octaves);
+        let slope = fbm_slope(&definition) * frequency;
+        let fbm = Fbm::new(&definition, seed);
         let grid = MajorantGrid::build(lo, hi, [CLOUD_GRID; 3], |c_lo, c_hi| {
-            use noise::NoiseFn;
             let (mut deepest, mut shallowest) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
             for b in &blobs {
                 let (lo, hi) = Self::depth_range(b, c_lo, c_hi);
@@ -199,7 +200,6 @@ impl Cloud {
 
     /// Density in [0, 1] at p.
     pub fn density(&self, p: Vec3) -> f64 {
-        use noise::NoiseFn;
         let inside = self
             .blobs
             .iter()

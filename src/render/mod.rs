@@ -16,6 +16,7 @@
 pub mod camera;
 pub mod compare;
 pub mod fast;
+mod fbm;
 pub mod geometry;
 pub mod image;
 pub mod majorant;
