@@ -122,9 +122,12 @@ pub struct LightMaps {
     frame: LightFrame,
     /// Mip levels, finest first: (texels per side, [row][column][channel]).
     levels: Vec<(usize, Vec<f32>)>,
-    /// Per texel: the depth s₀ where its column first meets the medium, then the optical depth
-    /// from the sun at the `planes` + 1 depths s₀ + (s_max − s₀)(k/planes)², [row][column][1 +
-    /// plane].
+    /// Per texel, the depth s₀ where its column first meets the medium (s_max where it never
+    /// does), [row][column]: apart from the planes, so that the lookup's first pass over four
+    /// texels reads a small array that stays in cache.
+    first: Vec<f32>,
+    /// Per texel, the optical depth from the sun at the `planes` + 1 depths
+    /// s₀ + (s_max − s₀)(k/planes)², [row][column][plane].
     shadow: Vec<f32>,
     planes: usize,
 }
@@ -132,6 +135,7 @@ pub struct LightMaps {
 /// What one light column holds.
 struct Column {
     texel: [f32; CHANNELS],
+    first: f32,
     shadow: Vec<f32>,
 }
 
@@ -159,9 +163,11 @@ impl LightMaps {
             .map(|idx| column(medium, &frame, idx % n, idx / n, o))
             .collect();
         let mut level0 = Vec::with_capacity(n * n * CHANNELS);
-        let mut shadow = Vec::with_capacity(n * n * (o.planes + 2));
+        let mut first = Vec::with_capacity(n * n);
+        let mut shadow = Vec::with_capacity(n * n * (o.planes + 1));
         for c in columns {
             level0.extend_from_slice(&c.texel);
+            first.push(c.first);
             shadow.extend_from_slice(&c.shadow);
         }
         with_normals(&frame, &mut level0);
@@ -187,6 +193,7 @@ impl LightMaps {
         Self {
             frame,
             levels,
+            first,
             shadow,
             planes: o.planes,
         }
@@ -201,33 +208,35 @@ impl LightMaps {
     pub fn sun_optical_depth(&self, p: Vec3) -> f64 {
         let f = &self.frame;
         let (u, v, s) = f.to_light(p);
-        let stride = self.planes + 2;
         let (x, y) = ((u - f.u0) / f.texel - 0.5, (v - f.v0) / f.texel - 0.5);
-        let column = |i: usize| &self.shadow[i * stride..(i + 1) * stride];
-        let (mut first, mut weight) = (0.0, 0.0);
+        // The texels whose columns meet the medium: (index, weight, s₀).
+        let mut taps = [(0usize, 0.0f64, 0.0f64); 4];
+        let (mut count, mut first, mut weight) = (0, 0.0, 0.0);
         bilinear(f.n, x, y, |i, w| {
-            let c = column(i);
-            if (c[0] as f64) < f.depth {
-                first += w * c[0] as f64;
+            let s0 = self.first[i] as f64;
+            if s0 < f.depth {
+                first += w * s0;
                 weight += w;
+                taps[count] = (i, w, s0);
+                count += 1;
             }
         });
         if weight <= 0.0 {
             return 0.0;
         }
         let below = s - first / weight;
+        if below <= 0.0 {
+            return 0.0;
+        }
+        let stride = self.planes + 1;
         let mut tau = 0.0;
-        bilinear(f.n, x, y, |i, w| {
-            let c = column(i);
-            let s0 = c[0] as f64;
-            if s0 >= f.depth || below <= 0.0 {
-                return;
-            }
+        for &(i, w, s0) in &taps[..count] {
+            let column = &self.shadow[i * stride..(i + 1) * stride];
             let z = plane_index(s0 + below, s0, f.depth, self.planes);
             let k = (z as usize).min(self.planes - 1);
             let wz = (z - k as f64).min(1.0);
-            tau += w * ((1.0 - wz) * c[1 + k] as f64 + wz * c[2 + k] as f64);
-        });
+            tau += w * ((1.0 - wz) * column[k] as f64 + wz * column[k + 1] as f64);
+        }
         tau
     }
 
@@ -419,8 +428,7 @@ fn column(medium: &dyn Medium, f: &LightFrame, i: usize, j: usize, o: &MapOption
     let (u, v) = f.texel_centre(i, j);
     let start = f.to_world(u, v, 0.0);
     let w = f.sun.map(|x| -x);
-    let mut shadow = vec![0f32; o.planes + 2];
-    shadow[0] = f.depth as f32;
+    let mut shadow = vec![0f32; o.planes + 1];
     let mut first: Option<f64> = None;
     let plane_at =
         |first: f64, k: usize| first + (f.depth - first) * (k as f64 / o.planes as f64).powi(2);
@@ -455,7 +463,7 @@ fn column(medium: &dyn Medium, f: &LightFrame, i: usize, j: usize, o: &MapOption
             let s0 = *first.get_or_insert(a);
             while next_plane <= o.planes && plane_at(s0, next_plane) <= b {
                 let s = plane_at(s0, next_plane);
-                shadow[1 + next_plane] = (tau + sigma * (s - a).max(0.0)) as f32;
+                shadow[next_plane] = (tau + sigma * (s - a).max(0.0)) as f32;
                 next_plane += 1;
             }
             tau += sigma * (b - a);
@@ -463,10 +471,7 @@ fn column(medium: &dyn Medium, f: &LightFrame, i: usize, j: usize, o: &MapOption
             ControlFlow::Continue(())
         });
     }
-    if let Some(s0) = first {
-        shadow[0] = s0 as f32;
-    }
-    for s in &mut shadow[(1 + next_plane).min(o.planes + 2)..] {
+    for s in &mut shadow[next_plane.min(o.planes + 1)..] {
         *s = tau as f32;
     }
     let mut texel = [0f32; CHANNELS];
@@ -474,7 +479,11 @@ fn column(medium: &dyn Medium, f: &LightFrame, i: usize, j: usize, o: &MapOption
         // The normal comes from the neighbours' depths (`with_normals`).
         texel[..4].copy_from_slice(&[1.0, s0 as f32, s1.max(s0) as f32, (t1 - t0).max(0.0) as f32]);
     }
-    Column { texel, shadow }
+    Column {
+        texel,
+        first: first.unwrap_or(f.depth) as f32,
+        shadow,
+    }
 }
 
 impl LitSurface for LightMaps {
