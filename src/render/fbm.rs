@@ -48,7 +48,14 @@ pub struct Fbm {
     lacunarity: f64,
     persistence: f64,
     scale_factor: f64,
+    /// After octave k, a bound on what the octaves after it can still add to the result
+    /// (Σ_{j>k} πʲ⁺¹ × the scale factor, widened for rounding).
+    rest: Vec<f64>,
 }
+
+/// Relative and absolute widening of `rest`: far above the few ulps by which a sum of at most
+/// 32 octaves can differ from its partial sum plus the exact rest.
+const REST_SLACK: (f64, f64) = (1e-9, 1e-12);
 
 impl Fbm {
     /// The fBm of `source`'s seed, octaves, frequency, lacunarity and persistence.
@@ -61,25 +68,56 @@ impl Fbm {
             .collect();
         let denom =
             (1..=source.octaves).fold(0.0, |acc, k| acc + source.persistence.powi(k as i32));
+        let scale_factor = 1.0 / denom;
+        let weight = |k: usize| source.persistence.powi(k as i32 + 1) * scale_factor;
+        let rest = (0..source.octaves)
+            .map(|k| {
+                let r: f64 = (k + 1..source.octaves).map(weight).sum();
+                r * (1.0 + REST_SLACK.0) + REST_SLACK.1
+            })
+            .collect();
         Self {
             tables,
             frequency: source.frequency,
             lacunarity: source.lacunarity,
             persistence: source.persistence,
-            scale_factor: 1.0 / denom,
+            scale_factor,
+            rest,
         }
     }
 
     /// The fBm at p (its input units: the cloud scales p by its frequency first).
     pub fn get(&self, p: [f64; 3]) -> f64 {
+        match self.get_or_settle(p, |_, _| None::<()>) {
+            Ok(value) => value,
+            Err(()) => unreachable!("never settled early"),
+        }
+    }
+
+    /// The fBm at p, or what `settled(lo, hi)` returns as soon as it returns something: it is
+    /// asked after each octave but the last, with [lo, hi] holding the final value whatever
+    /// the octaves left add. A caller that needs only which side of a threshold the value
+    /// falls on skips the octaves that cannot change it.
+    pub fn get_or_settle<T>(
+        &self,
+        p: [f64; 3],
+        settled: impl Fn(f64, f64) -> Option<T>,
+    ) -> Result<f64, T> {
         let mut point = p.map(|x| x * self.frequency);
         let (mut result, mut attenuation) = (0.0, self.persistence);
-        for table in &self.tables {
+        let last = self.tables.len() - 1;
+        for (k, table) in self.tables.iter().enumerate() {
             result += perlin(table, point) * attenuation;
+            if k < last {
+                let so_far = result * self.scale_factor;
+                if let Some(answer) = settled(so_far - self.rest[k], so_far + self.rest[k]) {
+                    return Err(answer);
+                }
+            }
             attenuation *= self.persistence;
             point = point.map(|x| x * self.lacunarity);
         }
-        result * self.scale_factor
+        Ok(result * self.scale_factor)
     }
 }
 
