@@ -15,6 +15,7 @@
 //! seeds seed + k at frequency f λᵏ with weight πᵏ⁺¹, divided by Σ_{k=1}^{n} πᵏ.
 
 use noise::permutationtable::{NoiseHasher, PermutationTable};
+use noise::Seedable;
 
 /// The crate's normalisation of one octave to (−1, 1): 2/√3.
 const SCALE: f64 = 1.154_700_538_379_251_5;
@@ -61,7 +62,8 @@ const REST_SLACK: (f64, f64) = (1e-9, 1e-12);
 
 impl Fbm {
     /// The fBm of `source`'s seed, octaves, frequency, lacunarity and persistence.
-    pub fn new(source: &noise::Fbm<noise::Perlin>, seed: u32) -> Self {
+    pub fn new(source: &noise::Fbm<noise::Perlin>) -> Self {
+        let seed = source.seed();
         let tables = (0..source.octaves as u32)
             .map(|k| {
                 // The crate's seed of octave k (wrapping, as its release build does).
@@ -176,7 +178,7 @@ mod tests {
             let reference = noise::Fbm::<noise::Perlin>::new(seed)
                 .set_octaves(octaves)
                 .set_frequency(frequency);
-            let fast = Fbm::new(&reference, seed);
+            let fast = Fbm::new(&reference);
             let check = |p: [f64; 3]| {
                 let (a, b) = (reference.get(p), fast.get(p));
                 assert_eq!(a.to_bits(), b.to_bits(), "{p:?}: crate {a}, ours {b}");

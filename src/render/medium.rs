@@ -138,7 +138,7 @@ impl Cloud {
         }
         let definition = noise::Fbm::<noise::Perlin>::new(seed).set_octaves(octaves);
         let slope = fbm_slope(&definition) * frequency;
-        let fbm = Fbm::new(&definition, seed);
+        let fbm = Fbm::new(&definition);
         let grid = MajorantGrid::build(lo, hi, [CLOUD_GRID; 3], |c_lo, c_hi| {
             let (mut deepest, mut shallowest) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
             for b in &blobs {
