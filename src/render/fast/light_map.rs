@@ -132,11 +132,10 @@ pub struct LightMaps {
     planes: usize,
 }
 
-/// What one light column holds.
+/// What one light column holds besides its optical depths (written in place).
 struct Column {
     texel: [f32; CHANNELS],
     first: f32,
-    shadow: Vec<f32>,
 }
 
 /// Settings of the maps.
@@ -158,17 +157,17 @@ impl LightMaps {
     pub fn build(medium: &dyn Medium, (lo, hi): (Vec3, Vec3), sun: Vec3, o: &MapOptions) -> Self {
         let frame = LightFrame::new(lo, hi, sun, o.resolution);
         let n = o.resolution;
-        let columns: Vec<Column> = (0..n * n)
-            .into_par_iter()
-            .map(|idx| column(medium, &frame, idx % n, idx / n, o))
+        let mut shadow = vec![0f32; n * n * (o.planes + 1)];
+        let columns: Vec<Column> = shadow
+            .par_chunks_mut(o.planes + 1)
+            .enumerate()
+            .map(|(idx, depths)| column(medium, &frame, (idx % n, idx / n), o, depths))
             .collect();
         let mut level0 = Vec::with_capacity(n * n * CHANNELS);
         let mut first = Vec::with_capacity(n * n);
-        let mut shadow = Vec::with_capacity(n * n * (o.planes + 1));
         for c in columns {
             level0.extend_from_slice(&c.texel);
             first.push(c.first);
-            shadow.extend_from_slice(&c.shadow);
         }
         with_normals(&frame, &mut level0);
         with_edge_distances(&frame, &mut level0);
@@ -423,12 +422,18 @@ fn plane_index(s: f64, first: f64, depth: f64, planes: usize) -> f64 {
 }
 
 /// The light column through texel (i, j): marched from the sun's side with the medium's
-/// majorants (empty cells skipped, homogeneous ones in closed form).
-fn column(medium: &dyn Medium, f: &LightFrame, i: usize, j: usize, o: &MapOptions) -> Column {
+/// majorants (empty cells skipped, homogeneous ones in closed form); its optical depths at the
+/// planes go into `shadow` (zeroed, `planes` + 1 long).
+fn column(
+    medium: &dyn Medium,
+    f: &LightFrame,
+    (i, j): (usize, usize),
+    o: &MapOptions,
+    shadow: &mut [f32],
+) -> Column {
     let (u, v) = f.texel_centre(i, j);
     let start = f.to_world(u, v, 0.0);
     let w = f.sun.map(|x| -x);
-    let mut shadow = vec![0f32; o.planes + 1];
     let mut first: Option<f64> = None;
     let plane_at =
         |first: f64, k: usize| first + (f.depth - first) * (k as f64 / o.planes as f64).powi(2);
@@ -482,7 +487,6 @@ fn column(medium: &dyn Medium, f: &LightFrame, i: usize, j: usize, o: &MapOption
     Column {
         texel,
         first: first.unwrap_or(f.depth) as f32,
-        shadow,
     }
 }
 
