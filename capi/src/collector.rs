@@ -419,6 +419,7 @@ pub unsafe extern "C" fn nephele_finite_cloud(
                 coverage: f.coverage != 0,
                 rate_scale: f.rate_scale,
                 delay_scale: f.delay_scale,
+                spread: false,
                 absorption: f.absorption,
                 mean_cosine: f.mean_cosine,
             };

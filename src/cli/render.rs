@@ -116,6 +116,15 @@ pub struct FastArgs {
     /// Collector: the sides count from order n_c = A (δ̄ + z_e)²/D on (0: from the first).
     #[arg(long, default_value_t = 0.0, value_name = "A")]
     pub leakage_delay: f64,
+    /// Collector (an ablation): the sides count the orders by how far the walk has spread
+    /// across the light, not order by order (docs/collector.md, "lateral spread").
+    #[arg(long)]
+    pub leakage_spread: bool,
+    /// Collector (an ablation): the lateral size R from the cloud's cross-section at N depths
+    /// along the light, read one transport mean free path below the collector (0: from the
+    /// cloud's whole projection, the default).
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    pub lateral_sections: usize,
     /// Octaves: N, a, b, c of L ≈ Σ_{i<N} bⁱ σ_s p(θ; cⁱ g) E Tr_sun(aⁱ σ_t).
     #[arg(long, value_names = ["N", "A", "B", "C"], num_args = 4)]
     pub octaves: Option<Vec<f64>>,
@@ -173,6 +182,8 @@ impl FastArgs {
                 coverage: matches!(self.correction, Correction::Coverage | Correction::Both),
                 rate_scale: self.leakage_scale,
                 delay_scale: self.leakage_delay,
+                spread: self.leakage_spread,
+                sections: self.lateral_sections,
             },
             thickness_scale: self.thickness_scale,
         };
@@ -227,7 +238,7 @@ const FAST_ONLY: [&str; 8] = [
     "surface_density",
     "rays",
 ];
-const COLLECTOR_ONLY: [&str; 9] = [
+const COLLECTOR_ONLY: [&str; 11] = [
     "search_every_ray",
     "iterations",
     "tolerance",
@@ -237,6 +248,8 @@ const COLLECTOR_ONLY: [&str; 9] = [
     "correction",
     "leakage_scale",
     "leakage_delay",
+    "leakage_spread",
+    "lateral_sections",
 ];
 
 /// Refuses the flags that `method` does not take (docs/render.md: a flag that does not apply
@@ -254,7 +267,12 @@ fn refuse_flags_of_other_methods(m: &ArgMatches, method: Method, fast: &FastArgs
     } else if !matches!(fast.correction, Correction::Leakage | Correction::Both) {
         super::refuse_unused(
             m,
-            &["leakage_scale", "leakage_delay"],
+            &[
+                "leakage_scale",
+                "leakage_delay",
+                "leakage_spread",
+                "lateral_sections",
+            ],
             "without the leakage correction (--correction leakage or both)",
         )?;
     }

@@ -31,6 +31,9 @@ pub struct FiniteCloud {
     pub rate_scale: f32,
     /// The sides count from order n_c = this × (δ̄ + z_e)²/D on (0: from the first order).
     pub delay_scale: f32,
+    /// The sides count the orders by the walk's spread across the light
+    /// ([`super::leakage::lateral_orders`]; an ablation, docs/collector.md).
+    pub spread: bool,
     /// κ_a = −ln ϖ per scattering (0 for water clouds in the visible).
     pub absorption: f32,
     /// g, the phase function's mean cosine (the tables').
@@ -45,6 +48,7 @@ impl FiniteCloud {
             coverage: false,
             rate_scale: 1.0,
             delay_scale: 0.0,
+            spread: false,
             absorption: 0.0,
             mean_cosine,
         }
@@ -96,6 +100,7 @@ pub fn finite_cloud<S: LitSurface + ?Sized>(
         absorption: opts.absorption.max(0.0),
         lateral: 0.0,
         delay: 0.0,
+        spread: None,
     };
     if let Some(l) = surface.lateral(c.centre, c.sigma) {
         kept.coverage = l.coverage.clamp_to(0.0, 1.0);
@@ -105,6 +110,7 @@ pub fn finite_cloud<S: LitSurface + ?Sized>(
             loss.lateral = opts.rate_scale * lateral_rate(kept.radius, g_mean);
             let reach = edge + extrapolation_length(g_mean);
             loss.delay = opts.delay_scale * reach * reach / diffusion_coefficient(g_mean);
+            loss.spread = opts.spread.then_some(g_mean);
         }
     }
     let (first, last) = group_orders(tables, g);
@@ -128,6 +134,7 @@ pub fn absorbed(
         absorption: opts.absorption.max(0.0),
         lateral: 0.0,
         delay: 0.0,
+        spread: None,
     };
     let (first, last) = group_orders(tables, g);
     group_survival(first, last, at.depth, at.thickness, opts.mean_cosine, &loss)

@@ -74,12 +74,16 @@ pub struct Loss<R> {
     pub lateral: R,
     /// n_c: the orders before the sides take their toll (0: from the start).
     pub delay: R,
+    /// Some(g): the sides count the orders by how far a walk of mean cosine g entering along
+    /// the light has spread across it ([`lateral_orders`]); None: order by order.
+    pub spread: Option<R>,
 }
 
 impl<R: Real> Loss<R> {
-    /// The log-weight of order n: −κ_a n − κ⊥ (n − n_c)⁺.
+    /// The log-weight of order n: −κ_a n − κ⊥ (n⊥ − n_c)⁺, n⊥ = n or [`lateral_orders`].
     fn exponent(&self, n: R) -> R {
-        let late = n - self.delay;
+        let across = self.spread.map_or(n, |g| lateral_orders(n, g));
+        let late = across - self.delay;
         let late = if late > R::of(0.0) { late } else { R::of(0.0) };
         -self.absorption * n - self.lateral * late
     }
@@ -87,6 +91,44 @@ impl<R: Real> Loss<R> {
     fn none(&self) -> bool {
         !(self.absorption > R::of(0.0)) && !(self.lateral > R::of(0.0))
     }
+}
+
+/// The lateral orders n⊥(n) (docs/collector.md, "The sides counted by the lateral spread"):
+/// after n flights, a walk that entered along the light, with unit mean free paths and a phase
+/// function of mean cosine g (and ⟨P₂⟩ = h = g², as Henyey–Greenstein), has spread across the
+/// light by ⟨r⊥²⟩ = ⟨r²⟩ − ⟨r_z²⟩, the persistent walk's exact moments:
+///
+///   ⟨r²⟩ = 2n + 2S,  ⟨r_z²⟩ = ⅔ (n + 2(1 − hⁿ)/(1 − h)) + ⅔ S + 4⁄3 T,
+///   S = g (n(1 − g) − (1 − gⁿ))/(1 − g)²,  T = g/(1 − g) [(1 − hⁿ)/(1 − h) − (gⁿ − hⁿ)/(g − h)],
+///
+/// and n⊥ = ⟨r⊥²⟩/(4D) is the order at which diffusion would have spread as far: ≈ 0.04 at
+/// n = 2 for g = 0.86, → n − g/(1 − g) − 1/(1 − h) for large n. A forward-peaked walk keeps to
+/// its entry line for its first orders, so the sides cannot take their light yet.
+pub fn lateral_orders<R: Real>(n: R, g: R) -> R {
+    let one = R::of(1.0);
+    let g = g.clamp_to(R::of(1e-3), R::of(0.999));
+    let h = g * g;
+    let (gn, hn) = ((n * g.ln()).exp(), (n * h.ln()).exp());
+    let s = g * (n * (one - g) - (one - gn)) / ((one - g) * (one - g));
+    let t = g / (one - g) * ((one - hn) / (one - h) - (gn - hn) / (g - h));
+    let third = R::of(1.0 / 3.0);
+    let r2 = R::of(2.0) * (n + s);
+    let rz2 = R::of(2.0) * third * (n + R::of(2.0) * (one - hn) / (one - h))
+        + R::of(2.0) * third * s
+        + R::of(4.0) * third * t;
+    let across = (r2 - rz2) * R::of(0.75) * (one - g);
+    if across > R::of(0.0) {
+        across
+    } else {
+        R::of(0.0)
+    }
+}
+
+/// n − n⊥(n) for large n: g/(1 − g) + 1/(1 − g²).
+fn lateral_offset<R: Real>(g: R) -> R {
+    let one = R::of(1.0);
+    let g = g.clamp_to(R::of(1e-3), R::of(0.999));
+    g / (one - g) + one / (one - g * g)
 }
 
 /// The share of one order group's light that the `loss` leaves: the group holds orders
@@ -138,7 +180,9 @@ pub fn group_survival<R: Real>(
             } else {
                 R::of(1e-30)
             };
-            let mut delay = loss.delay.clamp_to(zero, R::of(60.0) / rate);
+            // Beyond order 30 the lateral orders are n − their offset to within 0.1.
+            let offset = loss.spread.map_or(zero, lateral_offset);
+            let mut delay = (loss.delay + offset).clamp_to(zero, R::of(60.0) / rate);
             if let Some(hi) = hi {
                 delay = delay.clamp_to(zero, hi);
             }
@@ -284,6 +328,7 @@ mod tests {
             absorption: kappa,
             lateral: R::of(0.0),
             delay: R::of(0.0),
+            spread: None,
         }
     }
 
@@ -295,6 +340,7 @@ mod tests {
             absorption: 0.0,
             lateral: 0.05,
             delay: 40.0,
+            spread: None,
         };
         assert_eq!(
             group_survival(13.0, Some(18.0), 0.0, 30.0, 0.86, &late),
@@ -435,6 +481,96 @@ mod tests {
                     );
                 }
             }
+        }
+    }
+
+    /// The closed form of n⊥ equals the moments summed flight by flight, from the direction
+    /// correlations E[ω_i·ω_j] = g^{j−i} and E[ω_iz ω_jz] = g^{j−i} (1 + 2hⁱ)/3 (the ones
+    /// tests/pencil.rs checks against the slab walk), and tends to n − g/(1 − g) − 1/(1 − h).
+    #[test]
+    fn lateral_orders_follow_the_walk_moments() {
+        for g in [0.3f64, 0.7, 0.86, 0.95] {
+            let h = g * g;
+            let d = 1.0 / (3.0 * (1.0 - g));
+            for n in 1..=60usize {
+                let (mut r2, mut rz2) = (0.0, 0.0);
+                for i in 0..n {
+                    let ci = (1.0 + 2.0 * h.powi(i as i32)) / 3.0;
+                    // E[ℓ²] = 2 for unit exponential flights, E[ℓ_i ℓ_j] = 1 apart.
+                    r2 += 2.0;
+                    rz2 += 2.0 * ci;
+                    for j in i + 1..n {
+                        let c = g.powi((j - i) as i32);
+                        r2 += 2.0 * c;
+                        rz2 += 2.0 * c * ci;
+                    }
+                }
+                let direct = (r2 - rz2) / (4.0 * d);
+                let closed: f64 = lateral_orders(n as f64, g);
+                assert!(
+                    (closed - direct).abs() < 1e-9 * (1.0 + direct),
+                    "g {g} n {n}"
+                );
+                let single = lateral_orders(n as f32, g as f32) as f64;
+                assert!(
+                    (single - closed).abs() < 1e-4 * (1.0 + closed),
+                    "f32 g {g} n {n}"
+                );
+            }
+            let far = 400.0;
+            let asymptote = far - lateral_offset(g);
+            assert!((lateral_orders(far, g) - asymptote).abs() < 1e-6, "g {g}");
+        }
+        // A forward-peaked walk keeps to its entry line: g = 0.86, n⊥(2) ≈ 0.04, n⊥(20) ≈ 10.7.
+        assert!((lateral_orders(2.0f64, 0.86) - 0.036).abs() < 0.002);
+        assert!((lateral_orders(20.0f64, 0.86) - 10.66).abs() < 0.01);
+    }
+
+    /// Counting the sides by the walk's spread keeps more of every group than counting them
+    /// order by order, and the open group's asymptote agrees with the closed groups' sums.
+    #[test]
+    fn the_spread_spares_the_early_orders() {
+        let by_order = Loss {
+            absorption: 0.0,
+            lateral: 0.05,
+            delay: 0.0,
+            spread: None,
+        };
+        let by_spread = Loss {
+            spread: Some(0.86),
+            ..by_order
+        };
+        for (first, last) in [
+            (2.0, Some(2.0)),
+            (3.0, Some(4.0)),
+            (13.0, Some(18.0)),
+            (31.0, None),
+        ] {
+            let a: f64 = group_survival(first, last, 3.0, 30.0, 0.86, &by_order);
+            let b: f64 = group_survival(first, last, 3.0, 30.0, 0.86, &by_spread);
+            assert!(b > a && b <= 1.0, "{first}: {a} {b}");
+        }
+        // The open group (the asymptote n⊥ = n − offset in the continuum) against the exact
+        // n⊥ summed order by order over the first-passage density, to order 2·10⁵.
+        let g = 0.86f64;
+        let (d, ze) = (diffusion_coefficient(g), extrapolation_length(g));
+        for (depth, thickness) in [(0.0, 200.0), (5.0, 40.0), (20.0, 64.0)] {
+            let z = (depth - 1.0 / (1.0 - g)).abs() + ze;
+            let te: f64 = thickness + 2.0 * ze;
+            let s = d * core::f64::consts::PI.powi(2) / (te * te);
+            let (mut with, mut without) = (0.0, 0.0);
+            for n in 31..200_000 {
+                let n = n as f64;
+                let w = (-z * z / (4.0 * d * n) - s * n).exp() * n.powf(-1.5);
+                with += w * (-0.05 * lateral_orders(n, g)).exp();
+                without += w;
+            }
+            let open: f64 = group_survival(31.0, None, depth, thickness, g, &by_spread);
+            let exact = with / without;
+            assert!(
+                (open - exact).abs() < 0.02 * exact,
+                "{depth} {thickness}: {open} {exact}"
+            );
         }
     }
 

@@ -30,6 +30,10 @@ pub struct Finite {
     pub rate_scale: f64,
     /// The sides count from order n_c = this × (δ̄ + z_e)²/D on (0: from the first order).
     pub delay_scale: f64,
+    /// The sides count the orders by the walk's spread across the light (an ablation).
+    pub spread: bool,
+    /// R from the cloud's cross-section at this many depths (0: from its whole projection).
+    pub sections: usize,
 }
 
 impl Finite {
@@ -39,6 +43,8 @@ impl Finite {
         coverage: false,
         rate_scale: 1.0,
         delay_scale: 0.0,
+        spread: false,
+        sections: 0,
     };
 
     /// Its name in render.json and in `nephele compare`'s columns.
@@ -55,6 +61,12 @@ impl Finite {
         if self.leakage && self.delay_scale != 0.0 {
             name += &format!(", delay {}", self.delay_scale);
         }
+        if self.leakage && self.spread {
+            name += ", spread";
+        }
+        if self.leakage && self.sections > 0 {
+            name += &format!(", {} sections", self.sections);
+        }
         name
     }
 
@@ -66,6 +78,7 @@ impl Finite {
             coverage: self.coverage,
             rate_scale: self.rate_scale as f32,
             delay_scale: self.delay_scale as f32,
+            spread: self.spread,
             absorption: (-albedo.ln()).max(0.0) as f32,
             mean_cosine: mean_cosine(tables),
         }

@@ -122,6 +122,10 @@ pub struct LightMaps {
     frame: LightFrame,
     /// Mip levels, finest first: (texels per side, [row][column][channel]).
     levels: Vec<(usize, Vec<f32>)>,
+    /// Cross-sections at several depths (none: the lateral extent is the projection's).
+    sections: Vec<Section>,
+    /// `MapOptions::section_depth`.
+    section_depth: f64,
     /// Per texel, the depth s₀ where its column first meets the medium (s_max where it never
     /// does), [row][column]: apart from the planes, so that the lookup's first pass over four
     /// texels reads a small array that stays in cache.
@@ -149,6 +153,12 @@ pub struct MapOptions {
     pub step: f64,
     /// σ_t of the lit surface (1/m): ρ₀ times the scene's σ_t.
     pub threshold: f64,
+    /// Cross-sections of the cloud at this many depths along the light, for the lateral
+    /// extent (0: none; the extent is the whole projection's).
+    pub sections: usize,
+    /// How far below the point handed to `lateral` its cross-section is read, at most (m):
+    /// one transport mean free path, where diffusion's source lies.
+    pub section_depth: f64,
 }
 
 impl LightMaps {
@@ -171,27 +181,13 @@ impl LightMaps {
         }
         with_normals(&frame, &mut level0);
         with_edge_distances(&frame, &mut level0);
-        let mut levels = vec![(n, level0)];
-        while levels.last().map_or(0, |l| l.0) > 1 {
-            let (m, prev) = levels.last().expect("a level");
-            let half = m / 2;
-            let mut next = vec![0f32; half * half * CHANNELS];
-            for j in 0..half {
-                for i in 0..half {
-                    for ch in 0..CHANNELS {
-                        let at = |a: usize, b: usize| {
-                            prev[((2 * j + b) * m + 2 * i + a) * CHANNELS + ch]
-                        };
-                        next[(j * half + i) * CHANNELS + ch] =
-                            0.25 * (at(0, 0) + at(1, 0) + at(0, 1) + at(1, 1));
-                    }
-                }
-            }
-            levels.push((half, next));
-        }
+        let levels = pyramid::<CHANNELS>(n, level0);
+        let sections = cross_sections(&frame, &levels[0].1, o);
         Self {
             frame,
             levels,
+            sections,
+            section_depth: o.section_depth,
             first,
             shadow,
             planes: o.planes,
@@ -256,27 +252,109 @@ impl LightMaps {
 
     /// The premultiplied channels at (u, v) and real level ℓ, trilinear.
     fn sample(&self, u: f64, v: f64, level: f64) -> [f64; CHANNELS] {
-        let top = self.levels.len() - 1;
-        let l = level.clamp(0.0, top as f64);
-        let k = (l as usize).min(top);
-        let w = l - k as f64;
-        let mut out = [0.0; CHANNELS];
-        for (lev, weight) in [(k, 1.0 - w), ((k + 1).min(top), w)] {
-            if weight <= 0.0 {
-                continue;
-            }
-            let (m, data) = &self.levels[lev];
-            let size = self.frame.texel * (self.frame.n / m) as f64;
-            let x = (u - self.frame.u0) / size - 0.5;
-            let y = (v - self.frame.v0) / size - 0.5;
-            bilinear(*m, x, y, |i, b| {
-                for ch in 0..CHANNELS {
-                    out[ch] += weight * b * data[i * CHANNELS + ch] as f64;
-                }
-            });
-        }
-        out
+        sample_pyramid(&self.frame, &self.levels, u, v, level)
     }
+}
+
+/// Mip levels of a map of C channels per texel, n texels per side: finest first, each texel
+/// the mean of the four below it.
+fn pyramid<const C: usize>(n: usize, level0: Vec<f32>) -> Vec<(usize, Vec<f32>)> {
+    let mut levels = vec![(n, level0)];
+    while levels.last().map_or(0, |l| l.0) > 1 {
+        let (m, prev) = levels.last().expect("a level");
+        let half = m / 2;
+        let mut next = vec![0f32; half * half * C];
+        for j in 0..half {
+            for i in 0..half {
+                for ch in 0..C {
+                    let at = |a: usize, b: usize| prev[((2 * j + b) * m + 2 * i + a) * C + ch];
+                    next[(j * half + i) * C + ch] =
+                        0.25 * (at(0, 0) + at(1, 0) + at(0, 1) + at(1, 1));
+                }
+            }
+        }
+        levels.push((half, next));
+    }
+    levels
+}
+
+/// The channels of `levels` at (u, v) and real level ℓ, trilinear.
+fn sample_pyramid<const C: usize>(
+    frame: &LightFrame,
+    levels: &[(usize, Vec<f32>)],
+    u: f64,
+    v: f64,
+    level: f64,
+) -> [f64; C] {
+    let top = levels.len() - 1;
+    let l = level.clamp(0.0, top as f64);
+    let k = (l as usize).min(top);
+    let w = l - k as f64;
+    let mut out = [0.0; C];
+    for (lev, weight) in [(k, 1.0 - w), ((k + 1).min(top), w)] {
+        if weight <= 0.0 {
+            continue;
+        }
+        let (m, data) = &levels[lev];
+        let size = frame.texel * (frame.n / m) as f64;
+        let x = (u - frame.u0) / size - 0.5;
+        let y = (v - frame.v0) / size - 0.5;
+        bilinear(*m, x, y, |i, b| {
+            for ch in 0..C {
+                out[ch] += weight * b * data[i * C + ch] as f64;
+            }
+        });
+    }
+    out
+}
+
+/// The cross-section of the cloud across the light at one depth: per texel (whether its
+/// column holds matter there, that × the distance to the section's edge), mip-mapped.
+struct Section {
+    depth: f64,
+    levels: Vec<(usize, Vec<f32>)>,
+}
+
+/// `o.sections` cross-sections at depths evenly spread over the cloud's (light-space s from
+/// the first entry to the last exit); a texel's column holds matter at depth s where
+/// s₀ ≤ s ≤ s₁ (the gaps between lobes along one column are not seen).
+fn cross_sections(f: &LightFrame, level0: &[f32], o: &MapOptions) -> Vec<Section> {
+    let n = f.n;
+    let texel = |k: usize| &level0[k * CHANNELS..(k + 1) * CHANNELS];
+    let covered: Vec<usize> = (0..n * n).filter(|&k| texel(k)[0] > 0.0).collect();
+    if o.sections == 0 || covered.is_empty() {
+        return Vec::new();
+    }
+    let lo = covered
+        .iter()
+        .map(|&k| texel(k)[1] as f64)
+        .fold(f64::INFINITY, f64::min);
+    let hi = covered
+        .iter()
+        .map(|&k| texel(k)[2] as f64)
+        .fold(f64::NEG_INFINITY, f64::max);
+    (0..o.sections)
+        .into_par_iter()
+        .map(|i| {
+            let depth = lo + (i as f64 + 0.5) / o.sections as f64 * (hi - lo);
+            let inside = |k: usize| {
+                let t = texel(k);
+                t[0] > 0.0 && (t[1] as f64) <= depth && depth <= t[2] as f64
+            };
+            let delta = edge_distances(f, inside);
+            let mut data = vec![0f32; n * n * 2];
+            for (k, d) in delta.into_iter().enumerate() {
+                if let Some(d) = d {
+                    data[2 * k] = 1.0;
+                    data[2 * k + 1] = d;
+                }
+            }
+            Section {
+                depth,
+                levels: pyramid::<2>(n, data),
+            }
+        })
+        .collect()
 }
 
 /// The outward normal of each covered texel from the front depths around it: the lit surface
@@ -323,6 +401,18 @@ fn with_normals(f: &LightFrame, level0: &mut [f32]) {
 /// centres). Two passes of the 1-D lower envelope of parabolas (Felzenszwalb & Huttenlocher
 /// 2012), by columns then by rows.
 fn with_edge_distances(f: &LightFrame, level0: &mut [f32]) {
+    let delta = edge_distances(f, |k| level0[k * CHANNELS] > 0.0);
+    for (k, d) in delta.into_iter().enumerate() {
+        if let Some(d) = d {
+            level0[k * CHANNELS + 7] = d;
+        }
+    }
+}
+
+/// Per texel of the region `inside` (texel index → bool), its distance to the region's edge
+/// (m; a texel at the edge is half a texel from it), None outside: an exact Euclidean
+/// distance transform (Felzenszwalb & Huttenlocher) of the map padded by one outside texel.
+fn edge_distances(f: &LightFrame, inside: impl Fn(usize) -> bool) -> Vec<Option<f32>> {
     let n = f.n;
     let m = n + 2;
     let far = (4 * m * m) as f64;
@@ -330,8 +420,8 @@ fn with_edge_distances(f: &LightFrame, level0: &mut [f32]) {
     let mut d2: Vec<f64> = (0..m * m)
         .map(|k| {
             let (i, j) = (k % m, k / m);
-            let inside = i >= 1 && j >= 1 && i <= n && j <= n;
-            if inside && level0[((j - 1) * n + i - 1) * CHANNELS] > 0.0 {
+            let within = i >= 1 && j >= 1 && i <= n && j <= n;
+            if within && inside((j - 1) * n + i - 1) {
                 far
             } else {
                 0.0
@@ -351,15 +441,15 @@ fn with_edge_distances(f: &LightFrame, level0: &mut [f32]) {
             }
         }
     }
-    for j in 0..n {
-        for i in 0..n {
-            let t = &mut level0[(j * n + i) * CHANNELS..(j * n + i + 1) * CHANNELS];
-            if t[0] > 0.0 {
+    (0..n * n)
+        .map(|k| {
+            let (i, j) = (k % n, k / n);
+            inside(k).then(|| {
                 let d = d2[(j + 1) * m + i + 1].sqrt();
-                t[7] = ((d - 0.5).max(0.5) * f.texel) as f32;
-            }
-        }
-    }
+                ((d - 0.5).max(0.5) * f.texel) as f32
+            })
+        })
+        .collect()
 }
 
 /// min over q of (p − q)² + g(q) for every p: the squared distance transform of one line.
@@ -514,10 +604,44 @@ impl LitSurface for LightMaps {
     }
 
     fn lateral(&self, at: [f32; 3], sigma: f32) -> Option<Lateral> {
-        let (_, _, x) = self.covered(at, sigma)?;
-        Some(Lateral {
+        let (u, v, x) = self.covered(at, sigma)?;
+        let projected = Lateral {
             coverage: x[0] as f32,
             edge_distance: (x[7] / x[0]) as f32,
+        };
+        if self.sections.is_empty() {
+            return Some(projected);
+        }
+        // The section one transport mean free path below `at`, but not past the middle of
+        // its column (a body thinner than that spreads its light through its whole section),
+        // interpolated between the two nearest.
+        let (_, _, s) = self.frame.to_light(at.map(f64::from));
+        let column = self.sample(u, v, 0.0);
+        let half_chord = if column[0] > 0.0 {
+            0.5 * (column[2] - column[1]) / column[0]
+        } else {
+            0.0
+        };
+        let s = s + self.section_depth.min(half_chord.max(0.0));
+        let k = self.sections.partition_point(|c| c.depth <= s);
+        let (a, b) = (k.saturating_sub(1), k.min(self.sections.len() - 1));
+        let w = if a == b {
+            0.0
+        } else {
+            let (da, db) = (self.sections[a].depth, self.sections[b].depth);
+            ((s - da) / (db - da)).clamp(0.0, 1.0)
+        };
+        let level = (sigma as f64 / self.frame.texel).max(1.0).log2();
+        let read =
+            |i: usize| sample_pyramid::<2>(&self.frame, &self.sections[i].levels, u, v, level);
+        let (ra, rb) = (read(a), read(b));
+        let mass = (1.0 - w) * ra[0] + w * rb[0];
+        if mass < 1e-4 {
+            return Some(projected);
+        }
+        Some(Lateral {
+            coverage: projected.coverage,
+            edge_distance: (((1.0 - w) * ra[1] + w * rb[1]) / mass) as f32,
         })
     }
 }
@@ -532,22 +656,15 @@ mod tests {
     #[test]
     fn a_ball_maps_to_its_chords() {
         let r = 300.0;
-        let ball = Cloud::new(
-            vec![Ellipsoid {
-                center: [0.0, 0.0, 500.0],
-                radii: [r; 3],
-            }],
-            2.0,
-            (0.0, 0.01, 1),
-            0.05,
-            1,
-        );
+        let ball = ball(r);
         let sun = normalize([0.3, -0.4, 0.8]);
         let o = MapOptions {
             resolution: 64,
             planes: 128,
             step: 1.0,
             threshold: 0.025,
+            sections: 0,
+            section_depth: 0.0,
         };
         let maps = LightMaps::build(&ball, ball_bounds(&ball), sun, &o);
         let c = [0.0, 0.0, 500.0];
@@ -584,6 +701,70 @@ mod tests {
         }
         let far: Vec3 = [5000.0, 5000.0, 500.0];
         assert_eq!(maps.sun_optical_depth(far), 0.0);
+    }
+
+    /// The lateral extent of a ball from its cross-sections: read at the middle of each
+    /// column (a section depth of r) it is the whole disc's, as the projection's (δ = r − q at
+    /// distance q from the axis); read 50 m below the lit point on the axis, the section there
+    /// is the disc of radius √(r² − (r − 50)²) = 166 m.
+    #[test]
+    fn a_ball_has_its_cross_sections() {
+        let r = 300.0;
+        let ball = ball(r);
+        let sun = normalize([0.3, -0.4, 0.8]);
+        let options = |sections, section_depth| MapOptions {
+            resolution: 128,
+            planes: 64,
+            step: 1.0,
+            threshold: 0.025,
+            sections,
+            section_depth,
+        };
+        let bounds = ball_bounds(&ball);
+        let projection = LightMaps::build(&ball, bounds, sun, &options(0, 0.0));
+        let middle = LightMaps::build(&ball, bounds, sun, &options(32, r));
+        let shallow = LightMaps::build(&ball, bounds, sun, &options(32, 50.0));
+        let c = [0.0, 0.0, 500.0];
+        let side = normalize(cross(sun, [0.0, 0.0, 1.0]));
+        let texel = projection.texel();
+        for q in [0.0, 100.0, 200.0] {
+            let on_axis: Vec3 = std::array::from_fn(|k| c[k] + q * side[k]);
+            // The lit point of that column: back toward the sun by half its chord.
+            let half = (r * r - q * q).sqrt();
+            let lit: Vec3 = std::array::from_fn(|k| on_axis[k] + half * sun[k]);
+            let at = lit.map(|x| x as f32);
+            let a = projection.lateral(at, 0.0).expect("covered").edge_distance as f64;
+            let b = middle.lateral(at, 0.0).expect("covered").edge_distance as f64;
+            assert!((a - (r - q)).abs() < 2.0 * texel, "projection at {q}: {a}");
+            assert!(
+                (b - (r - q)).abs() < 0.02 * r + 2.0 * texel,
+                "sections at {q}: {b}"
+            );
+        }
+        let top: Vec3 = std::array::from_fn(|k| c[k] + r * sun[k]);
+        let d = shallow
+            .lateral(top.map(|x| x as f32), 0.0)
+            .expect("covered")
+            .edge_distance;
+        let disc = (r * r - (r - 50.0f64).powi(2)).sqrt();
+        assert!(
+            (d as f64 - disc).abs() < 0.08 * disc,
+            "50 m down: {d} vs {disc}"
+        );
+    }
+
+    /// A homogeneous ball of radius r (m) centred at (0, 0, 500), σ_t = 0.05 /m, edge 2 m.
+    fn ball(r: f64) -> Cloud {
+        Cloud::new(
+            vec![Ellipsoid {
+                center: [0.0, 0.0, 500.0],
+                radii: [r; 3],
+            }],
+            2.0,
+            (0.0, 0.01, 1),
+            0.05,
+            1,
+        )
     }
 
     fn ball_bounds(b: &Cloud) -> (Vec3, Vec3) {

@@ -126,13 +126,20 @@ impl Default for FastOptions {
 }
 
 impl FastOptions {
-    /// The light maps' settings for a march sub-step and a surface extinction.
-    fn maps(&self, step: f64, threshold: f64) -> MapOptions {
+    /// The light maps' settings for a march sub-step, a surface extinction and the transport
+    /// mean free path 1/((1 − g) σ_t) (m).
+    fn maps(&self, step: f64, threshold: f64, transport_mfp: f64) -> MapOptions {
         MapOptions {
             resolution: self.map_resolution,
             planes: self.planes,
             step,
             threshold,
+            sections: if self.finite.leakage {
+                self.finite.sections
+            } else {
+                0
+            },
+            section_depth: transport_mfp,
         }
     }
 
@@ -239,7 +246,7 @@ pub fn prepare<'a>(
     let side = sun_side(
         scene,
         medium.as_ref(),
-        &opts.maps(step, threshold),
+        &opts.maps(step, threshold, 1.0 / ((1.0 - g).max(1e-3) * scene.sigma_t)),
         opts.thickness_scale,
     )?;
     let maps = t0.elapsed().as_secs_f64();
@@ -337,7 +344,13 @@ pub fn surface_points(scene: &Scene, stride: usize) -> Result<(SunSide, Vec<View
     let opts = FastOptions::default();
     let step = 0.5 / scene.sigma_t;
     let threshold = opts.surface_density * scene.sigma_t;
-    let side = sun_side(scene, medium.as_ref(), &opts.maps(step, threshold), 1.0)?;
+    // The default maps hold no cross-sections, so the transport mean free path is not read.
+    let side = sun_side(
+        scene,
+        medium.as_ref(),
+        &opts.maps(step, threshold, 0.0),
+        1.0,
+    )?;
     let cam = Pinhole::new(&scene.camera);
     let tables = nephele_runtime::embedded::mie_10um();
     let frame = Frame {
