@@ -1,9 +1,10 @@
 #!/usr/bin/env python3
 """The finite-cloud study (docs/collector.md, "Finite clouds"): every study scene rendered by the
-collector as published, with the finite-cloud correction (the default: lateral leakage, no
-fitted constant) and its ablations (coverage alone, leakage and coverage, leakage with a delay),
-the sides counted by the walk's lateral spread, alone and with R from the cloud's cross-sections
-at 16 depths (docs/collector.md, "The sides counted by the lateral spread"), and the octaves
+collector as published, with the finite-cloud correction (the default: lateral leakage counted
+by the walk's spread across the light, R from the larger of the cloud's sections across the
+light and along its lit surface; no fitted constant) and its ablations (coverage alone, leakage
+and coverage, R from each section alone or from the whole projection, and the correction of
+2 Dec: leakage order by order with R from the projection), and the octaves
 fitted on cloud_side; each compared with its path-traced reference by
 `nephele compare`. Writes finite.json, finite.md (the tables of docs/collector.md) and
 finite_orders.png (per group: truth / slab against the correction's share, on the spheres)
@@ -30,9 +31,11 @@ VARIANTS = {
     "leakage": [],
     "coverage": ["--correction", "coverage"],
     "leakage+coverage": ["--correction", "both"],
-    "leakage, delay 0.1": ["--leakage-delay", "0.1"],
-    "leakage, spread": ["--leakage-spread"],
-    "leakage, spread, sections": ["--leakage-spread", "--lateral-sections", "16"],
+    "leakage, R from the projection": ["--lateral", "projection"],
+    "leakage, R across the light": ["--lateral", "sections"],
+    "leakage, R along the surface": ["--lateral", "surface"],
+    "leakage by order, R from the projection (2 Dec)": ["--leakage-count", "orders",
+                                                        "--lateral", "projection"],
 }
 GROUPS = ["order 2", "orders 3-4", "orders 5-6", "orders 7-8", "orders 9-12", "orders 13-18",
           "orders 19-30", "orders 31+"]

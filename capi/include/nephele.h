@@ -212,6 +212,11 @@ typedef struct NepheleFiniteCloud {
    */
   float delay_scale;
   /**
+   * The sides count a path's orders by how far the walk has spread across the light (1,
+   * the default), or order by order from the first (0).
+   */
+  int32_t spread;
+  /**
    * κ_a = −ln ϖ per scattering (0 for water clouds in the visible).
    */
   float absorption;

@@ -106,6 +106,9 @@ pub struct NepheleFiniteCloud {
     pub rate_scale: f32,
     /// The sides count from order n_c = this × (δ̄ + z_e)²/D on.
     pub delay_scale: f32,
+    /// The sides count a path's orders by how far the walk has spread across the light (1,
+    /// the default), or order by order from the first (0).
+    pub spread: i32,
     /// κ_a = −ln ϖ per scattering (0 for water clouds in the visible).
     pub absorption: f32,
     /// g, the phase function's mean cosine.
@@ -354,6 +357,7 @@ pub unsafe extern "C" fn nephele_finite_cloud_for_tables(
                     coverage: i32::from(f.coverage),
                     rate_scale: f.rate_scale,
                     delay_scale: f.delay_scale,
+                    spread: i32::from(f.spread),
                     absorption: f.absorption,
                     mean_cosine: f.mean_cosine,
                 };
@@ -419,7 +423,7 @@ pub unsafe extern "C" fn nephele_finite_cloud(
                 coverage: f.coverage != 0,
                 rate_scale: f.rate_scale,
                 delay_scale: f.delay_scale,
-                spread: false,
+                spread: f.spread != 0,
                 absorption: f.absorption,
                 mean_cosine: f.mean_cosine,
             };

@@ -116,18 +116,44 @@ pub struct FastArgs {
     /// Collector: the sides count from order n_c = A (δ̄ + z_e)²/D on (0: from the first).
     #[arg(long, default_value_t = 0.0, value_name = "A")]
     pub leakage_delay: f64,
-    /// Collector (an ablation): the sides count the orders by how far the walk has spread
-    /// across the light, not order by order (docs/collector.md, "lateral spread").
-    #[arg(long)]
-    pub leakage_spread: bool,
-    /// Collector (an ablation): the lateral size R from the cloud's cross-section at N depths
-    /// along the light, read one transport mean free path below the collector (0: from the
-    /// cloud's whole projection, the default).
-    #[arg(long, default_value_t = 0, value_name = "N")]
-    pub lateral_sections: usize,
+    /// Collector: how the sides count a path's orders: by how far the walk has spread across
+    /// the light (the default), or order by order from the first (an ablation;
+    /// docs/collector.md, "lateral spread").
+    #[arg(long, value_enum, default_value_t = LeakageCount::Spread)]
+    pub leakage_count: LeakageCount,
+    /// Collector: where the lateral size R comes from: the larger of the cloud's sections
+    /// across the light and along its lit surface (both, the default), either alone, or the
+    /// cloud's whole projection (ablations; docs/collector.md).
+    #[arg(long, value_enum, default_value_t = LateralFrom::Both)]
+    pub lateral: LateralFrom,
+    /// Collector: the sections across the light, at this many depths.
+    #[arg(long, default_value_t = 16, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=256))]
+    pub lateral_sections: u32,
     /// Octaves: N, a, b, c of L ≈ Σ_{i<N} bⁱ σ_s p(θ; cⁱ g) E Tr_sun(aⁱ σ_t).
     #[arg(long, value_names = ["N", "A", "B", "C"], num_args = 4)]
     pub octaves: Option<Vec<f64>>,
+}
+
+/// How the sides count a path's orders.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum LeakageCount {
+    /// By the walk's spread across the light.
+    Spread,
+    /// Order by order, from the first.
+    Orders,
+}
+
+/// Where the lateral size R comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum LateralFrom {
+    /// The larger of the sections across the light and along the lit surface.
+    Both,
+    /// The section across the light one transport mean free path below the collector.
+    Sections,
+    /// The section along the lit surface.
+    Surface,
+    /// The cloud's whole projection along the light.
+    Projection,
 }
 
 /// The collector's finite-cloud correction.
@@ -182,8 +208,12 @@ impl FastArgs {
                 coverage: matches!(self.correction, Correction::Coverage | Correction::Both),
                 rate_scale: self.leakage_scale,
                 delay_scale: self.leakage_delay,
-                spread: self.leakage_spread,
-                sections: self.lateral_sections,
+                spread: self.leakage_count == LeakageCount::Spread,
+                sections: match self.lateral {
+                    LateralFrom::Both | LateralFrom::Sections => self.lateral_sections as usize,
+                    _ => 0,
+                },
+                surface: matches!(self.lateral, LateralFrom::Both | LateralFrom::Surface),
             },
             thickness_scale: self.thickness_scale,
         };
@@ -238,7 +268,7 @@ const FAST_ONLY: [&str; 8] = [
     "surface_density",
     "rays",
 ];
-const COLLECTOR_ONLY: [&str; 11] = [
+const COLLECTOR_ONLY: [&str; 12] = [
     "search_every_ray",
     "iterations",
     "tolerance",
@@ -248,7 +278,8 @@ const COLLECTOR_ONLY: [&str; 11] = [
     "correction",
     "leakage_scale",
     "leakage_delay",
-    "leakage_spread",
+    "leakage_count",
+    "lateral",
     "lateral_sections",
 ];
 
@@ -270,10 +301,18 @@ fn refuse_flags_of_other_methods(m: &ArgMatches, method: Method, fast: &FastArgs
             &[
                 "leakage_scale",
                 "leakage_delay",
-                "leakage_spread",
+                "leakage_count",
+                "lateral",
                 "lateral_sections",
             ],
             "without the leakage correction (--correction leakage or both)",
+        )?;
+    }
+    if matches!(fast.lateral, LateralFrom::Surface | LateralFrom::Projection) {
+        super::refuse_unused(
+            m,
+            &["lateral_sections"],
+            "without the sections across the light (--lateral both or sections)",
         )?;
     }
     if method != Method::Octaves {

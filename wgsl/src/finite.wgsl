@@ -2,9 +2,10 @@
 // in runtime/src/transport/leakage.rs and docs/collector.md, "Finite clouds"): the share of the
 // infinite slab's T_g a real cloud keeps. Lateral leakage: the cross-section around the
 // collector has a mean distance δ̄ to its edge, R = 3 δ̄ (mfp), κ⊥ = D j₀² / (R + z_e)²;
-// absorption κ_a = −ln ϖ; the group keeps Σ_{n∈g} w_n e^{−κ n} / Σ w_n with w_n the orders'
-// distribution from diffusion (closed groups order by order, the open last group by the
-// first-passage integral with erfcx). Needs search.wgsl before it.
+// absorption κ_a = −ln ϖ; the group keeps Σ_{n∈g} w_n e^{−κ_a n − κ⊥ n⊥(n)} / Σ w_n with w_n
+// the orders' distribution from diffusion (closed groups order by order, the open last group
+// by the first-passage integral with erfcx) and n⊥ the lateral orders (the walk's spread
+// across the light; n itself with `spread` = 0). Needs search.wgsl before it.
 
 // Which corrections apply (1 on) and the medium's constants.
 struct FiniteCloud {
@@ -12,6 +13,7 @@ struct FiniteCloud {
     coverage: u32,
     rate_scale: f32,
     delay_scale: f32,
+    spread: u32,
     absorption: f32,
     mean_cosine: f32,
 }
@@ -24,11 +26,14 @@ struct Kept {
     coverage: f32,
 }
 
-// What a path loses per scattering: absorption, the sides' rate, the orders before they count.
+// What a path loses per scattering: absorption, the sides' rate, the orders before they count,
+// and whether the sides count the lateral orders (1) or the orders (0), for mean cosine g.
 struct Loss {
     absorption: f32,
     lateral: f32,
     delay: f32,
+    spread: u32,
+    g: f32,
 }
 
 const NF_J0_SQUARED: f32 = 5.783185962946784;
@@ -49,8 +54,36 @@ fn nf_lateral_rate(radius: f32, g: f32) -> f32 {
     return nf_diffusion(g) * NF_J0_SQUARED / (re * re);
 }
 
+// n⊥(n): the order at which diffusion would have spread as far across the light as a
+// persistent walk of mean cosine g (⟨P₂⟩ = g²) entering along it after n flights (the walk's
+// exact moments; runtime's leakage::lateral_orders).
+fn nf_lateral_orders(n: f32, g0: f32) -> f32 {
+    let g = ns_clamp(g0, 1e-3, 0.999);
+    let h = g * g;
+    let gn = nephele_exp(n * nephele_ln(g));
+    let hn = nephele_exp(n * nephele_ln(h));
+    let s = g * (n * (1.0 - g) - (1.0 - gn)) / ((1.0 - g) * (1.0 - g));
+    let t = g / (1.0 - g) * ((1.0 - hn) / (1.0 - h) - (gn - hn) / (g - h));
+    let third = 1.0 / 3.0;
+    let r2 = 2.0 * (n + s);
+    let rz2 = 2.0 * third * (n + 2.0 * (1.0 - hn) / (1.0 - h)) + 2.0 * third * s
+        + 4.0 * third * t;
+    let across = (r2 - rz2) * 0.75 * (1.0 - g);
+    return select(0.0, across, across > 0.0);
+}
+
+// n − n⊥(n) for large n: g/(1 − g) + 1/(1 − g²).
+fn nf_lateral_offset(g0: f32) -> f32 {
+    let g = ns_clamp(g0, 1e-3, 0.999);
+    return g / (1.0 - g) + 1.0 / (1.0 - g * g);
+}
+
 fn nf_loss_exponent(l: Loss, n: f32) -> f32 {
-    let late = select(0.0, n - l.delay, n - l.delay > 0.0);
+    var across = n;
+    if l.spread != 0u {
+        across = nf_lateral_orders(n, l.g);
+    }
+    let late = select(0.0, across - l.delay, across - l.delay > 0.0);
     return -l.absorption * n - l.lateral * late;
 }
 
@@ -149,7 +182,9 @@ fn group_survival(first: f32, last: f32, open: bool, depth: f32, thickness: f32,
         let lo = first - 0.5;
         let hi = last + 0.5;
         let rate = select(1e-30, l.lateral, l.lateral > 1e-30);
-        var delay = ns_clamp(l.delay, 0.0, 60.0 / rate);
+        // Beyond order 30 the lateral orders are n − their offset to within 0.1.
+        let offset = select(0.0, nf_lateral_offset(g), l.spread != 0u);
+        var delay = ns_clamp(l.delay + offset, 0.0, 60.0 / rate);
         if !open {
             delay = ns_clamp(delay, 0.0, hi);
         }
@@ -174,7 +209,7 @@ fn finite_cloud(g: u32, c: NepheleCollector, opts: FiniteCloud) -> Kept {
         return kept;
     }
     let g_mean = opts.mean_cosine;
-    var l = Loss(max(opts.absorption, 0.0), 0.0, 0.0);
+    var l = Loss(max(opts.absorption, 0.0), 0.0, 0.0, 0u, g_mean);
     let side = nephele_surface_lateral(c.centre, c.sigma);
     if side.hit != 0u {
         kept.coverage = ns_clamp(side.coverage, 0.0, 1.0);
@@ -184,6 +219,7 @@ fn finite_cloud(g: u32, c: NepheleCollector, opts: FiniteCloud) -> Kept {
             l.lateral = opts.rate_scale * nf_lateral_rate(kept.radius, g_mean);
             let reach = edge + nf_extrapolation(g_mean);
             l.delay = opts.delay_scale * reach * reach / nf_diffusion(g_mean);
+            l.spread = opts.spread;
         }
     }
     var first = 2.0;

@@ -55,7 +55,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let c = find_collector(g, v, SUN, SearchOptions(8u, 0.1, 1u, 1u));
     var kept = Kept(1.0, NEPHELE_F32_MAX, 1.0);
     if c.found != 0u {
-        kept = finite_cloud(g, c, FiniteCloud(1u, 0u, 1.0, 0.0, 0.0, bitcast<f32>(job.z)));
+        kept = finite_cloud(g, c, FiniteCloud(1u, 0u, 1.0, 0.0, 1u, 0.0, bitcast<f32>(job.z)));
     }
     let o = 24u * i;
     out[o] = f32(c.found);

@@ -1,11 +1,15 @@
 //! The finite-cloud correction of a collector (docs/collector.md, "Finite clouds"): what share
 //! of the infinite slab's T_g a real cloud keeps.
 //!
-//! - **Lateral leakage**: the cross-section of the cloud across the light, filtered at the
-//!   collector's spread σ_g around its centre, has a mean distance δ̄ to its edge; a disk of
-//!   radius R has δ̄ = R/3, so R = 3 δ̄ (a strip of width W gives R = 3W/4, whose κ⊥ is within
-//!   5 % of the strip's own π² D / W²). In mfp with the collector's κ̄, κ⊥ = D j₀²/R_e², and the
-//!   group keeps [`group_survival`] of κ⊥ + κ_a ([`super::leakage`]). A small footprint deep
+//! - **Lateral leakage**: the section of the cloud the light spreads through around the
+//!   collector (the surface's [`LitSurface::lateral`]: the toolchain's light maps take the
+//!   larger of the sections across the light one transport mean free path below it and along
+//!   the lit surface), filtered at the collector's spread σ_g around its centre, has a mean
+//!   distance δ̄ to its edge; a disk of radius R has δ̄ = R/3, so R = 3 δ̄ (a strip of width W
+//!   gives R = 3W/4, whose κ⊥ is within 5 % of the strip's own π² D / W²). In mfp with the
+//!   collector's κ̄, κ⊥ = D j₀²/R_e², and the group keeps [`group_survival`] of κ⊥ + κ_a
+//!   ([`super::leakage`]), the sides counting each order by how far the walk has spread
+//!   across the light ([`super::leakage::lateral_orders`], `spread`). A small footprint deep
 //!   inside a wide cloud sees a large δ̄ and keeps nearly all; near an edge, or once σ_g spans
 //!   the cloud, the cloud's own size sets the loss.
 //! - **Absorption**: κ_a = −ln ϖ per scattering, exact for any ϖ given the orders' distribution.
@@ -32,7 +36,7 @@ pub struct FiniteCloud {
     /// The sides count from order n_c = this × (δ̄ + z_e)²/D on (0: from the first order).
     pub delay_scale: f32,
     /// The sides count the orders by the walk's spread across the light
-    /// ([`super::leakage::lateral_orders`]; an ablation, docs/collector.md).
+    /// ([`super::leakage::lateral_orders`]; the default), else order by order from the first.
     pub spread: bool,
     /// κ_a = −ln ϖ per scattering (0 for water clouds in the visible).
     pub absorption: f32,
@@ -54,10 +58,12 @@ impl FiniteCloud {
         }
     }
 
-    /// Lateral leakage from diffusion theory, no fitted constant, for `tables`' phase function.
+    /// Lateral leakage from diffusion theory, counted by the walk's spread across the light,
+    /// no fitted constant, for `tables`' phase function.
     pub fn for_tables(tables: &TransportTables) -> Self {
         Self {
             leakage: true,
+            spread: true,
             ..Self::published(mean_cosine(tables))
         }
     }

@@ -55,8 +55,10 @@ pub trait LitSurface {
     /// σ₀ (m): the scale of the first filtering, the cloud's size.
     fn initial_scale(&self) -> f32;
 
-    /// The cloud's cross-section seen from the sun, filtered at scale `sigma` (m) around the
-    /// light line through `at`: what the finite-cloud correction reads
+    /// The cloud's section that the light entering at `at` spreads through (the toolchain's
+    /// maps: the larger of its sections across the light one transport mean free path below
+    /// `at` and along the lit surface; docs/collector.md), filtered at scale `sigma` (m)
+    /// around the light line through `at`: what the finite-cloud correction reads
     /// ([`super::finite_cloud`]). None (the default) where the surface does not know it:
     /// an unbounded slab.
     fn lateral(&self, _at: Vec3<f32>, _sigma: f32) -> Option<Lateral> {
@@ -64,13 +66,13 @@ pub trait LitSurface {
     }
 }
 
-/// The cloud's cross-section across the light, filtered around a point at a scale.
+/// The cloud's section around a point, filtered at a scale.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Lateral {
     /// The share of the footprint the cloud covers, in [0, 1].
     pub coverage: f32,
-    /// The mean, over the covered part of the footprint, of the distance across the light
-    /// to the cross-section's edge (m).
+    /// The mean, over the covered part of the footprint, of the distance to the section's
+    /// edge (m).
     pub edge_distance: f32,
 }
 

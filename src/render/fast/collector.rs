@@ -30,10 +30,14 @@ pub struct Finite {
     pub rate_scale: f64,
     /// The sides count from order n_c = this × (δ̄ + z_e)²/D on (0: from the first order).
     pub delay_scale: f64,
-    /// The sides count the orders by the walk's spread across the light (an ablation).
+    /// The sides count the orders by the walk's spread across the light (else order by
+    /// order, from the first).
     pub spread: bool,
-    /// R from the cloud's cross-section at this many depths (0: from its whole projection).
+    /// R from the cloud's sections across the light at this many depths (0: none).
     pub sections: usize,
+    /// R from the cloud's section along its lit surface; with `sections`, the larger of the
+    /// two; with neither, R from the cloud's whole projection.
+    pub surface: bool,
 }
 
 impl Finite {
@@ -45,6 +49,7 @@ impl Finite {
         delay_scale: 0.0,
         spread: false,
         sections: 0,
+        surface: false,
     };
 
     /// Its name in render.json and in `nephele compare`'s columns.
@@ -61,11 +66,21 @@ impl Finite {
         if self.leakage && self.delay_scale != 0.0 {
             name += &format!(", delay {}", self.delay_scale);
         }
-        if self.leakage && self.spread {
-            name += ", spread";
+        let default = Finite::default();
+        if self.leakage && self.spread != default.spread {
+            name += if self.spread {
+                ", spread"
+            } else {
+                ", by order"
+            };
         }
-        if self.leakage && self.sections > 0 {
-            name += &format!(", {} sections", self.sections);
+        if self.leakage && (self.sections, self.surface) != (default.sections, default.surface) {
+            name += &match (self.sections, self.surface) {
+                (0, false) => ", R from the projection".to_string(),
+                (0, true) => ", R along the surface".to_string(),
+                (k, false) => format!(", R across the light ({k} sections)"),
+                (k, true) => format!(", R from {k} sections and the surface"),
+            };
         }
         name
     }
@@ -86,10 +101,14 @@ impl Finite {
 }
 
 impl Default for Finite {
-    /// Lateral leakage, no fitted constant.
+    /// Lateral leakage counted by the walk's spread, R from the larger of the sections across
+    /// the light (16) and along the lit surface; no fitted constant.
     fn default() -> Self {
         Finite {
             leakage: true,
+            spread: true,
+            sections: 16,
+            surface: true,
             ..Finite::PUBLISHED
         }
     }

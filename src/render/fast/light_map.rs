@@ -126,6 +126,8 @@ pub struct LightMaps {
     sections: Vec<Section>,
     /// `MapOptions::section_depth`.
     section_depth: f64,
+    /// The section that follows the lit surface (`MapOptions::surface_section`).
+    surface: Option<Section>,
     /// Per texel, the depth s₀ where its column first meets the medium (s_max where it never
     /// does), [row][column]: apart from the planes, so that the lookup's first pass over four
     /// texels reads a small array that stays in cache.
@@ -154,11 +156,14 @@ pub struct MapOptions {
     /// σ_t of the lit surface (1/m): ρ₀ times the scene's σ_t.
     pub threshold: f64,
     /// Cross-sections of the cloud at this many depths along the light, for the lateral
-    /// extent (0: none; the extent is the whole projection's).
+    /// extent (0: none; without the surface section either, the whole projection's).
     pub sections: usize,
     /// How far below the point handed to `lateral` its cross-section is read, at most (m):
     /// one transport mean free path, where diffusion's source lies.
     pub section_depth: f64,
+    /// One section that follows the lit surface ([`surface_section`], `section_depth` its
+    /// scale); with `sections`, `lateral` reads the larger of the two.
+    pub surface_section: bool,
 }
 
 impl LightMaps {
@@ -183,11 +188,15 @@ impl LightMaps {
         with_edge_distances(&frame, &mut level0);
         let levels = pyramid::<CHANNELS>(n, level0);
         let sections = cross_sections(&frame, &levels[0].1, o);
+        let surface = o
+            .surface_section
+            .then(|| surface_section(&frame, &levels, o.section_depth));
         Self {
             frame,
             levels,
             sections,
             section_depth: o.section_depth,
+            surface,
             first,
             shadow,
             planes: o.planes,
@@ -308,11 +317,37 @@ fn sample_pyramid<const C: usize>(
     out
 }
 
-/// The cross-section of the cloud across the light at one depth: per texel (whether its
-/// column holds matter there, that × the distance to the section's edge), mip-mapped.
+/// A section of the cloud: per texel (whether it is inside, that × the distance to the
+/// section's edge), mip-mapped; across the light at one depth, or along the lit surface.
 struct Section {
     depth: f64,
     levels: Vec<(usize, Vec<f32>)>,
+}
+
+impl Section {
+    /// A section built from its `inside` texels.
+    fn new(f: &LightFrame, depth: f64, inside: impl Fn(usize) -> bool) -> Self {
+        let n = f.n;
+        let delta = edge_distances(f, inside);
+        let mut data = vec![0f32; n * n * 2];
+        for (k, d) in delta.into_iter().enumerate() {
+            if let Some(d) = d {
+                data[2 * k] = 1.0;
+                data[2 * k + 1] = d;
+            }
+        }
+        Self {
+            depth,
+            levels: pyramid::<2>(n, data),
+        }
+    }
+
+    /// δ̄ (m) over the footprint at (u, v) and real level ℓ; None where the section covers
+    /// less than 10⁻⁴ of it.
+    fn edge_distance(&self, f: &LightFrame, u: f64, v: f64, level: f64) -> Option<f64> {
+        let r = sample_pyramid::<2>(f, &self.levels, u, v, level);
+        (r[0] >= 1e-4).then(|| r[1] / r[0])
+    }
 }
 
 /// `o.sections` cross-sections at depths evenly spread over the cloud's (light-space s from
@@ -337,24 +372,37 @@ fn cross_sections(f: &LightFrame, level0: &[f32], o: &MapOptions) -> Vec<Section
         .into_par_iter()
         .map(|i| {
             let depth = lo + (i as f64 + 0.5) / o.sections as f64 * (hi - lo);
-            let inside = |k: usize| {
+            Section::new(f, depth, |k: usize| {
                 let t = texel(k);
                 t[0] > 0.0 && (t[1] as f64) <= depth && depth <= t[2] as f64
-            };
-            let delta = edge_distances(f, inside);
-            let mut data = vec![0f32; n * n * 2];
-            for (k, d) in delta.into_iter().enumerate() {
-                if let Some(d) = d {
-                    data[2 * k] = 1.0;
-                    data[2 * k + 1] = d;
-                }
-            }
-            Section {
-                depth,
-                levels: pyramid::<2>(n, data),
-            }
+            })
         })
         .collect()
+}
+
+/// The cloud's section along its lit surface rather than across the light: a covered texel
+/// is inside unless its column enters the cloud deeper than `depth` (m) below the lit surface
+/// smoothed over `depth` around it (s₀ > s̄₀ + depth). A tilted sheet is then one wide body,
+/// as its surface is smooth however it tilts, while a lobe seen behind another, whose entry
+/// lies far below the smoothed surface next to the front lobe's edge, is cut off from it, as
+/// is the far side of a crease deeper than `depth`.
+fn surface_section(f: &LightFrame, levels: &[(usize, Vec<f32>)], depth: f64) -> Section {
+    let n = f.n;
+    let level0 = &levels[0].1;
+    let level = (depth / f.texel).max(1.0).log2();
+    let inside: Vec<bool> = (0..n * n)
+        .into_par_iter()
+        .map(|k| {
+            let t = &level0[k * CHANNELS..(k + 1) * CHANNELS];
+            if t[0] <= 0.0 {
+                return false;
+            }
+            let (u, v) = f.texel_centre(k % n, k / n);
+            let x = sample_pyramid::<CHANNELS>(f, levels, u, v, level);
+            t[1] as f64 <= x[1] / x[0] + depth
+        })
+        .collect();
+    Section::new(f, depth, |k| inside[k])
 }
 
 /// The outward normal of each covered texel from the front depths around it: the lit surface
@@ -603,18 +651,38 @@ impl LitSurface for LightMaps {
         (self.frame.texel * self.frame.n as f64) as f32
     }
 
+    /// δ̄ over the footprint of the larger of the two cuts through diffusion's source that the
+    /// maps hold (the section across the light one transport mean free path below `at`, and
+    /// the section along the lit surface): each bounds from below the body the light can
+    /// spread through. Without either, the whole projection's.
     fn lateral(&self, at: [f32; 3], sigma: f32) -> Option<Lateral> {
         let (u, v, x) = self.covered(at, sigma)?;
-        let projected = Lateral {
-            coverage: x[0] as f32,
-            edge_distance: (x[7] / x[0]) as f32,
+        let level = (sigma as f64 / self.frame.texel).max(1.0).log2();
+        let across = self.across_light(at, u, v, level);
+        let along = self
+            .surface
+            .as_ref()
+            .and_then(|c| c.edge_distance(&self.frame, u, v, level));
+        let edge = match (across, along) {
+            (Some(a), Some(b)) => a.max(b),
+            (a, b) => a.or(b).unwrap_or(x[7] / x[0]),
         };
+        Some(Lateral {
+            coverage: x[0] as f32,
+            edge_distance: edge as f32,
+        })
+    }
+}
+
+impl LightMaps {
+    /// δ̄ (m) of the section across the light one transport mean free path below `at`, but
+    /// not past the middle of its column (a body thinner than that spreads its light through
+    /// its whole section), between the two nearest sections; None without sections or where
+    /// they do not cover the footprint.
+    fn across_light(&self, at: [f32; 3], u: f64, v: f64, level: f64) -> Option<f64> {
         if self.sections.is_empty() {
-            return Some(projected);
+            return None;
         }
-        // The section one transport mean free path below `at`, but not past the middle of
-        // its column (a body thinner than that spreads its light through its whole section),
-        // interpolated between the two nearest.
         let (_, _, s) = self.frame.to_light(at.map(f64::from));
         let column = self.sample(u, v, 0.0);
         let half_chord = if column[0] > 0.0 {
@@ -631,18 +699,11 @@ impl LitSurface for LightMaps {
             let (da, db) = (self.sections[a].depth, self.sections[b].depth);
             ((s - da) / (db - da)).clamp(0.0, 1.0)
         };
-        let level = (sigma as f64 / self.frame.texel).max(1.0).log2();
         let read =
             |i: usize| sample_pyramid::<2>(&self.frame, &self.sections[i].levels, u, v, level);
         let (ra, rb) = (read(a), read(b));
         let mass = (1.0 - w) * ra[0] + w * rb[0];
-        if mass < 1e-4 {
-            return Some(projected);
-        }
-        Some(Lateral {
-            coverage: projected.coverage,
-            edge_distance: (((1.0 - w) * ra[1] + w * rb[1]) / mass) as f32,
-        })
+        (mass >= 1e-4).then(|| ((1.0 - w) * ra[1] + w * rb[1]) / mass)
     }
 }
 
@@ -665,6 +726,7 @@ mod tests {
             threshold: 0.025,
             sections: 0,
             section_depth: 0.0,
+            surface_section: false,
         };
         let maps = LightMaps::build(&ball, ball_bounds(&ball), sun, &o);
         let c = [0.0, 0.0, 500.0];
@@ -719,6 +781,7 @@ mod tests {
             threshold: 0.025,
             sections,
             section_depth,
+            surface_section: false,
         };
         let bounds = ball_bounds(&ball);
         let projection = LightMaps::build(&ball, bounds, sun, &options(0, 0.0));
@@ -751,6 +814,58 @@ mod tests {
             (d as f64 - disc).abs() < 0.08 * disc,
             "50 m down: {d} vs {disc}"
         );
+    }
+
+    /// The section along the lit surface: a sheet tilted 45° to the light is one wide body
+    /// (its section across the light at one depth is a band as wide as the sheet is thick
+    /// over sin 45°), and a ball seen behind another is cut off from it where the front
+    /// ball's edge hides its surface.
+    #[test]
+    fn the_surface_section_follows_a_tilted_sheet_and_cuts_hidden_lobes() {
+        let options = |sections, surface_section| MapOptions {
+            resolution: 128,
+            planes: 64,
+            step: 1.0,
+            threshold: 0.025,
+            sections,
+            section_depth: 140.0,
+            surface_section,
+        };
+        let blob = |center, radii| Ellipsoid { center, radii };
+        let cloud = |blobs| Cloud::new(blobs, 2.0, (0.0, 0.01, 1), 0.05, 1);
+        let sheet = cloud(vec![blob([0.0, 0.0, 500.0], [600.0, 600.0, 60.0])]);
+        let sun = normalize([0.0, -1.0, 1.0]);
+        let bounds = ball_bounds(&sheet);
+        let across = LightMaps::build(&sheet, bounds, sun, &options(32, false));
+        let along = LightMaps::build(&sheet, bounds, sun, &options(0, true));
+        let projection = LightMaps::build(&sheet, bounds, sun, &options(0, false));
+        let top = [0.0f32, 0.0, 560.0];
+        let read = |m: &LightMaps| m.lateral(top, 0.0).expect("covered").edge_distance as f64;
+        let (a, b, p) = (read(&across), read(&along), read(&projection));
+        let band = 120.0 / 0.5f64.sqrt();
+        assert!(a < 0.6 * band, "across the light: {a} m, band {band} m");
+        assert!(
+            b > 0.9 * p && b > 3.0 * a,
+            "along the surface: {b} m, projection {p} m"
+        );
+
+        // Two balls along the light, the back one shifted aside by 1.2 radii: near the
+        // front ball's edge the back one's surface lies ~r below the front one's.
+        let r = 200.0;
+        let sun = [0.0, 0.0, 1.0];
+        let pair = cloud(vec![
+            blob([0.0, 0.0, 900.0], [r; 3]),
+            blob([1.2 * r, 0.0, 300.0], [r; 3]),
+        ]);
+        let bounds = ball_bounds(&pair);
+        let along = LightMaps::build(&pair, bounds, sun, &options(0, true));
+        let projection = LightMaps::build(&pair, bounds, sun, &options(0, false));
+        // On the back ball, just beside the front ball's edge.
+        let at = [(1.0 * r + 30.0) as f32, 0.0, 480.0];
+        let b = along.lateral(at, 0.0).expect("covered").edge_distance as f64;
+        let p = projection.lateral(at, 0.0).expect("covered").edge_distance as f64;
+        assert!(p > 100.0, "the projection merges the balls: {p} m");
+        assert!(b < 0.5 * p, "the hidden ball cut off: {b} m against {p} m");
     }
 
     /// A homogeneous ball of radius r (m) centred at (0, 0, 500), σ_t = 0.05 /m, edge 2 m.

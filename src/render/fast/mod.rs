@@ -140,6 +140,7 @@ impl FastOptions {
                 0
             },
             section_depth: transport_mfp,
+            surface_section: self.finite.leakage && self.finite.surface,
         }
     }
 
@@ -246,7 +247,7 @@ pub fn prepare<'a>(
     let side = sun_side(
         scene,
         medium.as_ref(),
-        &opts.maps(step, threshold, 1.0 / ((1.0 - g).max(1e-3) * scene.sigma_t)),
+        &opts.maps(step, threshold, transport_mfp(scene, g)),
         opts.thickness_scale,
     )?;
     let maps = t0.elapsed().as_secs_f64();
@@ -336,6 +337,11 @@ pub fn render_fast(
     Ok(prepare(scene, tables, opts)?.render(&scene.camera, progress))
 }
 
+/// ℓ* = 1/((1 − g) σ_t) (m): the transport mean free path of `scene` for mean cosine `g`.
+fn transport_mfp(scene: &Scene, g: f64) -> f64 {
+    1.0 / ((1.0 - g).max(1e-3) * scene.sigma_t)
+}
+
 /// The sun side of `scene` (default maps) and, for every `stride`-th pixel of its camera whose
 /// ray meets the cloud, the viewpoint the collector search takes: what a benchmark of the
 /// search runs on.
@@ -344,11 +350,11 @@ pub fn surface_points(scene: &Scene, stride: usize) -> Result<(SunSide, Vec<View
     let opts = FastOptions::default();
     let step = 0.5 / scene.sigma_t;
     let threshold = opts.surface_density * scene.sigma_t;
-    // The default maps hold no cross-sections, so the transport mean free path is not read.
+    let g = mean_cosine(&Phase::build_channels(&scene.phase)?);
     let side = sun_side(
         scene,
         medium.as_ref(),
-        &opts.maps(step, threshold, 0.0),
+        &opts.maps(step, threshold, transport_mfp(scene, g)),
         1.0,
     )?;
     let cam = Pinhole::new(&scene.camera);
