@@ -102,6 +102,7 @@ fn slab_comparison(
             sky: 0.0,
             group_first: &GROUPS,
             sun_lobe: SunLobe::new(sun_lobe_steps, &[phase]),
+            lights: &[],
         };
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(11);
         // Views going up and down, toward and away from the sun, off the horizon.
@@ -226,6 +227,7 @@ fn furnace(
         sky: 1.0,
         group_first: &GROUPS,
         sun_lobe: SunLobe::OFF,
+        lights: &[],
     };
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
     let (mut sum, mut sum2, mut t_sum) = (0.0, 0.0, 0.0);
@@ -441,6 +443,7 @@ fn per_channel_phase_functions_match_monochrome_renders() {
             } else {
                 SunLobe::OFF
             },
+            lights: &[],
         }
     }
     let views = [
@@ -623,6 +626,7 @@ fn the_sun_lobe_estimator_agrees_with_plain_nee_per_order_group_on_mie() {
                 sky: 0.0,
                 group_first: &GROUPS,
                 sun_lobe,
+                lights: &[],
             };
             let (plain, lobe) = (volume(SunLobe::OFF), volume(SunLobe::new(16, phases)));
             for (v, view) in views.iter().enumerate() {

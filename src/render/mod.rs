@@ -19,6 +19,7 @@ pub mod fast;
 mod fbm;
 pub mod geometry;
 pub mod image;
+pub mod light;
 pub mod majorant;
 pub mod medium;
 pub mod output;

@@ -4,6 +4,7 @@
 //! z is up.
 
 use super::geometry::{cross, dot, Affine, Vec3};
+use super::light::Light;
 use super::medium::{Cloud, Ellipsoid, Medium, Slab, Voxels};
 use crate::phase::PhaseSpec;
 use anyhow::{bail, ensure, Context, Result};
@@ -41,6 +42,9 @@ pub struct Scene {
     /// Constant sky radiance (linear RGB, W m⁻² sr⁻¹); none by default.
     #[serde(default)]
     pub sky: [f64; 3],
+    /// Lights besides the sun and the sky (point and spot; the path tracer only).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub lights: Vec<Light>,
     /// The camera.
     pub camera: Camera,
     /// Samples (camera paths) per pixel; with a time budget, per pass.
@@ -185,6 +189,7 @@ impl Scene {
         s.validate()?;
         let n = norm(s.sun.direction);
         s.sun.direction = s.sun.direction.map(|x| x / n);
+        s.lights = s.lights.into_iter().map(Light::normalised).collect();
         Ok(s)
     }
 
@@ -213,6 +218,9 @@ impl Scene {
             self.sky.iter().all(|&e| e >= 0.0 && e.is_finite()),
             "sky must be three non-negative numbers"
         );
+        for (i, light) in self.lights.iter().enumerate() {
+            light.validate(&format!("lights[{i}]"))?;
+        }
         let c = &self.camera;
         ensure!(
             finite(&c.position) && finite(&c.look_at) && finite(&c.up),

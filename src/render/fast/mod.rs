@@ -234,6 +234,12 @@ pub fn prepare<'a>(
     opts: &FastOptions,
 ) -> Result<Prepared<'a>> {
     opts.validate()?;
+    ensure!(
+        scene.lights.is_empty(),
+        "the fast renderers take the sun and the sky only: this scene has {} point or spot \
+         light(s) (render it with --method path-tracer)",
+        scene.lights.len()
+    );
     let t_start = Instant::now();
     let medium = scene.build_medium()?;
     let phases = Phase::build_channels(&scene.phase)?;

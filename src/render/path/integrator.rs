@@ -10,7 +10,9 @@
 //!
 //!   L_n += β ϖ p(s · w) T_r(x → sun) E_sun,
 //!
-//! β the path throughput (ϖ^{n−1} without roulette); the path continues along a direction
+//! β the path throughput (ϖ^{n−1} without roulette); each point or spot light adds
+//! β ϖ p(ω · w) T_r(x → light) I(−ω) / r² (ω toward it, r its distance) at the same collision
+//! ([`crate::render::light`]); the path continues along a direction
 //! sampled from p around w (p is symmetric, so this is p(w′ · w) exactly), and an escaping path
 //! adds β L_sky to the order of its last scattering (the constant sky, if any).
 //!
@@ -33,6 +35,7 @@
 
 use super::sun_lobe::{mis_weight, History, Step, SunLobe, MAX_STEPS};
 use crate::render::geometry::{dot, normalize, Vec3};
+use crate::render::light::Light;
 use crate::render::medium::Medium;
 use nephele_runtime::PhaseFunction;
 use rand::Rng;
@@ -64,6 +67,8 @@ pub struct Volume<'a> {
     pub group_first: &'a [u32],
     /// The sun-lobe walks launched at every collision (`SunLobe::OFF`: plain NEE).
     pub sun_lobe: SunLobe,
+    /// Point and spot lights, each seen by next-event estimation at every collision.
+    pub lights: &'a [Light],
 }
 
 /// RGB.
@@ -76,6 +81,9 @@ pub struct PathSample {
     pub groups: [Rgb; MAX_GROUPS],
     /// Skylight per order group (scattered at least once), RGB.
     pub sky_groups: [Rgb; MAX_GROUPS],
+    /// The point and spot lights' light per order group, RGB (absolute: their intensities
+    /// are applied here, not when the images are gathered).
+    pub light_groups: [Rgb; MAX_GROUPS],
     /// Radiance seen without scattering (the sky through the medium).
     pub unscattered: f64,
     /// Transmittance of the camera ray through the whole medium (1 − opacity).
@@ -86,7 +94,7 @@ impl PathSample {
     /// The total radiance of channel c: the groups and the unscattered part.
     pub fn total(&self, c: usize) -> f64 {
         let sum = |g: &[Rgb; MAX_GROUPS]| g.iter().map(|v| v[c]).sum::<f64>();
-        self.unscattered + sum(&self.groups) + sum(&self.sky_groups)
+        self.unscattered + sum(&self.groups) + sum(&self.sky_groups) + sum(&self.light_groups)
     }
 }
 
@@ -159,9 +167,25 @@ pub fn transmittance_roulette<R: Rng>(
     floor: f64,
     rng: &mut R,
 ) -> f64 {
-    let Some(segment) = m.clip(o, w) else {
+    transmittance_within(m, o, w, f64::INFINITY, floor, rng)
+}
+
+/// `transmittance_roulette` over the first `distance` (m) of the ray only: toward a light.
+pub fn transmittance_within<R: Rng>(
+    m: &dyn Medium,
+    o: Vec3,
+    w: Vec3,
+    distance: f64,
+    floor: f64,
+    rng: &mut R,
+) -> f64 {
+    let Some((a, b)) = m.clip(o, w) else {
         return 1.0;
     };
+    if a >= distance {
+        return 1.0;
+    }
+    let segment = (a, b.min(distance));
     let mut tr = 1.0;
     let mut flight = Flight::new(rng);
     let roulette = |tr: &mut f64, rng: &mut R| {
@@ -235,6 +259,9 @@ pub fn trace<R: Rng>(v: &Volume, o: Vec3, w: Vec3, rng: &mut R) -> PathSample {
         };
         let tr = v.to_sun(x, &beta, v.mean(p_sun) * mis, rng);
         let g = v.group(order);
+        for light in v.lights {
+            v.to_light(light, x, w, &beta, &mut out.light_groups[g], rng);
+        }
         for k in 0..3 {
             out.groups[g][k] += beta[k] * v.albedo * p_sun[k] * tr * v.sun_irradiance * mis;
             beta[k] *= v.albedo;
@@ -321,6 +348,30 @@ impl Volume<'_> {
             0.0
         };
         transmittance_roulette(self.medium, x, self.sun_dir, floor, rng)
+    }
+
+    /// Next-event estimation of `light` at the collision x reached along w, throughput β
+    /// (before this collision's albedo): β ϖ p(ω · w) T_r(x → light) I(−ω) / r² into `out`,
+    /// ω toward the light at distance r.
+    fn to_light<R: Rng>(
+        &self,
+        light: &Light,
+        x: Vec3,
+        w: Vec3,
+        beta: &Rgb,
+        out: &mut Rgb,
+        rng: &mut R,
+    ) {
+        let Some(i) = light.toward(x) else {
+            return;
+        };
+        let p = self.eval(dot(i.toward, w));
+        // No roulette: a light's scale is absolute, so the sun's relative floor does not apply.
+        let tr = transmittance_within(self.medium, x, i.toward, i.distance, 0.0, rng);
+        for k in 0..3 {
+            out[k] +=
+                beta[k] * self.albedo * p[k] * tr * i.intensity[k] / (i.distance * i.distance);
+        }
     }
 
     /// The order group of scattering order n.

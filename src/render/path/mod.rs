@@ -29,10 +29,17 @@ fn pixel_seed(seed: u64, i: u64) -> u64 {
 }
 
 /// Per-pixel sums of one half of the samples (the even or the odd ones): [sun group g
-/// channel c] at g·3 + c, [sky group g channel c] after those, then the transmittance; a
-/// pixel holds the two halves one after the other.
+/// channel c] at g·3 + c, [sky group g channel c] after those, then the point and spot
+/// lights' [group g channel c], then the transmittance; a pixel holds the two halves one after
+/// the other.
 fn stride() -> usize {
-    2 * GROUP_FIRST.len() * 3 + 1
+    3 * GROUP_FIRST.len() * 3 + 1
+}
+
+/// The light of group g, channel c in one half's sums: the sun's and the sky's scaled by the
+/// scene's irradiance and radiance, the lights' as they are.
+fn light_of(part: &[f64], ng: usize, g: usize, c: usize, sun: &[f64; 3], sky: &[f64; 3]) -> f64 {
+    part[g * 3 + c] * sun[c] + part[(ng + g) * 3 + c] * sky[c] + part[(2 * ng + g) * 3 + c]
 }
 
 /// What a render has done so far, for a progress display.
@@ -112,6 +119,7 @@ pub fn render_reporting(scene: &Scene, progress: &(dyn Fn(&Progress) + Sync)) ->
                                 for c in 0..3 {
                                     px[g * 3 + c] += p.groups[g][c];
                                     px[(ng + g) * 3 + c] += p.sky_groups[g][c];
+                                    px[(2 * ng + g) * 3 + c] += p.light_groups[g][c];
                                 }
                             }
                             px[stride - 1] += p.transmittance;
@@ -159,9 +167,7 @@ fn noise_so_far(scene: &Scene, sums: &[f64], spp: u32) -> Option<f64> {
         for c in 0..3 {
             let half = |k: usize| {
                 let part = &both[k * stride..(k + 1) * stride];
-                let light: f64 = (0..ng)
-                    .map(|g| part[g * 3 + c] * sun[c] + part[(ng + g) * 3 + c] * sky[c])
-                    .sum();
+                let light: f64 = (0..ng).map(|g| light_of(part, ng, g, c, &sun, &sky)).sum();
                 light / counts[k]
             };
             let (a, b) = (half(0), half(1));
@@ -176,7 +182,7 @@ fn noise_so_far(scene: &Scene, sums: &[f64], spp: u32) -> Option<f64> {
 /// The estimator's view of `scene` (medium and phase functions built): the sun's irradiance
 /// and the sky's radiance are 1 here and applied per channel when the images are gathered.
 pub fn volume<'a>(
-    scene: &Scene,
+    scene: &'a Scene,
     medium: &'a dyn Medium,
     phases: &'a [&'a (dyn PhaseFunction<f64> + Sync)],
 ) -> Volume<'a> {
@@ -190,6 +196,7 @@ pub fn volume<'a>(
         sky: if has_sky { 1.0 } else { 0.0 },
         group_first: &GROUP_FIRST,
         sun_lobe: SunLobe::new(scene.sun_lobe_steps, phases),
+        lights: &scene.lights,
     }
 }
 
@@ -216,8 +223,7 @@ fn gather(scene: &Scene, cam: &Pinhole, sums: &[f64], spp: u32, seconds: f64) ->
         for (half, part) in [a, b].into_iter().enumerate() {
             for g in 0..ng {
                 for c in 0..3 {
-                    let v = (part[g * 3 + c] * sun[c] + part[(ng + g) * 3 + c] * sky[c])
-                        / counts[half].max(1.0);
+                    let v = light_of(part, ng, g, c, &sun, &sky) / counts[half].max(1.0);
                     out.halves[((half * ng + g) * h * w + px) * 3 + c] = v as f32;
                 }
             }
@@ -229,7 +235,7 @@ fn gather(scene: &Scene, cam: &Pinhole, sums: &[f64], spp: u32, seconds: f64) ->
             let mut total = tr * sky[c];
             out.unscattered[px * 3 + c] = total as f32;
             for g in 0..ng {
-                let v = (s[g * 3 + c] * sun[c] + s[(ng + g) * 3 + c] * sky[c]) / n;
+                let v = light_of(&s, ng, g, c, &sun, &sky) / n;
                 out.groups[(g * h * w + px) * 3 + c] = v as f32;
                 total += v;
             }
