@@ -72,21 +72,30 @@ impl InverseGuess {
             *n = node(k as f64 / GUESS_START as f64);
         }
         // Halve the intervals whose guess misses the inverse at their middle, pass by pass
-        // (from the start each pass, so the table does not depend on any order but ξ's).
+        // (from the start each pass, so the table does not depend on any order but ξ's); an
+        // interval that passed keeps its ends, so it is not checked again.
+        let mut settled = [false; GUESS_NODES];
         loop {
             let mut split = false;
             let mut k = 0;
             while k + 1 < count && count < GUESS_NODES {
+                if settled[k] {
+                    k += 1;
+                    continue;
+                }
                 let (a, b) = (nodes[k], nodes[k + 1]);
                 let middle = node(0.5 * (a[0] + b[0]));
                 let miss = (hermite(&a, &b, middle[0]) - middle[1]).abs();
                 if miss > GUESS_TOLERANCE * middle[2].min(1.0) {
                     nodes.copy_within(k + 1..count, k + 2);
+                    settled.copy_within(k + 1..count, k + 2);
                     nodes[k + 1] = middle;
+                    settled[k + 1] = false;
                     count += 1;
                     split = true;
                     k += 2;
                 } else {
+                    settled[k] = true;
                     k += 1;
                 }
             }
