@@ -22,6 +22,7 @@ CHECKS=(
     check_slab.py
     check_transport.py
     check_render_mitsuba.py
+    check_fog_mitsuba.py
 )
 
 BUILD=1

@@ -103,6 +103,7 @@ fn slab_comparison(
             group_first: &GROUPS,
             sun_lobe: SunLobe::new(sun_lobe_steps, &[phase]),
             lights: &[],
+            surfaces: &[],
         };
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(11);
         // Views going up and down, toward and away from the sun, off the horizon.
@@ -228,6 +229,7 @@ fn furnace(
         group_first: &GROUPS,
         sun_lobe: SunLobe::OFF,
         lights: &[],
+        surfaces: &[],
     };
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
     let (mut sum, mut sum2, mut t_sum) = (0.0, 0.0, 0.0);
@@ -444,6 +446,7 @@ fn per_channel_phase_functions_match_monochrome_renders() {
                 SunLobe::OFF
             },
             lights: &[],
+            surfaces: &[],
         }
     }
     let views = [
@@ -627,6 +630,7 @@ fn the_sun_lobe_estimator_agrees_with_plain_nee_per_order_group_on_mie() {
                 group_first: &GROUPS,
                 sun_lobe,
                 lights: &[],
+                surfaces: &[],
             };
             let (plain, lobe) = (volume(SunLobe::OFF), volume(SunLobe::new(16, phases)));
             for (v, view) in views.iter().enumerate() {

@@ -117,22 +117,6 @@ fn a_spot_light_lights_only_its_cone_with_mitsubas_falloff() {
 }
 
 #[test]
-fn the_fast_renderers_refuse_lights() {
-    let s = scene(r#"{"kind": "point", "position": [0, 0, 50], "intensity": [1, 1, 1]}"#);
-    let tables = nephele_runtime::embedded::mie_10um();
-    let e = nephele::render::fast::render_fast(
-        &s,
-        &tables,
-        &nephele::render::fast::FastOptions::default(),
-        &|_| {},
-    )
-    .err()
-    .expect("refused")
-    .to_string();
-    assert!(e.contains("point or spot"), "{e}");
-}
-
-#[test]
 fn a_bad_light_is_refused_with_its_name() {
     let e = parse(
         r#"{"kind": "point", "position": [0, 0, 1], "intensity": [1, 1, 1]},

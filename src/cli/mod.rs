@@ -59,7 +59,7 @@ enum Command {
     /// Evaluate compressed transport tables (transport.ntt) at one point: T per order group, as JSON.
     #[command(allow_negative_numbers = true)]
     Transport(transport::TransportArgs),
-    /// Render a scene (slab, cloud, voxels) with the path tracer or a fast method (collector, single, octaves): image and per-order AOVs.
+    /// Render a scene (slab, cloud, voxels, fog; lights and a ground for the path tracer) with the path tracer or a fast method (collector, single, octaves): image and per-order AOVs.
     #[command(allow_negative_numbers = true)]
     Render(render::RenderArgs),
     /// Compare renders with a path-traced reference per order group, beside its noise (report.json, figures).

@@ -399,6 +399,72 @@ impl Medium for Voxels {
     }
 }
 
+/// Fog filling a box [lo, hi] (m): homogeneous, or thinning with height as
+///
+///   σ_t(z) = σ_t · exp(−(z − lo_z) / H)   (H the scale height, m; σ_t at the box's floor),
+///
+/// the exponential height fog of real-time engines. The box bounds it so that free flights and
+/// shadow rays end; make it as large as the scene (a "global" fog). The majorants are a
+/// column of horizontal layers each at most H/8 thick, bounded exactly by the density at
+/// their floor and ceiling (σ̄/σ ≤ e^{1/8}: 12 % of tentative collisions are null at most);
+/// without a falloff the one layer is homogeneous (closed-form transmittance).
+pub struct Fog {
+    lo: Vec3,
+    hi: Vec3,
+    sigma_t: f64,
+    scale_height: Option<f64>,
+    grid: MajorantGrid,
+}
+
+/// The most horizontal layers of a fog's majorant column.
+const FOG_LAYERS: usize = 4096;
+
+impl Fog {
+    /// Fog of extinction `sigma_t` (1/m, at the floor) over [lo, hi] (m), thinning with the
+    /// scale height `scale_height` (m) if given.
+    pub fn new(lo: Vec3, hi: Vec3, sigma_t: f64, scale_height: Option<f64>) -> Self {
+        let layers = scale_height.map_or(1, |h| {
+            ((8.0 * (hi[2] - lo[2]) / h).ceil() as usize).clamp(1, FOG_LAYERS)
+        });
+        let density = |z: f64| scale_height.map_or(1.0, |h| (-(z - lo[2]) / h).exp());
+        let grid = MajorantGrid::build(lo, hi, [1, 1, layers], |a, b| Bounds {
+            min: sigma_t * density(b[2]),
+            max: sigma_t * density(a[2]),
+        });
+        Self {
+            lo,
+            hi,
+            sigma_t,
+            scale_height,
+            grid,
+        }
+    }
+}
+
+impl Medium for Fog {
+    fn sigma_t(&self, p: Vec3) -> f64 {
+        if (0..3).any(|k| p[k] < self.lo[k] || p[k] > self.hi[k]) {
+            return 0.0;
+        }
+        self.sigma_t
+            * self
+                .scale_height
+                .map_or(1.0, |h| (-(p[2] - self.lo[2]) / h).exp())
+    }
+
+    fn clip(&self, o: Vec3, w: Vec3) -> Option<(f64, f64)> {
+        box_clip(o, w, self.lo, self.hi)
+    }
+
+    fn majorants(&self) -> Majorants<'_> {
+        Majorants::Grid(&self.grid)
+    }
+
+    fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        Some((self.lo, self.hi))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

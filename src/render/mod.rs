@@ -26,3 +26,4 @@ pub mod output;
 pub mod path;
 pub mod regions;
 pub mod scene;
+pub mod surface;

@@ -1,11 +1,12 @@
 //! Scenes of the path tracer (JSON; examples in fit-configs/scenes/): a medium (homogeneous slab,
-//! implicit cloud or voxel grid), its extinction scale, albedo and phase function, a directional sun, an
+//! implicit cloud, voxel grid or fog in a box), its extinction scale, albedo and phase function, a directional sun, an
 //! optional constant sky, a pinhole camera, samples per pixel and a seed. World units are metres,
 //! z is up.
 
 use super::geometry::{cross, dot, Affine, Vec3};
 use super::light::Light;
-use super::medium::{Cloud, Ellipsoid, Medium, Slab, Voxels};
+use super::medium::{Cloud, Ellipsoid, Fog, Medium, Slab, Voxels};
+use super::surface::Surface;
 use crate::phase::PhaseSpec;
 use anyhow::{bail, ensure, Context, Result};
 use serde::{Deserialize, Serialize};
@@ -42,9 +43,13 @@ pub struct Scene {
     /// Constant sky radiance (linear RGB, W m⁻² sr⁻¹); none by default.
     #[serde(default)]
     pub sky: [f64; 3],
-    /// Lights besides the sun and the sky (point and spot; the path tracer only).
+    /// Lights besides the sun and the sky (point, spot, sphere, rectangle; the path tracer
+    /// only).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub lights: Vec<Light>,
+    /// Opaque surfaces (a diffuse ground plane; the path tracer only).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub surfaces: Vec<Surface>,
     /// The camera.
     pub camera: Camera,
     /// Samples (camera paths) per pixel; with a time budget, per pass.
@@ -105,6 +110,18 @@ pub enum MediumSpec {
         /// 4 × 4 matrix by rows (the last row 0 0 0 1), as Mitsuba's gridvolume `to_world`.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         to_world: Option<[[f64; 4]; 4]>,
+    },
+    /// Fog filling the box [min, max] (m): homogeneous, or thinning with height as
+    /// exp(−(z − min_z)/scale_height) (σ_t at the box's floor). Make the box as large as the
+    /// scene for a global fog.
+    Fog {
+        /// The box's lowest corner (m).
+        min: Vec3,
+        /// The box's highest corner (m).
+        max: Vec3,
+        /// Scale height of the density (m); none: homogeneous.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        scale_height: Option<f64>,
     },
 }
 
@@ -221,6 +238,9 @@ impl Scene {
         for (i, light) in self.lights.iter().enumerate() {
             light.validate(&format!("lights[{i}]"))?;
         }
+        for (i, surface) in self.surfaces.iter().enumerate() {
+            surface.validate(&format!("surfaces[{i}]"))?;
+        }
         let c = &self.camera;
         ensure!(
             finite(&c.position) && finite(&c.look_at) && finite(&c.up),
@@ -292,6 +312,23 @@ impl Scene {
             MediumSpec::Voxels { .. } => {
                 self.voxel_transform()?;
             }
+            MediumSpec::Fog {
+                min,
+                max,
+                scale_height,
+            } => {
+                ensure!(
+                    finite(min) && finite(max) && (0..3).all(|k| min[k] < max[k]),
+                    "medium.min and medium.max must be finite corners with min < max on every \
+                     axis (m)"
+                );
+                if let Some(h) = scale_height {
+                    ensure!(
+                        *h > 0.0 && h.is_finite(),
+                        "medium.scale_height must be a positive height (m)"
+                    );
+                }
+            }
         }
         Ok(())
     }
@@ -350,6 +387,7 @@ impl Scene {
                     .fold(0.0, f64::max),
                 (None, None) => 0.0,
             },
+            MediumSpec::Fog { min, max, .. } => (0..3).map(|k| max[k] - min[k]).fold(0.0, f64::max),
         }
     }
 
@@ -406,6 +444,11 @@ impl Scene {
                 self.sigma_t,
                 noise.seed,
             )),
+            MediumSpec::Fog {
+                min,
+                max,
+                scale_height,
+            } => Box::new(Fog::new(*min, *max, self.sigma_t, *scale_height)),
         })
     }
 }

@@ -236,9 +236,15 @@ pub fn prepare<'a>(
     opts.validate()?;
     ensure!(
         scene.lights.is_empty(),
-        "the fast renderers take the sun and the sky only: this scene has {} point or spot \
-         light(s) (render it with --method path-tracer)",
+        "the fast renderers take the sun and the sky only: this scene has {} point, spot \
+         or area light(s) (render it with --method path-tracer)",
         scene.lights.len()
+    );
+    ensure!(
+        scene.surfaces.is_empty(),
+        "the fast renderers draw a medium alone: this scene has {} surface(s) (render it with \
+         --method path-tracer)",
+        scene.surfaces.len()
     );
     let t_start = Instant::now();
     let medium = scene.build_medium()?;

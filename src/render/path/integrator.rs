@@ -10,9 +10,11 @@
 //!
 //!   L_n += β ϖ p(s · w) T_r(x → sun) E_sun,
 //!
-//! β the path throughput (ϖ^{n−1} without roulette); each point or spot light adds
-//! β ϖ p(ω · w) T_r(x → light) I(−ω) / r² (ω toward it, r its distance) at the same collision
-//! ([`crate::render::light`]); the path continues along a direction
+//! β the path throughput (ϖ^{n−1} without roulette); each light adds
+//! β ϖ p(ω · w) T_r(x → light) I(−ω) / r² (ω toward it, r its distance; for an area light one
+//! sampled point of it, I = L_e r²/q) at the same collision ([`crate::render::light`]); surfaces ([`crate::render::surface`]) end free flights and
+//! block shadow rays, and at a surface vertex the path scores β (ρ/π) cos θ T_r E for the sun
+//! and each light, then continues along a cosine-distributed direction with β ← β ρ; the path continues along a direction
 //! sampled from p around w (p is symmetric, so this is p(w′ · w) exactly), and an escaping path
 //! adds β L_sky to the order of its last scattering (the constant sky, if any).
 //!
@@ -37,6 +39,7 @@ use super::sun_lobe::{mis_weight, History, Step, SunLobe, MAX_STEPS};
 use crate::render::geometry::{dot, normalize, Vec3};
 use crate::render::light::Light;
 use crate::render::medium::Medium;
+use crate::render::surface::{self, Hit, Surface};
 use nephele_runtime::PhaseFunction;
 use rand::Rng;
 use std::f64::consts::PI;
@@ -67,8 +70,10 @@ pub struct Volume<'a> {
     pub group_first: &'a [u32],
     /// The sun-lobe walks launched at every collision (`SunLobe::OFF`: plain NEE).
     pub sun_lobe: SunLobe,
-    /// Point and spot lights, each seen by next-event estimation at every collision.
+    /// Point, spot and area lights, each seen by next-event estimation at every collision.
     pub lights: &'a [Light],
+    /// Opaque surfaces: they end free flights and block shadow rays.
+    pub surfaces: &'a [Surface],
 }
 
 /// RGB.
@@ -81,7 +86,7 @@ pub struct PathSample {
     pub groups: [Rgb; MAX_GROUPS],
     /// Skylight per order group (scattered at least once), RGB.
     pub sky_groups: [Rgb; MAX_GROUPS],
-    /// The point and spot lights' light per order group, RGB (absolute: their intensities
+    /// The lights' light per order group, RGB (absolute: their intensities
     /// are applied here, not when the images are gathered).
     pub light_groups: [Rgb; MAX_GROUPS],
     /// Radiance seen without scattering (the sky through the medium).
@@ -135,7 +140,22 @@ impl Flight {
 
 /// The next real collision along o + t w by delta tracking, or None if the ray leaves.
 pub fn collide<R: Rng>(m: &dyn Medium, o: Vec3, w: Vec3, rng: &mut R) -> Option<Vec3> {
-    let segment = m.clip(o, w)?;
+    collide_before(m, o, w, f64::INFINITY, rng)
+}
+
+/// `collide` within the first `reach` (m) of the ray: before a surface.
+pub fn collide_before<R: Rng>(
+    m: &dyn Medium,
+    o: Vec3,
+    w: Vec3,
+    reach: f64,
+    rng: &mut R,
+) -> Option<Vec3> {
+    let (a, b) = m.clip(o, w)?;
+    if a >= reach {
+        return None;
+    }
+    let segment = (a, b.min(reach));
     let mut flight = Flight::new(rng);
     m.majorants().walk(o, w, segment, |a, b, bounds| {
         let mut t = a;
@@ -228,18 +248,50 @@ fn group_of(first: &[u32], n: u32) -> usize {
 
 /// One camera path from `o` along the unit vector `w`.
 pub fn trace<R: Rng>(v: &Volume, o: Vec3, w: Vec3, rng: &mut R) -> PathSample {
+    let seen = v.hit(o, w);
+    let reach = seen.map_or(f64::INFINITY, |h| h.t);
     let mut out = PathSample {
-        transmittance: transmittance(v.medium, o, w, rng),
+        transmittance: transmittance_within(v.medium, o, w, reach, 0.0, rng),
         ..PathSample::default()
     };
-    out.unscattered = out.transmittance * v.sky;
+    // A surface in view hides the sky behind it.
+    out.unscattered = if seen.is_none() {
+        out.transmittance * v.sky
+    } else {
+        0.0
+    };
     let (mut o, mut w) = (o, w);
     let mut beta = [1.0; 3];
     let mut order = 0u32;
     let mut history = History::default();
     // p̄ of the direction the path arrived along, when it was sampled at a collision.
     let mut arrival_pdf = None;
-    while let Some(x) = collide(v.medium, o, w, rng) {
+    // The order of the last surface vertex: the sun-lobe walks' MIS windows start after it
+    // (a walk ends at a surface, so no walk can make a path through one).
+    let mut base = 0u32;
+    loop {
+        let hit = v.hit(o, w);
+        let reach = hit.map_or(f64::INFINITY, |h| h.t);
+        let Some(x) = collide_before(v.medium, o, w, reach, rng) else {
+            let Some(h) = hit else {
+                break;
+            };
+            order += 1;
+            let x = at(o, w, h.t);
+            v.surface_nee(x, &h, &beta, order, &mut out, rng);
+            for (b, r) in beta.iter_mut().zip(h.reflectance) {
+                *b *= r;
+            }
+            if !surface_roulette(&mut beta, rng) {
+                return out;
+            }
+            (history, arrival_pdf, base) = (History::default(), None, order);
+            (o, w) = (
+                x,
+                surface::sample_cosine(h.normal, rng.random(), rng.random()),
+            );
+            continue;
+        };
         order += 1;
         let p_sun = v.eval(dot(v.sun_dir, w));
         let mis = match arrival_pdf {
@@ -249,7 +301,7 @@ pub fn trace<R: Rng>(v: &Volume, o: Vec3, w: Vec3, rng: &mut R) -> PathSample {
                     b: v.mean(p_sun),
                 });
                 let mut window = [Step::default(); MAX_STEPS];
-                let l = v.window(order);
+                let l = v.window(order - base);
                 history.last(l, &mut window);
                 mis_weight(&window[..l], 0, order, v.sun_lobe.threshold, |m| {
                     v.survival(m)
@@ -274,7 +326,7 @@ pub fn trace<R: Rng>(v: &Volume, o: Vec3, w: Vec3, rng: &mut R) -> PathSample {
             beta = beta.map(|b| b / q);
         }
         if v.sun_lobe.steps > 0 {
-            v.sun_lobe_walk(x, w, order, &beta, &history, &mut out, rng);
+            v.sun_lobe_walk(x, w, (base, order), &beta, &history, &mut out, rng);
         }
         let (w_new, pdf) = v.scatter(w, &mut beta, rng);
         arrival_pdf = Some(pdf);
@@ -289,7 +341,69 @@ pub fn trace<R: Rng>(v: &Volume, o: Vec3, w: Vec3, rng: &mut R) -> PathSample {
     out
 }
 
+/// Roulette at a surface vertex once the throughput's largest channel falls below 10⁻³:
+/// survive with probability 0.1 (β × 10). Every strategy of a later MIS window shares this
+/// vertex, so the walks' weights need not know it. False when the path ends.
+fn surface_roulette<R: Rng>(beta: &mut Rgb, rng: &mut R) -> bool {
+    if beta.iter().copied().fold(0.0, f64::max) >= 1e-3 {
+        return true;
+    }
+    if rng.random::<f64>() < 0.1 {
+        *beta = beta.map(|b| b * 10.0);
+        true
+    } else {
+        false
+    }
+}
+
 impl Volume<'_> {
+    /// The nearest surface along o + t w.
+    fn hit(&self, o: Vec3, w: Vec3) -> Option<Hit> {
+        surface::nearest(self.surfaces, o, w, f64::INFINITY)
+    }
+
+    /// Whether no surface lies on the first `distance` (m) of o + t w.
+    fn unblocked(&self, o: Vec3, w: Vec3, distance: f64) -> bool {
+        surface::nearest(self.surfaces, o, w, distance).is_none()
+    }
+
+    /// Next-event estimation at the surface vertex x of order n (throughput β before its
+    /// reflectance): the sun, β (ρ/π) cos θ_s T_r(x → sun) E, and each light,
+    /// β (ρ/π) cos θ T_r(x → light) I / r², on the side of the normal.
+    fn surface_nee<R: Rng>(
+        &self,
+        x: Vec3,
+        h: &Hit,
+        beta: &Rgb,
+        n: u32,
+        out: &mut PathSample,
+        rng: &mut R,
+    ) {
+        let g = self.group(n);
+        let cos = dot(h.normal, self.sun_dir);
+        if cos > 0.0 && self.unblocked(x, self.sun_dir, f64::INFINITY) {
+            let tr = transmittance(self.medium, x, self.sun_dir, rng);
+            for k in 0..3 {
+                out.groups[g][k] += beta[k] * surface::brdf(h, k) * cos * tr * self.sun_irradiance;
+            }
+        }
+        for light in self.lights {
+            let Some(i) = light.sample(x, rng) else {
+                continue;
+            };
+            let cos = dot(h.normal, i.toward);
+            if !(cos > 0.0) || !self.unblocked(x, i.toward, i.distance) {
+                continue;
+            }
+            let tr = transmittance_within(self.medium, x, i.toward, i.distance, 0.0, rng);
+            let r2 = i.distance * i.distance;
+            for k in 0..3 {
+                out.light_groups[g][k] +=
+                    beta[k] * surface::brdf(h, k) * cos * tr * i.intensity[k] / r2;
+            }
+        }
+    }
+
     /// p(cos) per channel (1/sr).
     fn eval(&self, cos: f64) -> Rgb {
         match self.phases {
@@ -347,6 +461,9 @@ impl Volume<'_> {
         } else {
             0.0
         };
+        if !self.unblocked(x, self.sun_dir, f64::INFINITY) {
+            return 0.0;
+        }
         transmittance_roulette(self.medium, x, self.sun_dir, floor, rng)
     }
 
@@ -362,9 +479,12 @@ impl Volume<'_> {
         out: &mut Rgb,
         rng: &mut R,
     ) {
-        let Some(i) = light.toward(x) else {
+        let Some(i) = light.sample(x, rng) else {
             return;
         };
+        if !self.unblocked(x, i.toward, i.distance) {
+            return;
+        }
         let p = self.eval(dot(i.toward, w));
         // No roulette: a light's scale is absolute, so the sun's relative floor does not apply.
         let tr = transmittance_within(self.medium, x, i.toward, i.distance, 0.0, rng);
@@ -402,13 +522,14 @@ impl Volume<'_> {
     /// The sun-lobe walk launched at the collision x of order m, reached along w (β after this
     /// collision's albedo and roulette): the first direction around the sun, the next ones
     /// around the previous while they stay in the lobe, at most K; the i-th collision scores
-    /// order m + i with its MIS weight (module `sun_lobe`).
+    /// order m + i with its MIS weight (module `sun_lobe`), over the directions since the last
+    /// surface vertex (of order `base`, 0 if none). A surface ends the walk.
     #[allow(clippy::too_many_arguments)]
     fn sun_lobe_walk<R: Rng>(
         &self,
         x: Vec3,
         w: Vec3,
-        m: u32,
+        (base, m): (u32, u32),
         beta: &Rgb,
         history: &History,
         out: &mut PathSample,
@@ -431,11 +552,13 @@ impl Volume<'_> {
             for k in 0..3 {
                 throughput[k] *= p_a[k] / density;
             }
-            let Some(x2) = collide(self.medium, pos, d, rng) else {
+            // A surface ends the walk: its collisions are the medium's only.
+            let reach = self.hit(pos, d).map_or(f64::INFINITY, |h| h.t);
+            let Some(x2) = collide_before(self.medium, pos, d, reach, rng) else {
                 return;
             };
             let n = m + i as u32;
-            let l = self.window(n);
+            let l = self.window(n - base);
             history.last(l - i, &mut window);
             window[l - i..l].copy_from_slice(&walk[..i]);
             let tau = self.sun_lobe.threshold;

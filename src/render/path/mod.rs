@@ -197,6 +197,7 @@ pub fn volume<'a>(
         group_first: &GROUP_FIRST,
         sun_lobe: SunLobe::new(scene.sun_lobe_steps, phases),
         lights: &scene.lights,
+        surfaces: &scene.surfaces,
     }
 }
 
