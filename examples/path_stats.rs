@@ -41,12 +41,13 @@ fn main() -> anyhow::Result<()> {
     let steps = scene.sun_lobe_steps;
     let n: usize = args[3].parse()?;
     let medium = scene.build_medium()?;
+    let surfaces = nephele::render::surface::Surfaces::build(&scene.surfaces)?;
     let models = Phase::build_channels(&scene.phase)?;
     Phase::with_all(&models, |phases| {
         // Sunlight only: the sky's share would blur where the variance comes from.
         let volume = Volume {
             sky: 0.0,
-            ..volume(&scene, medium.as_ref(), phases)
+            ..volume(&scene, medium.as_ref(), &surfaces, phases)
         };
         let cam = &scene.camera;
         let dir = normalize(std::array::from_fn(|k| cam.look_at[k] - cam.position[k]));

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Cross-check of the path tracer's fog scenes (seed 004) against Mitsuba 3 (scalar_rgb, volpath).
 
-Three scenes, each built the same way in both renderers:
+Four scenes, each built the same way in both renderers:
 
   1. spot beam: a box of homogeneous fog (HG phase) with a spot light above it pointing down
      (Mitsuba's spot falloff: full to the beam width, linear in the angle to the cutoff), no
@@ -11,7 +11,10 @@ Three scenes, each built the same way in both renderers:
      the fog and by the sun (fog shadows on the ground, light reflected into the fog);
   3. area lights: scene 2's fog and ground lit by a rectangle panel above the fog facing down
      and a sphere of light inside it (Mitsuba's area emitters on null-BSDF shapes, rendered
-     with hide_emitters: transparent and unseen by camera rays, as nephele's).
+     with hide_emitters: transparent and unseen by camera rays, as nephele's);
+  4. fog in a mesh: a torus of fog (a closed, non-convex OBJ: nephele's fog `mesh`, Mitsuba's
+     obj shape with a null BSDF and an interior medium) beside a diffuse box (an OBJ surface,
+     flat-shaded) on the ground, lit by a point light and the sun.
 
 Each renderer renders K independent seeds; the statistics are check_render_mitsuba.py's:
 image means within 3 combined SE, 4x4-pixel blocks with no |z| > 5 and mean z^2 < 2, and the
@@ -77,6 +80,47 @@ def area_lights() -> dict:
     return sc
 
 
+def torus_obj(centre, major: float, minor: float, nu: int = 48, nv: int = 24) -> str:
+    """A closed torus about the vertical through `centre`, quads counter-clockwise from outside
+    (d/du x d/dv points outward)."""
+    lines = []
+    for i in range(nu):
+        u = 2 * np.pi * i / nu
+        for j in range(nv):
+            v = 2 * np.pi * j / nv
+            rr = major + minor * np.cos(v)
+            p = (centre[0] + rr * np.cos(u), centre[1] + rr * np.sin(u), centre[2] + minor * np.sin(v))
+            lines.append("v " + " ".join(repr(float(x)) for x in p))
+    idx = lambda i, j: (i % nu) * nv + (j % nv) + 1  # noqa: E731
+    for i in range(nu):
+        for j in range(nv):
+            lines.append(f"f {idx(i, j)} {idx(i + 1, j)} {idx(i + 1, j + 1)} {idx(i, j + 1)}")
+    return "\n".join(lines) + "\n"
+
+
+def box_obj(lo, hi) -> str:
+    """An axis-aligned box, faces counter-clockwise from outside."""
+    corner = lambda i: [hi[k] if (i >> k) & 1 else lo[k] for k in range(3)]  # noqa: E731
+    lines = ["v " + " ".join(repr(float(x)) for x in corner(i)) for i in range(8)]
+    for q in [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]:
+        lines.append("f " + " ".join(str(i + 1) for i in q))
+    return "\n".join(lines) + "\n"
+
+
+def mesh_fog() -> dict:
+    """Scene 4 in a renderer-neutral form: fog in a torus (a non-convex mesh) beside a diffuse
+    block (a mesh surface) on the ground, lit by a point light and the sun."""
+    sc = fog_over_ground()
+    sc.update({
+        "sigma_t": 0.8, "albedo": 0.9, "g": 0.5, "box": None,
+        "fog_mesh": torus_obj([0.0, 0.0, 1.2], 1.5, 0.6),
+        "blocks": [(box_obj([1.8, -1.6, 0.0], [2.6, -0.8, 1.4]), [0.7, 0.6, 0.5])],
+        "lights": [{"kind": "point", "position": [-1.0, -1.0, 3.5],
+                    "intensity": [15.0, 15.0, 15.0]}],
+    })
+    return sc
+
+
 def mitsuba_light(light: dict, T, rgb) -> dict:
     """One light of a neutral scene as a Mitsuba 3 emitter (area lights on null-BSDF shapes:
     transparent, as nephele's)."""
@@ -106,16 +150,27 @@ def mitsuba_light(light: dict, T, rgb) -> dict:
 
 def render_nephele(bin_path: Path, tmp: Path, sc: dict, w: int, h: int, spp: int,
                    seed: int) -> tuple[np.ndarray, float, int]:
-    lo, hi = sc["box"]
+    if sc.get("fog_mesh"):
+        (tmp / "fog.obj").write_text(sc["fog_mesh"])
+        medium = {"kind": "fog", "mesh": str(tmp / "fog.obj")}
+    else:
+        lo, hi = sc["box"]
+        medium = {"kind": "fog", "min": lo, "max": hi}
     scene = {
-        "medium": {"kind": "fog", "min": lo, "max": hi},
+        "medium": medium,
         "sigma_t": sc["sigma_t"], "albedo": sc["albedo"], "phase": {"kind": "hg", "g": sc["g"]},
         "sun": sc["sun"] or {"direction": [0.0, 0.0, 1.0], "irradiance": [0.0, 0.0, 0.0]},
         "lights": sc["lights"],
         "camera": dict(sc["camera"], width=w, height=h), "spp": spp, "seed": seed,
     }
+    surfaces = []
     if sc["ground"] is not None:
-        scene["surfaces"] = [{"kind": "ground", "height": 0.0, "reflectance": sc["ground"]}]
+        surfaces.append({"kind": "ground", "height": 0.0, "reflectance": sc["ground"]})
+    for i, (obj, rho) in enumerate(sc.get("blocks", [])):
+        (tmp / f"block{i}.obj").write_text(obj)
+        surfaces.append({"kind": "mesh", "obj": str(tmp / f"block{i}.obj"), "reflectance": rho})
+    if surfaces:
+        scene["surfaces"] = surfaces
     path = tmp / "scene.json"
     path.write_text(json.dumps(scene))
     out = tmp / f"nephele-{seed}"
@@ -125,11 +180,11 @@ def render_nephele(bin_path: Path, tmp: Path, sc: dict, w: int, h: int, spp: int
     return np.load(out / "beauty.npy").astype(np.float64), doc["seconds"], doc["paths"]
 
 
-def render_mitsuba(sc: dict, w: int, h: int, spp: int, seed: int) -> tuple[np.ndarray, float]:
+def render_mitsuba(sc: dict, w: int, h: int, spp: int, seed: int,
+                   tmp: Path) -> tuple[np.ndarray, float]:
     import mitsuba as mi
     mi.set_variant("scalar_rgb")
     T = mi.ScalarTransform4f
-    lo, hi = (np.array(v) for v in sc["box"])
     cam = sc["camera"]
     rgb = lambda v: {"type": "rgb", "value": list(v)}  # noqa: E731
     d = {
@@ -144,14 +199,22 @@ def render_mitsuba(sc: dict, w: int, h: int, spp: int, seed: int) -> tuple[np.nd
                      "pixel_format": "rgb"},
             "sampler": {"type": "independent", "sample_count": spp},
         },
-        "fog": {
-            "type": "cube",
-            "to_world": T().translate(((lo + hi) / 2).tolist()).scale(((hi - lo) / 2).tolist()),
-            "bsdf": {"type": "null"},
-            "interior": {"type": "homogeneous", "sigma_t": sc["sigma_t"], "albedo": sc["albedo"],
-                         "phase": {"type": "hg", "g": sc["g"]}},
-        },
     }
+    interior = {"type": "homogeneous", "sigma_t": sc["sigma_t"], "albedo": sc["albedo"],
+                "phase": {"type": "hg", "g": sc["g"]}}
+    if sc.get("fog_mesh"):
+        (tmp / "fog.obj").write_text(sc["fog_mesh"])
+        d["fog"] = {"type": "obj", "filename": str(tmp / "fog.obj"), "bsdf": {"type": "null"},
+                    "interior": interior}
+    else:
+        lo, hi = (np.array(v) for v in sc["box"])
+        d["fog"] = {"type": "cube", "bsdf": {"type": "null"}, "interior": interior,
+                    "to_world": T().translate(((lo + hi) / 2).tolist()).scale(((hi - lo) / 2).tolist())}
+    for i, (obj, rho) in enumerate(sc.get("blocks", [])):
+        (tmp / f"block{i}.obj").write_text(obj)
+        # Flat faces, as nephele's geometric normals.
+        d[f"block{i}"] = {"type": "obj", "filename": str(tmp / f"block{i}.obj"),
+                          "face_normals": True, "bsdf": {"type": "diffuse", "reflectance": rgb(rho)}}
     for i, light in enumerate(sc["lights"]):
         d[f"light{i}"] = mitsuba_light(light, T, rgb)
     if sc["sun"] is not None:
@@ -176,9 +239,9 @@ def main(argv=None) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         for name, sc in [("spot beam in fog", spot_beam()), ("fog over a ground", fog_over_ground()),
-                         ("area lights", area_lights())]:
+                         ("area lights", area_lights()), ("fog in a mesh", mesh_fog())]:
             runs_n = [render_nephele(args.bin, tmp, sc, w, h, spp, s + 1) for s in range(k)]
-            runs_m = [render_mitsuba(sc, w, h, spp, s + 1) for s in range(k)]
+            runs_m = [render_mitsuba(sc, w, h, spp, s + 1, tmp) for s in range(k)]
             failures += compare(name, runs_n, runs_m, k, w, h, spp)
     if failures:
         print("check_fog_mitsuba: FAILED: " + ", ".join(failures))

@@ -7,12 +7,16 @@ use nephele::render::majorant::{Bounds, Majorants};
 use nephele::render::medium::Slab;
 use nephele::render::path::integrator::{trace, Volume};
 use nephele::render::path::sun_lobe::SunLobe;
+use nephele::render::surface::Surfaces;
 use nephele::slab::{run_slice, SlabGrid, Slice, StopRule};
 use nephele_runtime::phase::HenyeyGreenstein;
 use nephele_runtime::PhaseFunction;
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use std::f64::consts::PI;
+
+/// Scenes without surfaces.
+static NO_SURFACES: Surfaces = Surfaces::NONE;
 
 const GROUPS: [u32; 9] = [1, 2, 3, 5, 7, 9, 13, 19, 31];
 
@@ -103,7 +107,7 @@ fn slab_comparison(
             group_first: &GROUPS,
             sun_lobe: SunLobe::new(sun_lobe_steps, &[phase]),
             lights: &[],
-            surfaces: &[],
+            surfaces: &NO_SURFACES,
         };
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(11);
         // Views going up and down, toward and away from the sun, off the horizon.
@@ -229,7 +233,7 @@ fn furnace(
         group_first: &GROUPS,
         sun_lobe: SunLobe::OFF,
         lights: &[],
-        surfaces: &[],
+        surfaces: &NO_SURFACES,
     };
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
     let (mut sum, mut sum2, mut t_sum) = (0.0, 0.0, 0.0);
@@ -446,7 +450,7 @@ fn per_channel_phase_functions_match_monochrome_renders() {
                 SunLobe::OFF
             },
             lights: &[],
-            surfaces: &[],
+            surfaces: &NO_SURFACES,
         }
     }
     let views = [
@@ -630,7 +634,7 @@ fn the_sun_lobe_estimator_agrees_with_plain_nee_per_order_group_on_mie() {
                 group_first: &GROUPS,
                 sun_lobe,
                 lights: &[],
-                surfaces: &[],
+                surfaces: &NO_SURFACES,
             };
             let (plain, lobe) = (volume(SunLobe::OFF), volume(SunLobe::new(16, phases)));
             for (v, view) in views.iter().enumerate() {

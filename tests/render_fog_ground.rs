@@ -274,6 +274,22 @@ fn bad_fog_and_surfaces_are_refused_by_name() {
         assert!(e.contains(named), "'{named}' not in: {e}");
     }
     assert!(base(fog, "").is_none());
+    // Fog in a mesh: not with a box as well, a file that must exist and be closed.
+    let both = r#"{"kind": "fog", "min": [0, 0, 0], "max": [1, 1, 1], "mesh": "x.obj"}"#;
+    assert!(base(both, "")
+        .expect("refused")
+        .contains("either min and max"));
+    let medium = |obj: &std::path::Path| mesh_fog(obj, "", 0.1).err().map(|e| format!("{e:#}"));
+    let missing = std::env::temp_dir().join("nephele-no-such-mesh.obj");
+    assert!(medium(&missing)
+        .expect("refused")
+        .contains("nephele-no-such-mesh.obj"));
+    let open = boxes_obj("open", &[([0.0; 3], [1.0; 3])]);
+    let text = std::fs::read_to_string(&open).expect("read");
+    std::fs::write(&open, text.lines().take(13).collect::<Vec<_>>().join("\n")).expect("write");
+    let e = medium(&open).expect("refused");
+    assert!(e.contains("not closed"), "{e}");
+    assert!(medium(&boxes_obj("closed", &[([0.0; 3], [1.0; 3])])).is_none());
 }
 
 /// The error of the collector renderer on `s`.
@@ -301,4 +317,131 @@ fn the_fast_renderers_refuse_lights_and_surfaces() {
     .lights;
     let e = fast_error(&s);
     assert!(e.contains("point, spot or area light"), "{e}");
+}
+
+/// An OBJ file of axis-aligned boxes [lo, hi] (faces counter-clockwise from outside), written
+/// to a fresh temporary directory; its path.
+fn boxes_obj(name: &str, boxes: &[([f64; 3], [f64; 3])]) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("nephele-mesh-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let mut text = String::from("# boxes\n");
+    for (b, (lo, hi)) in boxes.iter().enumerate() {
+        for i in 0..8 {
+            let c = |k: usize, bit: usize| if (i >> bit) & 1 == 1 { hi[k] } else { lo[k] };
+            text += &format!("v {} {} {}\n", c(0, 0), c(1, 1), c(2, 2));
+        }
+        let base = 8 * b + 1;
+        for q in [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ] {
+            text += &format!(
+                "f {} {} {} {}\n",
+                base + q[0],
+                base + q[1],
+                base + q[2],
+                base + q[3]
+            );
+        }
+    }
+    let path = dir.join(format!("{name}.obj"));
+    std::fs::write(&path, text).expect("write the OBJ");
+    path
+}
+
+/// The medium of a scene of fog (extinction `sigma`) inside the mesh `obj`, `extra` keys
+/// added to the medium.
+fn mesh_fog(obj: &std::path::Path, extra: &str, sigma: f64) -> anyhow::Result<Box<dyn Medium>> {
+    Scene::parse(&format!(
+        r#"{{"medium": {{"kind": "fog", "mesh": {:?} {extra}}}, "sigma_t": {sigma},
+            "phase": {{"kind": "hg", "g": 0.5}},
+            "sun": {{"direction": [0, 0, 1], "irradiance": [1, 1, 1]}},
+            "camera": {{"position": [0, -10, 5], "look_at": [0, 0, 0], "fov_deg": 30,
+                        "width": 4, "height": 4}}, "spp": 1}}"#,
+        obj.display().to_string()
+    ))?
+    .build_medium()
+}
+
+#[test]
+fn fog_in_a_mesh_fills_exactly_its_inside() {
+    // Two separate boxes in one OBJ (non-convex as a whole): a ray through both crosses fog
+    // over the sum of its chords, and none between them; with a falloff, as the box fog.
+    let a = ([0.0, 0.0, 0.0], [2.0, 2.0, 2.0]);
+    let b = ([3.0, 0.5, 0.5], [4.0, 1.5, 1.5]);
+    let obj = boxes_obj("two", &[a, b]);
+    let sigma: f64 = 0.4;
+    let scene = |extra: &str| mesh_fog(&obj, extra, sigma).expect("the mesh reads");
+    let fog = scene("");
+    let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(4);
+    let o = [-1.0, 1.0, 1.0];
+    let w = [1.0, 0.0, 0.0];
+    let want: f64 = (-sigma * (2.0 + 1.0f64)).exp();
+    let runs = 20_000;
+    let (mut sum, mut escaped) = (0.0, 0usize);
+    for _ in 0..runs {
+        sum += transmittance(fog.as_ref(), o, w, &mut rng);
+        escaped += usize::from(collide(fog.as_ref(), o, w, &mut rng).is_none());
+    }
+    let (mean, p) = (sum / runs as f64, escaped as f64 / runs as f64);
+    let se = (want * (1.0 - want) / runs as f64).sqrt();
+    eprintln!("two boxes: ratio tracking {mean:.5}, escapes {p:.5}, closed form {want:.5}");
+    assert!((mean - want).abs() < 4.0 * se && (p - want).abs() < 4.0 * se);
+    // Inside and outside, point by point, and the falloff from the mesh's floor.
+    assert_eq!(fog.sigma_t([2.5, 1.0, 1.0]), 0.0);
+    assert_eq!(fog.sigma_t([1.9, 0.1, 1.9]), sigma);
+    let thinning = scene(r#", "scale_height": 0.5"#);
+    let got = thinning.sigma_t([3.5, 1.0, 1.25]);
+    assert!(
+        (got - sigma * (-1.25f64 / 0.5).exp()).abs() < 1e-15,
+        "{got}"
+    );
+}
+
+#[test]
+fn a_mesh_surface_is_lit_and_casts_its_shadow() {
+    // A diffuse box 2 m tall on the ground under a sun 45° up: its top is (ρ/π) μ E, and the
+    // ground just beyond it, away from the sun, lies in its shadow.
+    let obj = boxes_obj("block", &[([-1.0, -1.0, 0.0], [1.0, 1.0, 2.0])]);
+    let view = |look_at: [f64; 3]| {
+        let mut s = Scene::parse(&format!(
+            r#"{{
+            "medium": {{"kind": "fog", "min": [1000, 1000, 0], "max": [1001, 1001, 1]}},
+            "sigma_t": 0.1, "phase": {{"kind": "hg", "g": 0}},
+            "sun": {{"direction": [0.7071067811865476, 0, 0.7071067811865476],
+                     "irradiance": [1, 1, 1]}},
+            "surfaces": [{{"kind": "ground", "height": 0, "reflectance": [0.5, 0.5, 0.5]}},
+                         {{"kind": "mesh", "obj": {:?}, "reflectance": [0.9, 0.6, 0.3]}}],
+            "camera": {{"position": [0, -0.5, 40], "look_at": {look_at:?}, "fov_deg": 0.01,
+                        "width": 2, "height": 2}},
+            "spp": 256, "seed": 2
+        }}"#,
+            obj.display().to_string()
+        ))
+        .expect("a valid scene");
+        s.sun_lobe_steps = 0;
+        render(&s, &|_| {}).expect("render")
+    };
+    let top = view([0.2, 0.1, 2.0]);
+    let want = 0.9 / PI * std::f64::consts::FRAC_1_SQRT_2;
+    let got = top.groups[0] as f64;
+    eprintln!("the block's top: {got:.6e}, closed form {want:.6e}");
+    assert!(
+        (got / want - 1.0).abs() < 1e-6,
+        "{got} vs {want} (f32 images)"
+    );
+    // Behind the block (x < −1, within 2 m of it): in its shadow, no direct sunlight (order
+    // 1), only what the lit ground sends back by way of the block's shaded face.
+    let shade = view([-2.5, 0.0, 0.0]);
+    let n = shade.width * shade.height;
+    assert!(shade.groups[..3 * n].iter().all(|&v| v == 0.0));
+    assert!(shade.beauty.iter().any(|&v| v > 0.0));
+    // Beside the sun's side of it: lit, (ρ/π) μ E.
+    let lit = view([2.5, 0.0, 0.0]);
+    let want = 0.5 / PI * std::f64::consts::FRAC_1_SQRT_2;
+    assert!((lit.groups[0] as f64 / want - 1.0).abs() < 1e-6);
 }

@@ -5,6 +5,7 @@
 use super::fbm::Fbm;
 use super::geometry::{box_clip, slab_clip, Affine, Vec3};
 use super::majorant::{Bounds, MajorantGrid, Majorants};
+use super::mesh::TriangleMesh;
 
 /// The medium as the integrator sees it.
 pub trait Medium: Sync {
@@ -399,25 +400,33 @@ impl Medium for Voxels {
     }
 }
 
-/// Fog filling a box [lo, hi] (m): homogeneous, or thinning with height as
+/// Fog filling a box [lo, hi] (m), or the inside of a closed triangle mesh: homogeneous, or
+/// thinning with height as
 ///
-///   σ_t(z) = σ_t · exp(−(z − lo_z) / H)   (H the scale height, m; σ_t at the box's floor),
+///   σ_t(z) = σ_t · exp(−(z − lo_z) / H)   (H the scale height, m; σ_t at the floor),
 ///
 /// the exponential height fog of real-time engines. The box bounds it so that free flights and
-/// shadow rays end; make it as large as the scene (a "global" fog). The majorants are a
-/// column of horizontal layers each at most H/8 thick, bounded exactly by the density at
+/// shadow rays end; make it as large as the scene (a "global" fog). In a box, the majorants
+/// are a column of horizontal layers each at most H/8 thick, bounded exactly by the density at
 /// their floor and ceiling (σ̄/σ ≤ e^{1/8}: 12 % of tentative collisions are null at most);
-/// without a falloff the one layer is homogeneous (closed-form transmittance).
+/// without a falloff the one layer is homogeneous (closed-form transmittance). In a mesh, a
+/// grid of cells over its bounds: cells the surface may pass through (a triangle's box
+/// overlaps them) are bounded by [0, σ(floor)], and σ_t there asks the mesh whether the point
+/// is inside; the others are wholly inside (bounded as the layers are) or wholly outside (0).
 pub struct Fog {
     lo: Vec3,
     hi: Vec3,
     sigma_t: f64,
     scale_height: Option<f64>,
+    mesh: Option<TriangleMesh>,
     grid: MajorantGrid,
 }
 
 /// The most horizontal layers of a fog's majorant column.
 const FOG_LAYERS: usize = 4096;
+
+/// Majorant cells along the longest side of a mesh's bounds.
+const MESH_CELLS: usize = 48;
 
 impl Fog {
     /// Fog of extinction `sigma_t` (1/m, at the floor) over [lo, hi] (m), thinning with the
@@ -426,7 +435,7 @@ impl Fog {
         let layers = scale_height.map_or(1, |h| {
             ((8.0 * (hi[2] - lo[2]) / h).ceil() as usize).clamp(1, FOG_LAYERS)
         });
-        let density = |z: f64| scale_height.map_or(1.0, |h| (-(z - lo[2]) / h).exp());
+        let density = |z: f64| Self::density(lo[2], scale_height, z);
         let grid = MajorantGrid::build(lo, hi, [1, 1, layers], |a, b| Bounds {
             min: sigma_t * density(b[2]),
             max: sigma_t * density(a[2]),
@@ -436,8 +445,42 @@ impl Fog {
             hi,
             sigma_t,
             scale_height,
+            mesh: None,
             grid,
         }
+    }
+
+    /// Fog inside the closed `mesh`, its floor the mesh's lowest point.
+    pub fn in_mesh(mesh: TriangleMesh, sigma_t: f64, scale_height: Option<f64>) -> Self {
+        let (lo, hi) = mesh.bounds();
+        let longest = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
+        let n = std::array::from_fn(|k| {
+            ((MESH_CELLS as f64 * (hi[k] - lo[k]) / longest).ceil() as usize).max(1)
+        });
+        let density = |z: f64| Self::density(lo[2], scale_height, z);
+        let grid = MajorantGrid::build(lo, hi, n, |a, b| {
+            let (min, max) = (sigma_t * density(b[2]), sigma_t * density(a[2]));
+            if mesh.touches_box(a, b) {
+                Bounds { min: 0.0, max }
+            } else if mesh.contains(std::array::from_fn(|k| 0.5 * (a[k] + b[k]))) {
+                Bounds { min, max }
+            } else {
+                Bounds { min: 0.0, max: 0.0 }
+            }
+        });
+        Self {
+            lo,
+            hi,
+            sigma_t,
+            scale_height,
+            mesh: Some(mesh),
+            grid,
+        }
+    }
+
+    /// The density (0…1) at height z over the floor z₀.
+    fn density(floor: f64, scale_height: Option<f64>, z: f64) -> f64 {
+        scale_height.map_or(1.0, |h| (-(z - floor) / h).exp())
     }
 }
 
@@ -446,10 +489,10 @@ impl Medium for Fog {
         if (0..3).any(|k| p[k] < self.lo[k] || p[k] > self.hi[k]) {
             return 0.0;
         }
-        self.sigma_t
-            * self
-                .scale_height
-                .map_or(1.0, |h| (-(p[2] - self.lo[2]) / h).exp())
+        if self.mesh.as_ref().is_some_and(|m| !m.contains(p)) {
+            return 0.0;
+        }
+        self.sigma_t * Self::density(self.lo[2], self.scale_height, p[2])
     }
 
     fn clip(&self, o: Vec3, w: Vec3) -> Option<(f64, f64)> {

@@ -22,6 +22,7 @@ pub mod image;
 pub mod light;
 pub mod majorant;
 pub mod medium;
+pub mod mesh;
 pub mod output;
 pub mod path;
 pub mod regions;

@@ -6,6 +6,7 @@
 use super::geometry::{cross, dot, Affine, Vec3};
 use super::light::Light;
 use super::medium::{Cloud, Ellipsoid, Fog, Medium, Slab, Voxels};
+use super::mesh::TriangleMesh;
 use super::surface::Surface;
 use crate::phase::PhaseSpec;
 use anyhow::{bail, ensure, Context, Result};
@@ -111,15 +112,22 @@ pub enum MediumSpec {
         #[serde(default, skip_serializing_if = "Option::is_none")]
         to_world: Option<[[f64; 4]; 4]>,
     },
-    /// Fog filling the box [min, max] (m): homogeneous, or thinning with height as
-    /// exp(−(z − min_z)/scale_height) (σ_t at the box's floor). Make the box as large as the
-    /// scene for a global fog.
+    /// Fog filling the box [min, max] (m) or a closed mesh: homogeneous, or thinning with
+    /// height as exp(−(z − floor)/scale_height) (σ_t at the floor). Make the box as large as
+    /// the scene for a global fog.
     Fog {
         /// The box's lowest corner (m).
-        min: Vec3,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        min: Option<Vec3>,
         /// The box's highest corner (m).
-        max: Vec3,
-        /// Scale height of the density (m); none: homogeneous.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        max: Option<Vec3>,
+        /// Instead of the box: a closed triangle mesh (Wavefront OBJ, m; relative paths from
+        /// the scene's directory) holding the fog.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        mesh: Option<PathBuf>,
+        /// Scale height of the density (m, from the box's or the mesh's floor); none:
+        /// homogeneous.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         scale_height: Option<f64>,
     },
@@ -192,9 +200,22 @@ impl Scene {
             .with_context(|| format!("cannot read scene '{}'", path.display()))?;
         let mut scene =
             Self::parse(&text).with_context(|| format!("scene '{}'", path.display()))?;
-        if let MediumSpec::Voxels { npy, .. } = &mut scene.medium {
-            if npy.is_relative() {
-                *npy = path.parent().unwrap_or(Path::new(".")).join(&*npy);
+        let dir = path.parent().unwrap_or(Path::new("."));
+        let from_scene = |file: &mut PathBuf| {
+            if file.is_relative() {
+                *file = dir.join(&*file);
+            }
+        };
+        match &mut scene.medium {
+            MediumSpec::Voxels { npy, .. } => from_scene(npy),
+            MediumSpec::Fog {
+                mesh: Some(obj), ..
+            } => from_scene(obj),
+            _ => {}
+        }
+        for s in &mut scene.surfaces {
+            if let Surface::Mesh { obj, .. } = s {
+                from_scene(obj);
             }
         }
         Ok(scene)
@@ -315,13 +336,18 @@ impl Scene {
             MediumSpec::Fog {
                 min,
                 max,
+                mesh,
                 scale_height,
             } => {
-                ensure!(
-                    finite(min) && finite(max) && (0..3).all(|k| min[k] < max[k]),
-                    "medium.min and medium.max must be finite corners with min < max on every \
-                     axis (m)"
-                );
+                match (min, max, mesh) {
+                    (Some(min), Some(max), None) => ensure!(
+                        finite(min) && finite(max) && (0..3).all(|k| min[k] < max[k]),
+                        "medium.min and medium.max must be finite corners with min < max on \
+                         every axis (m)"
+                    ),
+                    (None, None, Some(_)) => {}
+                    _ => bail!("medium: give either min and max (a box), or mesh, for fog"),
+                }
                 if let Some(h) = scale_height {
                     ensure!(
                         *h > 0.0 && h.is_finite(),
@@ -387,7 +413,11 @@ impl Scene {
                     .fold(0.0, f64::max),
                 (None, None) => 0.0,
             },
-            MediumSpec::Fog { min, max, .. } => (0..3).map(|k| max[k] - min[k]).fold(0.0, f64::max),
+            // A mesh's size is known once it is read: no warning from it.
+            MediumSpec::Fog { min, max, .. } => match (min, max) {
+                (Some(min), Some(max)) => (0..3).map(|k| max[k] - min[k]).fold(0.0, f64::max),
+                _ => 0.0,
+            },
         }
     }
 
@@ -447,8 +477,25 @@ impl Scene {
             MediumSpec::Fog {
                 min,
                 max,
+                mesh,
                 scale_height,
-            } => Box::new(Fog::new(*min, *max, self.sigma_t, *scale_height)),
+            } => match (min, max, mesh) {
+                (Some(min), Some(max), None) => {
+                    Box::new(Fog::new(*min, *max, self.sigma_t, *scale_height))
+                }
+                (None, None, Some(obj)) => {
+                    let mesh = TriangleMesh::load(obj)?;
+                    ensure!(
+                        mesh.open_edges() == 0,
+                        "mesh '{}' is not closed: {} edges do not belong to exactly two faces \
+                         (fog fills the inside of a closed surface)",
+                        obj.display(),
+                        mesh.open_edges()
+                    );
+                    Box::new(Fog::in_mesh(mesh, self.sigma_t, *scale_height))
+                }
+                _ => bail!("medium: give either min and max (a box), or mesh, for fog"),
+            },
         })
     }
 }

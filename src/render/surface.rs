@@ -1,17 +1,20 @@
-//! Opaque surfaces of the path tracer (docs/render.md, "Surfaces"): a ground plane with a
-//! diffuse (Lambertian) reflectance ρ, whose BRDF is ρ/π. A surface blocks light from both
-//! sides and reflects on the side a ray arrives from; its shading normal faces that side.
+//! Opaque surfaces of the path tracer (docs/render.md, "Surfaces"): a ground plane and
+//! triangle meshes read from OBJ files ([`super::mesh`]), with a diffuse (Lambertian)
+//! reflectance ρ, whose BRDF is ρ/π. A surface blocks light from both sides and reflects on
+//! the side a ray arrives from; its shading normal (the geometric one) faces that side.
 //!
 //! Its vertex counts as one scattering order in the images' order groups (an interaction, as a
 //! collision in the medium is).
 
 use super::geometry::{dot, Vec3};
+use super::mesh::TriangleMesh;
 use anyhow::{ensure, Result};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
+use std::path::PathBuf;
 
 /// One surface of a scene.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Surface {
     /// The horizontal plane z = `height` (m), infinite, diffuse.
@@ -19,6 +22,30 @@ pub enum Surface {
         /// Its height (m).
         height: f64,
         /// Diffuse reflectance ρ (linear RGB, each in [0, 1]).
+        reflectance: [f64; 3],
+    },
+    /// The triangles of a Wavefront OBJ file (m; relative paths from the scene's directory),
+    /// diffuse.
+    Mesh {
+        /// The OBJ file.
+        obj: PathBuf,
+        /// Diffuse reflectance ρ (linear RGB, each in [0, 1]).
+        reflectance: [f64; 3],
+    },
+}
+
+/// A scene's surfaces, built (meshes read): what the path tracer intersects.
+#[derive(Default)]
+pub struct Surfaces(Vec<Built>);
+
+/// One surface, built.
+enum Built {
+    Ground {
+        height: f64,
+        reflectance: [f64; 3],
+    },
+    Mesh {
+        mesh: TriangleMesh,
         reflectance: [f64; 3],
     },
 }
@@ -41,7 +68,7 @@ const SELF_HIT: f64 = 1e-9;
 impl Surface {
     /// Checks the surface's values, naming the first bad one (`at`: its place in the scene).
     pub fn validate(&self, at: &str) -> Result<()> {
-        match self {
+        let reflectance = match self {
             Surface::Ground {
                 height,
                 reflectance,
@@ -50,44 +77,89 @@ impl Surface {
                     height.is_finite(),
                     "{at}.height must be a finite height (m)"
                 );
-                ensure!(
-                    reflectance.iter().all(|r| (0.0..=1.0).contains(r)),
-                    "{at}.reflectance must be three numbers in [0, 1]"
-                );
+                reflectance
             }
-        }
+            Surface::Mesh { reflectance, .. } => reflectance,
+        };
+        ensure!(
+            reflectance.iter().all(|r| (0.0..=1.0).contains(r)),
+            "{at}.reflectance must be three numbers in [0, 1]"
+        );
         Ok(())
-    }
-
-    /// The first hit of o + t w with t in (ε, t_max).
-    fn intersect(&self, o: Vec3, w: Vec3, t_max: f64) -> Option<Hit> {
-        let eps = SELF_HIT * dot(o, o).sqrt().max(1.0);
-        match *self {
-            Surface::Ground {
-                height,
-                reflectance,
-            } => {
-                let t = (height - o[2]) / w[2];
-                (t > eps && t < t_max).then(|| Hit {
-                    t,
-                    normal: [0.0, 0.0, if w[2] < 0.0 { 1.0 } else { -1.0 }],
-                    reflectance,
-                })
-            }
-        }
     }
 }
 
-/// The nearest hit of o + t w among `surfaces`, t in (ε, t_max).
-pub fn nearest(surfaces: &[Surface], o: Vec3, w: Vec3, t_max: f64) -> Option<Hit> {
-    let mut best: Option<Hit> = None;
-    for s in surfaces {
-        let reach = best.map_or(t_max, |h| h.t);
-        if let Some(h) = s.intersect(o, w, reach) {
-            best = Some(h);
-        }
+impl Surfaces {
+    /// No surface at all.
+    pub const NONE: Surfaces = Surfaces(Vec::new());
+
+    /// The surfaces of `specs`, their meshes read.
+    pub fn build(specs: &[Surface]) -> Result<Self> {
+        let built = specs
+            .iter()
+            .map(|s| {
+                Ok(match s {
+                    Surface::Ground {
+                        height,
+                        reflectance,
+                    } => Built::Ground {
+                        height: *height,
+                        reflectance: *reflectance,
+                    },
+                    Surface::Mesh { obj, reflectance } => Built::Mesh {
+                        mesh: TriangleMesh::load(obj)?,
+                        reflectance: *reflectance,
+                    },
+                })
+            })
+            .collect::<Result<_>>()?;
+        Ok(Self(built))
     }
-    best
+
+    /// The nearest hit of o + t w with t in (ε, t_max).
+    pub fn nearest(&self, o: Vec3, w: Vec3, t_max: f64) -> Option<Hit> {
+        let mut best: Option<Hit> = None;
+        for s in &self.0 {
+            let reach = best.map_or(t_max, |h| h.t);
+            if let Some(h) = s.intersect(o, w, reach) {
+                best = Some(h);
+            }
+        }
+        best
+    }
+}
+
+impl Built {
+    /// The first hit of o + t w with t in (ε, t_max), its normal turned toward the ray's origin.
+    fn intersect(&self, o: Vec3, w: Vec3, t_max: f64) -> Option<Hit> {
+        let (t, normal, reflectance) = match self {
+            Built::Ground {
+                height,
+                reflectance,
+            } => {
+                let eps = SELF_HIT * dot(o, o).sqrt().max(1.0);
+                let t = (height - o[2]) / w[2];
+                if !(t > eps && t < t_max) {
+                    return None;
+                }
+                (t, [0.0, 0.0, 1.0], *reflectance)
+            }
+            Built::Mesh { mesh, reflectance } => {
+                let (t, n) = mesh.intersect(o, w, t_max)?;
+                (t, n, *reflectance)
+            }
+        };
+        let normal = if dot(normal, w) > 0.0 {
+            normal.map(|x| -x)
+        } else {
+            normal
+        };
+        Some(Hit {
+            t,
+            normal,
+            reflectance,
+        })
+    }
 }
 
 /// The Lambertian BRDF ρ/π of channel k.

@@ -39,7 +39,7 @@ use super::sun_lobe::{mis_weight, History, Step, SunLobe, MAX_STEPS};
 use crate::render::geometry::{dot, normalize, Vec3};
 use crate::render::light::Light;
 use crate::render::medium::Medium;
-use crate::render::surface::{self, Hit, Surface};
+use crate::render::surface::{self, Hit, Surfaces};
 use nephele_runtime::PhaseFunction;
 use rand::Rng;
 use std::f64::consts::PI;
@@ -73,7 +73,7 @@ pub struct Volume<'a> {
     /// Point, spot and area lights, each seen by next-event estimation at every collision.
     pub lights: &'a [Light],
     /// Opaque surfaces: they end free flights and block shadow rays.
-    pub surfaces: &'a [Surface],
+    pub surfaces: &'a Surfaces,
 }
 
 /// RGB.
@@ -359,12 +359,12 @@ fn surface_roulette<R: Rng>(beta: &mut Rgb, rng: &mut R) -> bool {
 impl Volume<'_> {
     /// The nearest surface along o + t w.
     fn hit(&self, o: Vec3, w: Vec3) -> Option<Hit> {
-        surface::nearest(self.surfaces, o, w, f64::INFINITY)
+        self.surfaces.nearest(o, w, f64::INFINITY)
     }
 
     /// Whether no surface lies on the first `distance` (m) of o + t w.
     fn unblocked(&self, o: Vec3, w: Vec3, distance: f64) -> bool {
-        surface::nearest(self.surfaces, o, w, distance).is_none()
+        self.surfaces.nearest(o, w, distance).is_none()
     }
 
     /// Next-event estimation at the surface vertex x of order n (throughput β before its

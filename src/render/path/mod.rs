@@ -11,6 +11,7 @@ use super::camera::Pinhole;
 use super::image::{Rendered, GROUP_FIRST};
 use super::medium::Medium;
 use super::scene::Scene;
+use super::surface::Surfaces;
 use crate::phase::Phase;
 use anyhow::Result;
 use integrator::{trace, Volume};
@@ -79,6 +80,7 @@ pub fn render(scene: &Scene, progress: &(dyn Fn(f64) + Sync)) -> Result<Rendered
 /// give the same bits as one render at k · spp.
 pub fn render_reporting(scene: &Scene, progress: &(dyn Fn(&Progress) + Sync)) -> Result<Rendered> {
     let medium = scene.build_medium()?;
+    let surfaces = Surfaces::build(&scene.surfaces)?;
     let models = Phase::build_channels(&scene.phase)?;
     let cam = Pinhole::new(&scene.camera);
     let (w, h) = (cam.width, cam.height);
@@ -101,7 +103,7 @@ pub fn render_reporting(scene: &Scene, progress: &(dyn Fn(&Progress) + Sync)) ->
     };
     let mut passes = 0u32;
     Phase::with_all(&models, |phases| {
-        let volume = volume(scene, medium.as_ref(), phases);
+        let volume = volume(scene, medium.as_ref(), &surfaces, phases);
         loop {
             let pass_start = t0.elapsed().as_secs_f64();
             let first = passes as u64 * scene.spp as u64;
@@ -179,11 +181,12 @@ fn noise_so_far(scene: &Scene, sums: &[f64], spp: u32) -> Option<f64> {
     (mean > 0.0).then(|| (var / n).sqrt() / (mean / n))
 }
 
-/// The estimator's view of `scene` (medium and phase functions built): the sun's irradiance
+/// The estimator's view of `scene` (medium, surfaces and phase functions built): the sun's irradiance
 /// and the sky's radiance are 1 here and applied per channel when the images are gathered.
 pub fn volume<'a>(
     scene: &'a Scene,
     medium: &'a dyn Medium,
+    surfaces: &'a Surfaces,
     phases: &'a [&'a (dyn PhaseFunction<f64> + Sync)],
 ) -> Volume<'a> {
     let has_sky = scene.sky.iter().any(|&s| s > 0.0);
@@ -197,7 +200,7 @@ pub fn volume<'a>(
         group_first: &GROUP_FIRST,
         sun_lobe: SunLobe::new(scene.sun_lobe_steps, phases),
         lights: &scene.lights,
-        surfaces: &scene.surfaces,
+        surfaces,
     }
 }
 
