@@ -1,8 +1,11 @@
-//! Mie benchmarks (criterion): one sphere's coefficients, and the product-rule job of
-//! issue 2 (d = 5 µm, σ = 0.25, 41 sizes × 31 wavelengths, 2251 angles). The comparison
-//! against miepython lives in scripts/bench_mie.py (same machine, same run).
+//! Mie benchmarks (criterion): one sphere's coefficients, the product-rule job of issue 2
+//! (d = 5 µm, σ = 0.25, 41 sizes × 31 wavelengths, 2251 angles), and the matrix product at
+//! its shapes through the GEMM nephele uses (matrixmultiply) against the `gemm` crate (faer's
+//! kernels), both dispatching to the CPU's SIMD level at run time: which one a build should
+//! take, measured in one run on the machine at hand (issue 30; docs/mie.md). The comparison
+//! against miepython and numpy's DGEMM lives in scripts/bench_mie.py (same machine, same run).
 
-use criterion::{criterion_group, criterion_main, Criterion};
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use nephele::mie::{MieCoefficients, MieJob, SizeRule};
 use num_complex::Complex64;
 use std::hint::black_box;
@@ -25,5 +28,92 @@ fn product_rule_job(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, coefficients, product_rule_job);
+/// The SIMD level the GEMMs can dispatch to on this CPU.
+fn simd_level() -> &'static str {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if is_x86_feature_detected!("avx512f") {
+            return "x86-64-v4 (AVX-512F)";
+        }
+        if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
+            return "x86-64-v3 (AVX2, FMA)";
+        }
+        "x86-64 (SSE2)"
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    "not x86-64"
+}
+
+/// C (64 × 2251) = A (64 × k) B (k × 2251), the block product of `mie::batch` (32 spheres, re
+/// and im rows, k Mie orders: 40 ≈ d = 5 µm at 700 nm, 170 ≈ 20 µm at 400 nm, 500 the size
+/// tail); throughput in flops (2 m k n per product).
+fn gemm_shapes(c: &mut Criterion) {
+    eprintln!("CPU SIMD level: {}", simd_level());
+    let (m, n) = (64usize, 2251usize);
+    for k in [40usize, 170, 500] {
+        let a: Vec<f64> = (0..m * k)
+            .map(|i| ((i * 7919) % 1000) as f64 / 1e3)
+            .collect();
+        let b: Vec<f64> = (0..k * n)
+            .map(|i| ((i * 104729) % 1000) as f64 / 1e3)
+            .collect();
+        let mut out = vec![0.0; m * n];
+        let mut group = c.benchmark_group(format!("gemm 64x{k}x2251"));
+        group.throughput(Throughput::Elements(2 * (m * k * n) as u64));
+        group.bench_function("matrixmultiply", |bench| {
+            bench.iter(|| {
+                // SAFETY: a is m × k, b is k × n, out is m × n, all contiguous by rows.
+                unsafe {
+                    matrixmultiply::dgemm(
+                        m,
+                        k,
+                        n,
+                        1.0,
+                        a.as_ptr(),
+                        k as isize,
+                        1,
+                        b.as_ptr(),
+                        n as isize,
+                        1,
+                        0.0,
+                        out.as_mut_ptr(),
+                        n as isize,
+                        1,
+                    )
+                }
+            })
+        });
+        group.bench_function("gemm crate", |bench| {
+            bench.iter(|| {
+                // SAFETY: as above; gemm's strides are (column, row).
+                unsafe {
+                    gemm::gemm(
+                        m,
+                        n,
+                        k,
+                        out.as_mut_ptr(),
+                        1,
+                        n as isize,
+                        false,
+                        a.as_ptr(),
+                        1,
+                        k as isize,
+                        b.as_ptr(),
+                        1,
+                        n as isize,
+                        0.0,
+                        1.0,
+                        false,
+                        false,
+                        false,
+                        gemm::Parallelism::None,
+                    )
+                }
+            })
+        });
+        group.finish();
+    }
+}
+
+criterion_group!(benches, coefficients, product_rule_job, gemm_shapes);
 criterion_main!(benches);

@@ -142,6 +142,9 @@ def main(argv=None) -> int:
         return 2
     load = os.getloadavg()
     print(f"machine: {cpu_name()}, {os.cpu_count()} logical CPUs, load average {load[0]:.2f} {load[1]:.2f}")
+    simd = subprocess.run(["bash", str(Path(__file__).resolve().parent / "simd_level.sh")],
+                          capture_output=True, text=True)
+    print("  " + (simd.stdout.strip() or "SIMD level: unknown"))
     if load[0] > 0.5:
         print("  warning: the machine is busy; timings may be pessimistic")
     version = subprocess.run([str(binary), "--version"], capture_output=True, text=True).stdout.strip()

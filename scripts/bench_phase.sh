@@ -8,6 +8,7 @@ n=${1:-10000000}
 ref=benches/baselines/phase_ref.c
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
+bash scripts/simd_level.sh
 cc -O3 -march=native -o "$tmp/phase_ref" "$ref" -lm
 cargo build --release --quiet --example bench_phase
 echo "== benches/baselines/phase_ref.c (f32 closed forms, d = 20 µm blend)"

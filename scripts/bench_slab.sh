@@ -8,6 +8,7 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 n=${1:-2000000}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
+bash scripts/simd_level.sh
 cc -O3 -march=native -o "$tmp/slab_ref" benches/baselines/slab_ref.c -lm
 cargo build --release --quiet --example bench_slab
 echo "== benches/baselines/slab_ref.c (analog walk, totals and 10 μ bins)"
