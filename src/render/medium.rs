@@ -426,7 +426,7 @@ pub struct Fog {
 const FOG_LAYERS: usize = 4096;
 
 /// Majorant cells along the longest side of a mesh's bounds.
-const MESH_CELLS: usize = 48;
+const MESH_CELLS: usize = 24;
 
 impl Fog {
     /// Fog of extinction `sigma_t` (1/m, at the floor) over [lo, hi] (m), thinning with the

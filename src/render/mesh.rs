@@ -11,7 +11,7 @@
 //! ray's direction is fixed and irrational to the axes, so that it meets edges and vertices of
 //! a mesh built on a grid with probability 0.
 
-use super::geometry::{cross, dot, normalize, Vec3};
+use super::geometry::{box_clip, cross, dot, normalize, Vec3};
 use anyhow::{ensure, Context, Result};
 use bvh::aabb::{Aabb, Bounded};
 use bvh::bounding_hierarchy::BHShape;
@@ -178,6 +178,14 @@ impl TriangleMesh {
     /// Calls `f` on the triangles whose boxes the ray o + t w (t ≥ 0) passes through (no
     /// allocation: the hierarchy is walked by an iterator).
     fn for_candidates(&self, o: Vec3, w: Vec3, mut f: impl FnMut(&Triangle)) {
+        // Most rays of a scene miss a given mesh: its box first, without the hierarchy.
+        let pad = |x: f64, s: f64| x + s * (1e-9 + 1e-7 * x.abs());
+        let lo = self.lo.map(|x| pad(x, -1.0));
+        let hi = self.hi.map(|x| pad(x, 1.0));
+        // (Padded: a flat mesh has a box of zero thickness.)
+        if box_clip(o, w, lo, hi).is_none() {
+            return;
+        }
         let ray = bvh::ray::Ray::new(Point3::from(o), Vector3::from(w));
         for tri in self.bvh.traverse_iterator(&ray, &self.triangles) {
             f(tri);
@@ -265,5 +273,25 @@ mod tests {
             .expect("hit");
         assert!((n[0] - 1.0).abs() < 1e-12, "{n:?}");
         assert!(m.touches_box([0.9, 0.2, 0.2], [1.1, 0.3, 0.3]));
+    }
+
+    #[test]
+    fn a_flat_mesh_is_hit_though_its_box_has_no_thickness() {
+        let (a, b, c, d) = (
+            [0.0, 0.0, 1.0],
+            [2.0, 0.0, 1.0],
+            [2.0, 2.0, 1.0],
+            [0.0, 2.0, 1.0],
+        );
+        let m = TriangleMesh::from_triangles(&[[a, b, c], [a, c, d]]);
+        let (t, n) = m
+            .intersect([0.5, 1.5, 3.0], [0.0, 0.0, -1.0], f64::INFINITY)
+            .expect("hit");
+        assert!(
+            (t - 2.0).abs() < 1e-12 && (n[2] - 1.0).abs() < 1e-12,
+            "{t} {n:?}"
+        );
+        let w = normalize([0.3, 0.2, 1.0]);
+        assert!(m.intersect([0.5, 0.5, 0.0], w, f64::INFINITY).is_some());
     }
 }
