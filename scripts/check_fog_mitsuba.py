@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Cross-check of the path tracer's fog scenes (seed 004) against Mitsuba 3 (scalar_rgb, volpath).
 
-Four scenes, each built the same way in both renderers:
+Five scenes, each built the same way in both renderers:
 
   1. spot beam: a box of homogeneous fog (HG phase) with a spot light above it pointing down
      (Mitsuba's spot falloff: full to the beam width, linear in the angle to the cutoff), no
@@ -14,7 +14,9 @@ Four scenes, each built the same way in both renderers:
      with hide_emitters: transparent and unseen by camera rays, as nephele's);
   4. fog in a mesh: a torus of fog (a closed, non-convex OBJ: nephele's fog `mesh`, Mitsuba's
      obj shape with a null BSDF and an interior medium) beside a diffuse box (an OBJ surface,
-     flat-shaded) on the ground, lit by a point light and the sun.
+     flat-shaded) on the ground, lit by a point light and the sun;
+  5. fog over a mirror: scene 2 with a mirror for a ground (Mitsuba's conductor with material
+     none) under a constant sky, which the camera sees only in the mirror.
 
 Each renderer renders K independent seeds; the statistics are check_render_mitsuba.py's:
 image means within 3 combined SE, 4x4-pixel blocks with no |z| > 5 and mean z^2 < 2, and the
@@ -121,6 +123,14 @@ def mesh_fog() -> dict:
     return sc
 
 
+def mirror_ground() -> dict:
+    """Scene 5 in a renderer-neutral form: scene 2 over a mirror (its ground reflectance) under a
+    constant sky (out of the camera's direct view; seen in the mirror)."""
+    sc = fog_over_ground()
+    sc.update({"mirror": True, "sky": [0.05, 0.08, 0.12]})
+    return sc
+
+
 def mitsuba_light(light: dict, T, rgb) -> dict:
     """One light of a neutral scene as a Mitsuba 3 emitter (area lights on null-BSDF shapes:
     transparent, as nephele's)."""
@@ -165,7 +175,10 @@ def render_nephele(bin_path: Path, tmp: Path, sc: dict, w: int, h: int, spp: int
     }
     surfaces = []
     if sc["ground"] is not None:
-        surfaces.append({"kind": "ground", "height": 0.0, "reflectance": sc["ground"]})
+        surfaces.append({"kind": "ground", "height": 0.0, "reflectance": sc["ground"],
+                         "material": "mirror" if sc.get("mirror") else "diffuse"})
+    if sc.get("sky"):
+        scene["sky"] = sc["sky"]
     for i, (obj, rho) in enumerate(sc.get("blocks", [])):
         (tmp / f"block{i}.obj").write_text(obj)
         surfaces.append({"kind": "mesh", "obj": str(tmp / f"block{i}.obj"), "reflectance": rho})
@@ -189,9 +202,11 @@ def render_mitsuba(sc: dict, w: int, h: int, spp: int, seed: int,
     rgb = lambda v: {"type": "rgb", "value": list(v)}  # noqa: E731
     d = {
         "type": "scene",
-        # Area lights are invisible to camera rays in nephele: hidden here too.
+        # Area lights are invisible to camera rays in nephele: hidden here too (only where
+        # there are some: Mitsuba also hides an emitter seen by way of a mirror).
         "integrator": {"type": "volpath", "max_depth": -1, "rr_depth": 1_000_000,
-                       "hide_emitters": True},
+                       "hide_emitters": any(l["kind"] in ("sphere", "rectangle")
+                                            for l in sc["lights"])},
         "sensor": {
             "type": "perspective", "fov": cam["fov_deg"], "fov_axis": "y",
             "to_world": T().look_at(origin=cam["position"], target=cam["look_at"], up=cam["up"]),
@@ -221,8 +236,12 @@ def render_mitsuba(sc: dict, w: int, h: int, spp: int, seed: int,
         d["sun"] = {"type": "directional", "direction": (-np.array(sc["sun"]["direction"])).tolist(),
                     "irradiance": rgb(sc["sun"]["irradiance"])}
     if sc["ground"] is not None:
+        bsdf = ({"type": "conductor", "material": "none", "specular_reflectance": rgb(sc["ground"])}
+                if sc.get("mirror") else {"type": "diffuse", "reflectance": rgb(sc["ground"])})
         d["ground"] = {"type": "rectangle", "to_world": T().scale([200.0, 200.0, 1.0]),
-                       "bsdf": {"type": "diffuse", "reflectance": rgb(sc["ground"])}}
+                       "bsdf": bsdf}
+    if sc.get("sky"):
+        d["sky"] = {"type": "constant", "radiance": rgb(sc["sky"])}
     scene = mi.load_dict(d)
     t0 = time.perf_counter()
     img = np.array(mi.render(scene, seed=seed), dtype=np.float64)
@@ -239,7 +258,8 @@ def main(argv=None) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         for name, sc in [("spot beam in fog", spot_beam()), ("fog over a ground", fog_over_ground()),
-                         ("area lights", area_lights()), ("fog in a mesh", mesh_fog())]:
+                         ("area lights", area_lights()), ("fog in a mesh", mesh_fog()),
+                         ("fog over a mirror", mirror_ground())]:
             runs_n = [render_nephele(args.bin, tmp, sc, w, h, spp, s + 1) for s in range(k)]
             runs_m = [render_mitsuba(sc, w, h, spp, s + 1, tmp) for s in range(k)]
             failures += compare(name, runs_n, runs_m, k, w, h, spp)

@@ -268,6 +268,11 @@ fn bad_fog_and_surfaces_are_refused_by_name() {
         ),
         (fog, r#"{"kind": "ground", "heigth": 0}"#, "heigth"),
         (fog, r#"{"kind": "mirror"}"#, "mirror"),
+        (
+            fog,
+            r#"{"kind": "ground", "height": 0, "reflectance": [1, 1, 1], "material": "glass"}"#,
+            "glass",
+        ),
     ];
     for (medium, surfaces, named) in cases {
         let e = base(medium, surfaces).expect("refused");
@@ -444,4 +449,39 @@ fn a_mesh_surface_is_lit_and_casts_its_shadow() {
     let lit = view([2.5, 0.0, 0.0]);
     let want = 0.5 / PI * std::f64::consts::FRAC_1_SQRT_2;
     assert!((lit.groups[0] as f64 / want - 1.0).abs() < 1e-6);
+}
+
+#[test]
+fn a_ground_under_the_sky_hides_it_and_a_mirror_reflects_it() {
+    // No fog in view, a constant sky L: a diffuse ground returns ρ L (the sky all around, a
+    // furnace), a mirror ρ L; the sky behind the ground is not seen (it once was, added to
+    // the unscattered image).
+    for material in ["diffuse", "mirror"] {
+        let mut s = Scene::parse(&format!(
+            r#"{{
+            "medium": {{"kind": "fog", "min": [1000, 1000, 0], "max": [1001, 1001, 1]}},
+            "sigma_t": 0.1, "phase": {{"kind": "hg", "g": 0}},
+            "sun": {{"direction": [0.6, 0, 0.8], "irradiance": [0, 0, 0]}},
+            "sky": [0.2, 0.3, 0.5],
+            "surfaces": [{{"kind": "ground", "height": 0, "reflectance": [0.8, 0.5, 0.25],
+                           "material": "{material}"}}],
+            "camera": {{"position": [0, -30, 20], "look_at": [0, 0, 0], "fov_deg": 20,
+                        "width": 8, "height": 6}},
+            "spp": 4, "seed": 1
+        }}"#
+        ))
+        .expect("a valid scene");
+        s.sun_lobe_steps = 0;
+        let r = render(&s, &|_| {}).expect("render");
+        for (px, v) in r.beauty.chunks(3).enumerate() {
+            for (c, want) in [0.8 * 0.2, 0.5 * 0.3, 0.25 * 0.5].into_iter().enumerate() {
+                let got = v[c] as f64;
+                assert!(
+                    (got / want - 1.0).abs() < 1e-6,
+                    "{material}, pixel {px}, channel {c}: {got} vs {want}"
+                );
+            }
+        }
+        assert!(r.unscattered.iter().all(|&v| v == 0.0), "{material}");
+    }
 }

@@ -1,7 +1,8 @@
 //! Opaque surfaces of the path tracer (docs/render.md, "Surfaces"): a ground plane and
-//! triangle meshes read from OBJ files ([`super::mesh`]), with a diffuse (Lambertian)
-//! reflectance ρ, whose BRDF is ρ/π. A surface blocks light from both sides and reflects on
-//! the side a ray arrives from; its shading normal (the geometric one) faces that side.
+//! triangle meshes read from OBJ files ([`super::mesh`]), diffuse (Lambertian: BRDF ρ/π) or
+//! a mirror (reflectance ρ along ω_r = ω − 2 (ω · n) n). A surface blocks light from both
+//! sides and reflects on the side a ray arrives from; its shading normal (the geometric one)
+//! faces that side.
 //!
 //! Its vertex counts as one scattering order in the images' order groups (an interaction, as a
 //! collision in the medium is).
@@ -13,6 +14,17 @@ use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 use std::path::PathBuf;
 
+/// How a surface reflects.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Material {
+    /// Lambertian: ρ/π in every direction.
+    #[default]
+    Diffuse,
+    /// A perfect mirror of reflectance ρ (Mitsuba 3's `conductor` with `material: none`).
+    Mirror,
+}
+
 /// One surface of a scene.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
@@ -21,16 +33,22 @@ pub enum Surface {
     Ground {
         /// Its height (m).
         height: f64,
-        /// Diffuse reflectance ρ (linear RGB, each in [0, 1]).
+        /// Reflectance ρ (linear RGB, each in [0, 1]).
         reflectance: [f64; 3],
+        /// Diffuse (default) or mirror.
+        #[serde(default)]
+        material: Material,
     },
     /// The triangles of a Wavefront OBJ file (m; relative paths from the scene's directory),
     /// diffuse.
     Mesh {
         /// The OBJ file.
         obj: PathBuf,
-        /// Diffuse reflectance ρ (linear RGB, each in [0, 1]).
+        /// Reflectance ρ (linear RGB, each in [0, 1]).
         reflectance: [f64; 3],
+        /// Diffuse (default) or mirror.
+        #[serde(default)]
+        material: Material,
     },
 }
 
@@ -40,14 +58,15 @@ pub struct Surfaces(Vec<Built>);
 
 /// One surface, built.
 enum Built {
-    Ground {
-        height: f64,
-        reflectance: [f64; 3],
-    },
-    Mesh {
-        mesh: TriangleMesh,
-        reflectance: [f64; 3],
-    },
+    Ground { height: f64, look: Look },
+    Mesh { mesh: TriangleMesh, look: Look },
+}
+
+/// What a surface looks like: its reflectance and material.
+#[derive(Clone, Copy, Debug)]
+struct Look {
+    reflectance: [f64; 3],
+    material: Material,
 }
 
 /// Where a ray meets a surface.
@@ -57,8 +76,10 @@ pub struct Hit {
     pub t: f64,
     /// Unit normal on the side the ray came from.
     pub normal: Vec3,
-    /// Diffuse reflectance ρ (RGB).
+    /// Reflectance ρ (RGB).
     pub reflectance: [f64; 3],
+    /// Diffuse or mirror.
+    pub material: Material,
 }
 
 /// Hits closer than this fraction of the origin's distance from the world's origin (or than
@@ -72,6 +93,7 @@ impl Surface {
             Surface::Ground {
                 height,
                 reflectance,
+                ..
             } => {
                 ensure!(
                     height.is_finite(),
@@ -102,13 +124,24 @@ impl Surfaces {
                     Surface::Ground {
                         height,
                         reflectance,
+                        material,
                     } => Built::Ground {
                         height: *height,
-                        reflectance: *reflectance,
+                        look: Look {
+                            reflectance: *reflectance,
+                            material: *material,
+                        },
                     },
-                    Surface::Mesh { obj, reflectance } => Built::Mesh {
+                    Surface::Mesh {
+                        obj,
+                        reflectance,
+                        material,
+                    } => Built::Mesh {
                         mesh: TriangleMesh::load(obj)?,
-                        reflectance: *reflectance,
+                        look: Look {
+                            reflectance: *reflectance,
+                            material: *material,
+                        },
                     },
                 })
             })
@@ -132,21 +165,18 @@ impl Surfaces {
 impl Built {
     /// The first hit of o + t w with t in (ε, t_max), its normal turned toward the ray's origin.
     fn intersect(&self, o: Vec3, w: Vec3, t_max: f64) -> Option<Hit> {
-        let (t, normal, reflectance) = match self {
-            Built::Ground {
-                height,
-                reflectance,
-            } => {
+        let (t, normal, look) = match self {
+            Built::Ground { height, look } => {
                 let eps = SELF_HIT * dot(o, o).sqrt().max(1.0);
                 let t = (height - o[2]) / w[2];
                 if !(t > eps && t < t_max) {
                     return None;
                 }
-                (t, [0.0, 0.0, 1.0], *reflectance)
+                (t, [0.0, 0.0, 1.0], *look)
             }
-            Built::Mesh { mesh, reflectance } => {
+            Built::Mesh { mesh, look } => {
                 let (t, n) = mesh.intersect(o, w, t_max)?;
-                (t, n, *reflectance)
+                (t, n, *look)
             }
         };
         let normal = if dot(normal, w) > 0.0 {
@@ -157,9 +187,16 @@ impl Built {
         Some(Hit {
             t,
             normal,
-            reflectance,
+            reflectance: look.reflectance,
+            material: look.material,
         })
     }
+}
+
+/// The mirror direction of `w` (arriving) about the unit normal `n`: w − 2 (w · n) n.
+pub fn reflect(w: Vec3, n: Vec3) -> Vec3 {
+    let d = 2.0 * dot(w, n);
+    std::array::from_fn(|k| w[k] - d * n[k])
 }
 
 /// The Lambertian BRDF ρ/π of channel k.

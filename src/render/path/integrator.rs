@@ -13,8 +13,9 @@
 //! β the path throughput (ϖ^{n−1} without roulette); each light adds
 //! β ϖ p(ω · w) T_r(x → light) I(−ω) / r² (ω toward it, r its distance; for an area light one
 //! sampled point of it, I = L_e r²/q) at the same collision ([`crate::render::light`]); surfaces ([`crate::render::surface`]) end free flights and
-//! block shadow rays, and at a surface vertex the path scores β (ρ/π) cos θ T_r E for the sun
-//! and each light, then continues along a cosine-distributed direction with β ← β ρ; the path continues along a direction
+//! block shadow rays, and at a diffuse surface vertex the path scores β (ρ/π) cos θ T_r E for
+//! the sun and each light, then continues along a cosine-distributed direction with β ← β ρ
+//! (at a mirror, along the mirror direction, with nothing scored); the path continues along a direction
 //! sampled from p around w (p is symmetric, so this is p(w′ · w) exactly), and an escaping path
 //! adds β L_sky to the order of its last scattering (the constant sky, if any).
 //!
@@ -39,7 +40,7 @@ use super::sun_lobe::{mis_weight, History, Step, SunLobe, MAX_STEPS};
 use crate::render::geometry::{dot, normalize, Vec3};
 use crate::render::light::Light;
 use crate::render::medium::Medium;
-use crate::render::surface::{self, Hit, Surfaces};
+use crate::render::surface::{self, Hit, Material, Surfaces};
 use nephele_runtime::PhaseFunction;
 use rand::Rng;
 use std::f64::consts::PI;
@@ -278,7 +279,10 @@ pub fn trace<R: Rng>(v: &Volume, o: Vec3, w: Vec3, rng: &mut R) -> PathSample {
             };
             order += 1;
             let x = at(o, w, h.t);
-            v.surface_nee(x, &h, &beta, order, &mut out, rng);
+            // A mirror's BRDF is a delta: no light can be sampled toward it.
+            if h.material == Material::Diffuse {
+                v.surface_nee(x, &h, &beta, order, &mut out, rng);
+            }
             for (b, r) in beta.iter_mut().zip(h.reflectance) {
                 *b *= r;
             }
@@ -286,10 +290,11 @@ pub fn trace<R: Rng>(v: &Volume, o: Vec3, w: Vec3, rng: &mut R) -> PathSample {
                 return out;
             }
             (history, arrival_pdf, base) = (History::default(), None, order);
-            (o, w) = (
-                x,
-                surface::sample_cosine(h.normal, rng.random(), rng.random()),
-            );
+            let w_new = match h.material {
+                Material::Diffuse => surface::sample_cosine(h.normal, rng.random(), rng.random()),
+                Material::Mirror => surface::reflect(w, h.normal),
+            };
+            (o, w) = (x, w_new);
             continue;
         };
         order += 1;

@@ -30,11 +30,12 @@ fn pixel_seed(seed: u64, i: u64) -> u64 {
 }
 
 /// Per-pixel sums of one half of the samples (the even or the odd ones): [sun group g
-/// channel c] at g·3 + c, [sky group g channel c] after those, then the point and spot
-/// lights' [group g channel c], then the transmittance; a pixel holds the two halves one after
+/// channel c] at g·3 + c, [sky group g channel c] after those, then the lights' [group g
+/// channel c], then the camera ray's transmittance where it reaches the sky (0 where a surface
+/// hides it; 0 without a sky), then its transmittance; a pixel holds the two halves one after
 /// the other.
 fn stride() -> usize {
-    3 * GROUP_FIRST.len() * 3 + 1
+    3 * GROUP_FIRST.len() * 3 + 2
 }
 
 /// The light of group g, channel c in one half's sums: the sun's and the sky's scaled by the
@@ -124,6 +125,7 @@ pub fn render_reporting(scene: &Scene, progress: &(dyn Fn(&Progress) + Sync)) ->
                                     px[(2 * ng + g) * 3 + c] += p.light_groups[g][c];
                                 }
                             }
+                            px[stride - 2] += p.unscattered;
                             px[stride - 1] += p.transmittance;
                         }
                     }
@@ -234,9 +236,11 @@ fn gather(scene: &Scene, cam: &Pinhole, sums: &[f64], spp: u32, seconds: f64) ->
         }
         let s: Vec<f64> = (0..stride).map(|k| a[k] + b[k]).collect();
         let tr = s[stride - 1] / n;
+        // The camera ray's transmittance where it reaches the sky (a surface hides it).
+        let to_sky = s[stride - 2] / n;
         out.transmittance[px] = tr as f32;
         for c in 0..3 {
-            let mut total = tr * sky[c];
+            let mut total = to_sky * sky[c];
             out.unscattered[px * 3 + c] = total as f32;
             for g in 0..ng {
                 let v = light_of(&s, ng, g, c, &sun, &sky) / n;
