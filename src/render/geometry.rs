@@ -6,6 +6,13 @@ pub use nephele_runtime::frame::{cross, dot};
 /// A point or direction in world space (m); z is up (the runtime's vector, in f64).
 pub type Vec3 = nephele_runtime::frame::Vec3<f64>;
 
+/// The distance below which a ray leaving a surface point meets that same surface again (m):
+/// 10⁻⁹ of the point's distance from the world's origin, at least 10⁻⁹ m — a rounding error
+/// of the point, not a new hit.
+pub fn self_hit_distance(o: Vec3) -> f64 {
+    1e-9 * dot(o, o).sqrt().max(1.0)
+}
+
 /// a / |a|.
 pub fn normalize(a: Vec3) -> Vec3 {
     let n = dot(a, a).sqrt();

@@ -11,7 +11,7 @@
 //! ray's direction is fixed and irrational to the axes, so that it meets edges and vertices of
 //! a mesh built on a grid with probability 0.
 
-use super::geometry::{box_clip, cross, dot, normalize, Vec3};
+use super::geometry::{box_clip, cross, dot, normalize, self_hit_distance, Vec3};
 use anyhow::{ensure, Context, Result};
 use bvh::aabb::{Aabb, Bounded};
 use bvh::bounding_hierarchy::BHShape;
@@ -88,10 +88,6 @@ pub struct TriangleMesh {
 
 /// The direction of the inside test's rays (unit, irrational to the axes).
 const PARITY_RAY: Vec3 = [0.539_965_987_1, 0.606_339_816_4, 0.583_835_710_2];
-
-/// Hits closer than this (relative to the scene's scale at the origin, or metres near it) are
-/// the surface a ray leaves from.
-const SELF_HIT: f64 = 1e-9;
 
 impl TriangleMesh {
     /// The triangles of every object of the OBJ file at `path` (faces triangulated; units m).
@@ -195,7 +191,7 @@ impl TriangleMesh {
     /// The nearest hit of o + t w with t in (ε, t_max): its distance and unit geometric
     /// normal.
     pub fn intersect(&self, o: Vec3, w: Vec3, t_max: f64) -> Option<(f64, Vec3)> {
-        let eps = SELF_HIT * dot(o, o).sqrt().max(1.0);
+        let eps = self_hit_distance(o);
         let mut best: Option<(f64, Vec3)> = None;
         self.for_candidates(o, w, |tri| {
             let reach = best.map_or(t_max, |(t, _)| t);

@@ -7,7 +7,7 @@
 //! Its vertex counts as one scattering order in the images' order groups (an interaction, as a
 //! collision in the medium is).
 
-use super::geometry::{dot, Vec3};
+use super::geometry::{dot, self_hit_distance, Vec3};
 use super::mesh::TriangleMesh;
 use anyhow::{ensure, Result};
 use serde::{Deserialize, Serialize};
@@ -29,7 +29,7 @@ pub enum Material {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Surface {
-    /// The horizontal plane z = `height` (m), infinite, diffuse.
+    /// The horizontal plane z = `height` (m), infinite.
     Ground {
         /// Its height (m).
         height: f64,
@@ -39,8 +39,7 @@ pub enum Surface {
         #[serde(default)]
         material: Material,
     },
-    /// The triangles of a Wavefront OBJ file (m; relative paths from the scene's directory),
-    /// diffuse.
+    /// The triangles of a Wavefront OBJ file (m; relative paths from the scene's directory).
     Mesh {
         /// The OBJ file.
         obj: PathBuf,
@@ -81,10 +80,6 @@ pub struct Hit {
     /// Diffuse or mirror.
     pub material: Material,
 }
-
-/// Hits closer than this fraction of the origin's distance from the world's origin (or than
-/// this many metres near it) are the surface the ray leaves from, not a new one.
-const SELF_HIT: f64 = 1e-9;
 
 impl Surface {
     /// Checks the surface's values, naming the first bad one (`at`: its place in the scene).
@@ -167,7 +162,7 @@ impl Built {
     fn intersect(&self, o: Vec3, w: Vec3, t_max: f64) -> Option<Hit> {
         let (t, normal, look) = match self {
             Built::Ground { height, look } => {
-                let eps = SELF_HIT * dot(o, o).sqrt().max(1.0);
+                let eps = self_hit_distance(o);
                 let t = (height - o[2]) / w[2];
                 if !(t > eps && t < t_max) {
                     return None;
