@@ -1,6 +1,7 @@
 //! Scenes of the path tracer (JSON; examples in fit-configs/scenes/): a medium (homogeneous slab,
-//! implicit cloud, voxel grid or fog in a box), its extinction scale, albedo and phase function, a directional sun, an
-//! optional constant sky, a pinhole camera, samples per pixel and a seed. World units are metres,
+//! implicit cloud, voxel grid, or fog in a box or a closed mesh), its extinction scale, albedo
+//! and phase function, a directional sun, an optional constant sky, lights and surfaces (the
+//! path tracer only), a pinhole camera, samples per pixel and a seed. World units are metres,
 //! z is up.
 
 use super::geometry::{cross, dot, Affine, Vec3};
@@ -48,7 +49,8 @@ pub struct Scene {
     /// only).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub lights: Vec<Light>,
-    /// Opaque surfaces (a diffuse ground plane; the path tracer only).
+    /// Opaque surfaces (a ground plane and OBJ meshes, diffuse or mirror; the path tracer
+    /// only).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub surfaces: Vec<Surface>,
     /// The camera.
