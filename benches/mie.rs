@@ -61,27 +61,7 @@ fn gemm_shapes(c: &mut Criterion) {
         let mut group = c.benchmark_group(format!("gemm 64x{k}x2251"));
         group.throughput(Throughput::Elements(2 * (m * k * n) as u64));
         group.bench_function("matrixmultiply", |bench| {
-            bench.iter(|| {
-                // SAFETY: a is m × k, b is k × n, out is m × n, all contiguous by rows.
-                unsafe {
-                    matrixmultiply::dgemm(
-                        m,
-                        k,
-                        n,
-                        1.0,
-                        a.as_ptr(),
-                        k as isize,
-                        1,
-                        b.as_ptr(),
-                        n as isize,
-                        1,
-                        0.0,
-                        out.as_mut_ptr(),
-                        n as isize,
-                        1,
-                    )
-                }
-            })
+            bench.iter(|| nephele::mie::batch::gemm_strided(m, k, n, &a, &b, n, &mut out))
         });
         group.bench_function("gemm crate", |bench| {
             bench.iter(|| {

@@ -270,8 +270,9 @@ fn accumulate<R: AsRef<WeightRow>>(
 }
 
 /// C (m × n, contiguous) = A (m × k, contiguous) · B (k × n with row stride `ldb`), through
-/// matrixmultiply's dgemm (its kernels are picked at run time: AVX-512, AVX2/FMA, SSE2).
-fn gemm_strided(m: usize, k: usize, n: usize, a: &[f64], b: &[f64], ldb: usize, c: &mut [f64]) {
+/// matrixmultiply's dgemm (its kernels are picked at run time: AVX-512, AVX2/FMA, SSE2). Public
+/// for the GEMM benchmark (benches/mie.rs), which times this very call against the `gemm` crate.
+pub fn gemm_strided(m: usize, k: usize, n: usize, a: &[f64], b: &[f64], ldb: usize, c: &mut [f64]) {
     if m == 0 || n == 0 {
         return;
     }

@@ -270,8 +270,10 @@ pub fn trace<R: Rng>(v: &Volume, o: Vec3, w: Vec3, rng: &mut R) -> PathSample {
     // The order of the last surface vertex: the sun-lobe walks' MIS windows start after it
     // (a walk ends at a surface, so no walk can make a path through one).
     let mut base = 0u32;
+    // The camera ray's surface hit is already known; later rays look theirs up.
+    let mut next_hit = Some(seen);
     loop {
-        let hit = v.hit(o, w);
+        let hit = next_hit.take().unwrap_or_else(|| v.hit(o, w));
         let reach = hit.map_or(f64::INFINITY, |h| h.t);
         let Some(x) = collide_before(v.medium, o, w, reach, rng) else {
             let Some(h) = hit else {
