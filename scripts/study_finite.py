@@ -13,7 +13,8 @@ into OUT.
 References: REFS/<scene>_pt (`nephele render --scene fit-configs/scenes/<scene>.json
 --time-budget 150 --out REFS/<scene>_pt`).
 
-Usage: scripts/study_finite.py --refs DIR --out DIR [--bin PATH] [--scenes ...]
+Usage: scripts/study_finite.py --refs DIR --out DIR [--bin PATH] [--scenes ...] [--tables NTT]
+       [--only VARIANT ...]
 """
 import argparse
 import json
@@ -62,13 +63,14 @@ def quantity(cand, name):
     return next((q["regions"] for q in cand["quantities"] if q["quantity"] == name), None)
 
 
-def render_and_compare(binary, scene, refs, out, variants):
+def render_and_compare(binary, scene, refs, out, variants, tables=None):
     dirs = []
+    tables = ["--tables", tables] if tables else []
     for name, extra in variants.items():
         d = os.path.join(out, "renders", f"{scene}-{name.replace(' ', '_').replace(',', '')}")
         method = ["--method", "octaves"] if name == "octaves (fitted)" else ["--method", "collector"]
         run([binary, "render", "--scene", f"fit-configs/scenes/{scene}.json", *method, *extra,
-             "--out", d])
+             *tables, "--out", d])
         dirs.append(d)
     cmp_dir = os.path.join(out, "compare", scene)
     args = [binary, "compare", "--reference", os.path.join(refs, f"{scene}_pt"), "--out", cmp_dir]
@@ -166,6 +168,9 @@ def main():
     ap.add_argument("--scenes", nargs="*", default=SEEN + HELD_OUT + ABSORBING)
     ap.add_argument("--octaves", default="fit-configs/octaves-fitted.json",
                     help="the octaves' frozen fit (scripts/fit_fast.py on cloud_side)")
+    ap.add_argument("--tables", help="a .ntt to render with (default: the embedded tables)")
+    ap.add_argument("--only", nargs="*", help="render only these variants (names as in "
+                    "VARIANTS, e.g. leakage for the default; 'octaves (fitted)')")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     rows = []
@@ -178,7 +183,9 @@ def main():
             variants = {"leakage": []}
         else:
             variants["octaves (fitted)"] = octaves_args(a.octaves)
-        report = render_and_compare(a.bin, scene, a.refs, a.out, variants)
+        if a.only:
+            variants = {k: v for k, v in variants.items() if k in a.only}
+        report = render_and_compare(a.bin, scene, a.refs, a.out, variants, a.tables)
         for name, cand in zip(variants, report["candidates"]):
             rows.append(row(scene, name, report, cand))
         print(f"{scene}: done", file=sys.stderr)

@@ -4,11 +4,12 @@
 
 use nephele::mie::polydisperse::{CONVERGED_DEFAULT, DEFAULT_WAVELENGTHS};
 use nephele::mie::MieJob;
+use nephele::slab::aureole::{view_near_beam, Aureole, DEFAULT_AUREOLE_DEG};
 use nephele::slab::tally::SliceTables;
 use nephele::slab::{run_slice, SlabGrid, Slice, StopRule};
 use nephele_runtime::fitting::single_scattering_bin;
 use nephele_runtime::phase::{HenyeyGreenstein, TabulatedTable};
-use nephele_runtime::transport::SlabPoint;
+use nephele_runtime::transport::{single_scattering, SlabPoint};
 use nephele_runtime::PhaseFunction;
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 use std::f64::consts::PI;
@@ -97,6 +98,92 @@ fn slab_at(mu_l: f64, t: f64, d: f64) -> SlabPoint<f64> {
         psi_v: 0.0,
         mu_l,
     }
+}
+
+#[test]
+fn the_aureole_is_the_view_bins_estimator_and_matches_order_one() {
+    // Normal incidence: one annulus out to cos Θ = 0.875 is exactly the μ_V bin [−1, −0.875]
+    // (every ψ_V bin of it holds the same crossings, spread by Δψ/π).
+    let hg = HenyeyGreenstein::new(0.8);
+    let mut grid = SlabGrid::default_for(2.0).unwrap();
+    grid.aureole = Aureole::new(vec![0.0, 0.875f64.acos().to_degrees()]).unwrap();
+    let slice = Slice {
+        grid: &grid,
+        mu_l: 1.0,
+        albedo: 1.0,
+        phase: &hg,
+    };
+    let run = run_slice(&slice, 5, 0, &rule(200_000), &|_, _| {});
+    let (aur, _) = &run.tables.aureole;
+    let mut checked = 0;
+    for g in 0..grid.groups.len() {
+        for j in 1..grid.depths.len() {
+            let a = aur[grid.aureole_cell(g, j, 0)];
+            for k in 0..grid.n_psi() {
+                let b = run.tables.t[grid.cell(g, j, 0, k)];
+                assert!(
+                    (a - b).abs() <= 1e-12 * b,
+                    "group {g}, plane {j}: {a} vs {b}"
+                );
+            }
+            checked += (a > 0.0) as usize;
+        }
+    }
+    assert!(checked > 100, "{checked} cells with light");
+    // Order 1 under μ_L = 0.5 through Mie 10 µm: each annulus against the closed form averaged
+    // over it (64 angles × 64 turns about the beam).
+    let job = MieJob::paper(10.0, CONVERGED_DEFAULT, DEFAULT_WAVELENGTHS);
+    let table = &job.compute(&|_, _| {}).unwrap().0[0];
+    let mie = TabulatedTable::<f64>::from_phase(&table.theta_deg, &table.phase).unwrap();
+    let mie = mie.view();
+    let (t_slab, mu_l) = (4.0, 0.5);
+    let mut grid = SlabGrid::default_for(t_slab).unwrap();
+    grid.aureole = Aureole::new(DEFAULT_AUREOLE_DEG.to_vec()).unwrap();
+    let slice = Slice {
+        grid: &grid,
+        mu_l,
+        albedo: 1.0,
+        phase: &mie,
+    };
+    let run = run_slice(&slice, 13, 0, &rule(2_000_000), &|_, _| {});
+    let (aur, se) = &run.tables.aureole;
+    let (mut chi2, mut n, mut worst) = (0.0, 0, 0.0f64);
+    for (j, &d) in grid.depths.iter().enumerate().skip(1) {
+        // Only crossings going down are tallied: annuli reaching past the horizon are partial.
+        for b in (0..grid.aureole.n_bins()).filter(|&b| grid.aureole.whole(mu_l, b)) {
+            let (lo, hi) = (grid.aureole.edges_deg[b], grid.aureole.edges_deg[b + 1]);
+            let (mut sum, mut weight) = (0.0, 0.0);
+            for i in 0..64 {
+                let theta = (lo + (hi - lo) * (i as f64 + 0.5) / 64.0).to_radians();
+                for turn in 0..64 {
+                    let (mu_v, psi_v) = view_near_beam(mu_l, theta, 2.0 * PI * turn as f64 / 64.0);
+                    let at = SlabPoint {
+                        mu_v,
+                        psi_v,
+                        ..slab_at(mu_l, t_slab, d)
+                    };
+                    sum += single_scattering(&mie, 1.0, &at) * theta.sin();
+                    weight += theta.sin();
+                }
+            }
+            let exact = sum / weight;
+            let c = grid.aureole_cell(0, j, b);
+            let z = (aur[c] - exact) / se[c];
+            println!(
+                "plane {j}, {lo}–{hi}°: MC {:.4e} ± {:.1e}, exact {exact:.4e}",
+                aur[c], se[c]
+            );
+            chi2 += z * z;
+            n += 1;
+            worst = worst.max(z.abs());
+        }
+    }
+    let p = 1.0 - ChiSquared::new(n as f64).unwrap().cdf(chi2);
+    println!("aureole, order 1: {n} annuli, chi2 = {chi2:.1}, p = {p:.3}, worst |z| = {worst:.2}");
+    assert!(
+        p > 1e-3 && worst < 5.0,
+        "chi2 {chi2} over {n} annuli (p = {p}), worst |z| {worst}"
+    );
 }
 
 #[test]

@@ -2,6 +2,7 @@
 
 use anyhow::Result;
 use clap::Args;
+use nephele::compress::near_beam::NearBeamCheck;
 use nephele::compress::report::{CollectorError, GroupError};
 use nephele::compress::run::{compress_reporting, Options, Outcome};
 use nephele::compress::LogAdditive;
@@ -101,6 +102,29 @@ pub fn run(args: CompressArgs, m: &clap::ArgMatches) -> Result<()> {
     Ok(())
 }
 
+/// Prints the runtime's T near the beam against the tables there, per group.
+fn print_near_beam(nb: &NearBeamCheck) {
+    for (what, rows) in [
+        ("aureole annuli", &nb.annuli),
+        ("view bins near the beam", &nb.bins),
+    ] {
+        if rows.is_empty() {
+            continue;
+        }
+        println!("near the beam, {what}: group  cells  bias  E (noise), the runtime's cell means against the tables");
+        for r in rows.iter() {
+            let name = r.group.map_or("all ≥ 2".to_string(), |g| g.to_string());
+            println!(
+                "{name:>40} {:>6} {:>+7.1} % {:>6.1} % ({:.1} %)",
+                r.cells,
+                100.0 * r.bias,
+                100.0 * r.rel_rms,
+                100.0 * r.noise
+            );
+        }
+    }
+}
+
 /// Prints what a compression measured and wrote.
 pub fn print_outcome(o: &Outcome, out: &Path) {
     print_errors("fitted slices", &o.errors);
@@ -142,6 +166,9 @@ pub fn print_outcome(o: &Outcome, out: &Path) {
             n.worst_t_faint,
             n.below_f32
         );
+        if let Some(nb) = &n.near_beam {
+            print_near_beam(nb);
+        }
     }
     let (worst, groups) = &o.coverage;
     println!(

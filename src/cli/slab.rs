@@ -15,7 +15,7 @@ use std::time::Instant;
 #[derive(Args, Debug, Clone)]
 pub struct SlabArgs {
     /// Slab config (JSON; keys in fit-configs/README.md): thicknesses, mu_l, planes, mu_v_bins,
-    /// psi_v_bins, group_starts, phase, albedo, seed, stop.
+    /// psi_v_bins, group_starts, phase, albedo, grazing_mu, aureole_deg, seed, stop.
     #[arg(long, value_name = "FILE")]
     config: PathBuf,
     /// Output directory; its checkpoint/ subdirectory holds finished slices and the slice in

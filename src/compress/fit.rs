@@ -400,6 +400,7 @@ pub(crate) mod tests {
             group_first: vec![1.0, 2.0],
             collector: Default::default(),
             phase: None,
+            aureole: None,
         };
         let form = LogAdditive {
             legendre: 3,

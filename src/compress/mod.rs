@@ -10,6 +10,7 @@ pub mod figure;
 pub mod fit;
 pub mod form;
 pub mod joint;
+pub mod near_beam;
 pub mod report;
 pub mod run;
 pub mod ship;

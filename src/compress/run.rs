@@ -8,6 +8,7 @@ use super::figure;
 use super::fit::{fit_all, held_out_l, predict, predict_held_out, GroupFit};
 use super::form::Lerp;
 use super::joint::{fit_all_joint, fit_joint_groups, spanned, JointFit};
+use super::near_beam::{near_beam_check, NearBeamCheck};
 use super::report::{collector_error_on, group_error, group_error_on, CollectorError, GroupError};
 use super::ship::{ntt_bytes, phase_angles};
 use super::{LogAdditive, SlabTables};
@@ -140,7 +141,11 @@ pub fn compress_reporting(
         None
     } else {
         let phase = phase_of_run(&tab, tables)?;
-        Some(write_ntt(out, &tab, opt, &phase, &m)?)
+        let mut check = write_ntt(out, &tab, opt, &phase, &m)?;
+        let bytes = std::fs::read(&check.path)?;
+        let rt = TransportTables::from_bytes(&bytes).map_err(|e| anyhow!("{e}"))?;
+        check.near_beam = (rt.groups() + 1 == tab.shape[0]).then(|| near_beam_check(&tab, &rt));
+        Some(check)
     };
     let report = Report::new(tables, opt, &m, ntt.as_ref());
     write_json(&out.join("report.json"), &report)?;
@@ -548,6 +553,8 @@ pub struct NttCheck {
     /// the runtime's f32 cannot hold it (0 or a subnormal with few digits) and they are not
     /// compared — light no renderer sees (low orders deep in thick slabs under a grazing sun).
     pub below_f32: usize,
+    /// The runtime's T near the beam against the tables' tallies there.
+    pub near_beam: Option<NearBeamCheck>,
 }
 
 /// Writes transport.ntt (joint fits and the phase function) after loading it back with the
@@ -593,6 +600,7 @@ fn write_ntt(
         zero_mismatches: 0,
         below_f32: 0,
         worst_t_faint: 0.0,
+        near_beam: None,
     };
     let mut all = vec![Transport::default(); joint.len()];
     for it in 0..nt {
@@ -610,13 +618,7 @@ fn write_ntt(
                 for m in 0..nm {
                     for k in 0..nk {
                         let at = tab.point(it, il, j, m, k);
-                        let at32 = SlabPoint {
-                            depth: at.depth as f32,
-                            thickness: at.thickness as f32,
-                            mu_v: at.mu_v as f32,
-                            psi_v: at.psi_v as f32,
-                            mu_l: at.mu_l as f32,
-                        };
+                        let at32 = at.to_f32();
                         rt.evaluate_all(&at32, &mut all);
                         for (f, got) in joint.iter().zip(&all) {
                             let i = tab.index(f.group, it, il, j, m, k);

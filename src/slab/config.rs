@@ -44,6 +44,10 @@ pub struct SlabConfig {
     /// narrowest μ_V bin.
     #[serde(default = "default_grazing")]
     pub grazing_mu: f64,
+    /// Edges (degrees) of the cones around the transmitted beam tallied apart, the aureole
+    /// (src/slab/aureole.rs); empty: none.
+    #[serde(default = "default_aureole")]
+    pub aureole_deg: Vec<f64>,
     /// Seed of every random stream.
     #[serde(default = "one_u64")]
     pub seed: u64,
@@ -63,6 +67,9 @@ fn default_group_starts() -> Vec<u32> {
 }
 fn default_grazing() -> f64 {
     super::grid::DEFAULT_GRAZING_MU
+}
+fn default_aureole() -> Vec<f64> {
+    super::aureole::DEFAULT_AUREOLE_DEG.to_vec()
 }
 fn sixteen() -> usize {
     16
@@ -170,6 +177,7 @@ impl SlabConfig {
             self.groups(),
         )?;
         grid.grazing_mu = self.grazing_mu;
+        grid.aureole = super::aureole::Aureole::new(self.aureole_deg.clone())?;
         Ok(grid)
     }
 }

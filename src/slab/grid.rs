@@ -10,6 +10,7 @@
 //!   the orders 1–8 live within ~10 mfp of the lit face. The law is the runtime's (its
 //!   constants, and its inverse for the tables' lookups), as are the default order groups.
 
+use super::aureole::Aureole;
 use anyhow::{bail, Result};
 use nephele_runtime::fitting::{STRETCH_EXPONENT, STRETCH_SCALE};
 
@@ -57,6 +58,8 @@ pub struct SlabGrid {
     psi_cos: Vec<f64>,
     /// Bins per unit of μ when the μ_V bins are equal.
     mu_uniform: Option<f64>,
+    /// Cones around the transmitted beam, tallied apart (empty: none).
+    pub aureole: Aureole,
 }
 
 impl SlabGrid {
@@ -122,6 +125,7 @@ impl SlabGrid {
             group_of_order,
             psi_cos,
             mu_uniform,
+            aureole: Aureole::default(),
         })
     }
 
@@ -220,6 +224,17 @@ impl SlabGrid {
     pub fn solid_angle(&self, m: usize, k: usize) -> f64 {
         2.0 * (self.mu_edges[m + 1] - self.mu_edges[m])
             * (self.psi_edges[k + 1] - self.psi_edges[k])
+    }
+
+    /// Number of aureole cells: groups × planes × annuli.
+    pub fn n_aureole_cells(&self) -> usize {
+        self.groups.len() * self.depths.len() * self.aureole.n_bins()
+    }
+
+    /// Flat index of aureole cell (group, plane, annulus).
+    #[inline]
+    pub fn aureole_cell(&self, group: usize, plane: usize, b: usize) -> usize {
+        (group * self.depths.len() + plane) * self.aureole.n_bins() + b
     }
 
     /// Flat index of cell (group, plane, μ bin, ψ bin). Planes are the fastest index: the

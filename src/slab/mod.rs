@@ -2,6 +2,7 @@
 //! (docs/slab.md).
 //!
 //! - [`grid`]: tally planes, view-direction bins, order groups.
+//! - [`aureole`]: cones around the transmitted beam, the halo the view bins smear.
 //! - [`walk`]: the photon walk of one slice (t, μ_L) and its per-batch random streams.
 //! - [`tally`]: per-batch sums, batch-means statistics, the tables of a slice.
 //! - [`run`]: a slice run to its stopping rule, deterministic for any thread count.
@@ -11,6 +12,7 @@
 //! - [`output`]: tables.npz and tables.json, written and read.
 //! - [`checkpoint`]: exact sums of finished and running slices, for resuming and for shards.
 
+pub mod aureole;
 pub mod checkpoint;
 pub mod config;
 pub mod grid;

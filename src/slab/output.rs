@@ -4,6 +4,7 @@
 //! slice's report, timings) and `slab.png`. `nephele slab` and `nephele merge` write them; the
 //! compressor reads them.
 
+use super::aureole::Aureole;
 use super::config::SlabConfig;
 use super::tables::SlabRun;
 pub use super::tally::Collector;
@@ -20,6 +21,12 @@ use std::path::Path;
 pub const PHASE_THETA: &str = "phase_theta_deg";
 /// The name of its values p (sr⁻¹).
 pub const PHASE: &str = "phase";
+/// The aureole's T over [group, t, μ_L, depth, annulus] in tables.npz.
+pub const AUREOLE_T: &str = "T_aureole";
+/// Its standard error.
+pub const AUREOLE_SE: &str = "T_aureole_se";
+/// The annuli's edges (degrees from the beam).
+pub const AUREOLE_EDGES: &str = "aureole_edges_deg";
 
 /// Writes tables.npz and tables.json (and slab.png if `plot`) into `out`, atomically: the 5D
 /// tables of a whole run, its grids and groups, the phase function it sampled where it is a
@@ -116,6 +123,7 @@ fn arrays(cfg: &SlabConfig, run: &SlabRun, phase: Option<&Phase>) -> Npz {
         }
     }
     let mut z = Npz::new();
+    add_aureole(&mut z, cfg, run);
     let shape = [ng, nt, nl, np, nm, nk];
     for (name, data) in names.iter().zip(&out) {
         z.add(name, &shape, data);
@@ -149,6 +157,44 @@ fn arrays(cfg: &SlabConfig, run: &SlabRun, phase: Option<&Phase>) -> Npz {
         z.add(PHASE, &[s.phase.len()], &s.phase);
     }
     z
+}
+
+/// The aureole's T and its standard error over [group, t, μ_L, depth, annulus] and the
+/// annuli's edges (degrees), if the run tallied one.
+fn add_aureole(z: &mut Npz, cfg: &SlabConfig, run: &SlabRun) {
+    let na = cfg.aureole_deg.len().saturating_sub(1);
+    if na == 0 {
+        return;
+    }
+    let (nt, nl, np, ng) = (
+        cfg.thicknesses.len(),
+        cfg.mu_l.len(),
+        cfg.planes,
+        cfg.group_starts.len(),
+    );
+    let mut t = vec![f64::NAN; ng * nt * nl * np * na];
+    let mut se = t.clone();
+    for (s, (_, slice)) in run
+        .slices
+        .iter()
+        .enumerate()
+        .filter_map(|(s, x)| Some((s, x.as_ref()?)))
+    {
+        let (it, il) = (s / nl, s % nl);
+        let (at, ase) = &slice.tables.aureole;
+        for g in 0..ng {
+            for j in 0..np {
+                let src = (g * np + j) * na;
+                let dst = (((g * nt + it) * nl + il) * np + j) * na;
+                t[dst..dst + na].copy_from_slice(&at[src..src + na]);
+                se[dst..dst + na].copy_from_slice(&ase[src..src + na]);
+            }
+        }
+    }
+    let shape = [ng, nt, nl, np, na];
+    z.add(AUREOLE_T, &shape, &t);
+    z.add(AUREOLE_SE, &shape, &se);
+    z.add(AUREOLE_EDGES, &[na + 1], &cfg.aureole_deg);
 }
 
 /// T (up and down), c_z and σ against depth per order group, for the slice nearest t = 8,
@@ -251,6 +297,57 @@ pub struct SlabTables {
     /// The phase function the run sampled, where it is a table (files of runs before it was
     /// stored have none).
     pub phase: Option<Source>,
+    /// The aureole, if the run tallied one.
+    pub aureole: Option<AureoleTables>,
+}
+
+/// T and its standard error in cones around the transmitted beam (src/slab/aureole.rs) over
+/// [group, t, μ_L, depth, annulus].
+#[derive(Clone, Debug)]
+pub struct AureoleTables {
+    /// The annuli.
+    pub annuli: Aureole,
+    /// T = L/E⊥ (sr⁻¹), the mean over the annulus.
+    pub t: Vec<f64>,
+    /// Its standard error.
+    pub t_se: Vec<f64>,
+}
+
+impl AureoleTables {
+    /// Flat index of cell (group, t, μ_L, depth, annulus) of tables of `shape`.
+    pub fn index(
+        &self,
+        shape: &[usize; 6],
+        g: usize,
+        it: usize,
+        il: usize,
+        j: usize,
+        b: usize,
+    ) -> usize {
+        (((g * shape[1] + it) * shape[2] + il) * shape[3] + j) * self.annuli.n_bins() + b
+    }
+}
+
+/// The aureole of a tables.npz, if it has one, checked against the tables' `shape`.
+fn read_aureole(path: &Path, shape: &[usize; 6]) -> Result<Option<AureoleTables>> {
+    let Some(edges) = read_optional(path, AUREOLE_EDGES)? else {
+        return Ok(None);
+    };
+    let annuli = Aureole::new(edges).with_context(|| format!("'{}'", path.display()))?;
+    let a = read_arrays(path, &[AUREOLE_T, AUREOLE_SE])?;
+    let n = shape[..4].iter().product::<usize>() * annuli.n_bins();
+    ensure!(
+        a[0].len() == n && a[1].len() == n,
+        "'{}': {AUREOLE_T} has {} values, the grids say {n}",
+        path.display(),
+        a[0].len()
+    );
+    let mut a = a.into_iter();
+    Ok(Some(AureoleTables {
+        annuli,
+        t: a.next().unwrap_or_default(),
+        t_se: a.next().unwrap_or_default(),
+    }))
 }
 
 impl SlabTables {
@@ -331,6 +428,7 @@ impl SlabTables {
             group_first,
             collector,
             phase: read_phase(path)?,
+            aureole: read_aureole(path, &shape)?,
         })
     }
 

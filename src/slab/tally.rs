@@ -14,7 +14,7 @@
 //! the ratios c and σ).
 
 use super::grid::SlabGrid;
-use crate::io::npz::{read_arrays, Npz};
+use crate::io::npz::{read_arrays, read_optional, Npz};
 use anyhow::{bail, Result};
 use std::path::Path;
 
@@ -23,6 +23,8 @@ use std::path::Path;
 pub struct BatchTally {
     /// Per cell: Σ w/|μ| · (1, x′, z, x′² + z²).
     pub cells: Vec<[f64; 4]>,
+    /// Per aureole cell (group, plane, annulus; [`SlabGrid::aureole_cell`]): Σ w/|μ|.
+    pub aureole: Vec<f64>,
     /// Per plane: diffuse photons crossing upward / downward (flux in units of E⊥ μ_L per photon).
     pub up: Vec<f64>,
     /// See `up`.
@@ -47,6 +49,7 @@ impl BatchTally {
         let planes = grid.depths.len();
         Self {
             cells: vec![[0.0; 4]; grid.n_cells()],
+            aureole: vec![0.0; grid.n_aureole_cells()],
             up: vec![0.0; planes],
             down: vec![0.0; planes],
             direct: vec![0.0; planes],
@@ -68,6 +71,8 @@ pub struct Accumulator {
     pub total: BatchTally,
     /// Per cell, the 10 entries of Σ v vᵀ (upper triangle, row-major).
     second: Vec<[f64; 10]>,
+    /// Per aureole cell, Σ v².
+    aureole_second: Vec<f64>,
 }
 
 /// Index pairs of the upper triangle of a 4×4 matrix, row-major.
@@ -91,6 +96,7 @@ impl Accumulator {
             batches: 0,
             total: BatchTally::new(grid),
             second: vec![[0.0; 10]; grid.n_cells()],
+            aureole_second: vec![0.0; grid.n_aureole_cells()],
         }
     }
 
@@ -108,6 +114,15 @@ impl Accumulator {
             for (s, (i, j)) in sec.iter_mut().zip(PAIRS) {
                 *s += v[i] * v[j];
             }
+        }
+        for ((sum, sec), v) in t
+            .aureole
+            .iter_mut()
+            .zip(&mut self.aureole_second)
+            .zip(&b.aureole)
+        {
+            *sum += v;
+            *sec += v * v;
         }
         for (a, x) in [
             (&mut t.up, &b.up),
@@ -130,6 +145,13 @@ impl Accumulator {
         let n = t.cells.len();
         npz.add(&format!("{prefix}cells"), &[n, 4], &t.cells.concat());
         npz.add(&format!("{prefix}second"), &[n, 10], &self.second.concat());
+        let na = t.aureole.len();
+        npz.add(&format!("{prefix}aureole"), &[na], &t.aureole);
+        npz.add(
+            &format!("{prefix}aureole_second"),
+            &[na],
+            &self.aureole_second,
+        );
         let p = t.up.len();
         npz.add(
             &format!("{prefix}planes"),
@@ -166,6 +188,20 @@ impl Accumulator {
         acc.total.up = a[2][..p].to_vec();
         acc.total.down = a[2][p..2 * p].to_vec();
         acc.total.direct = a[2][2 * p..].to_vec();
+        let na = grid.n_aureole_cells();
+        for (name, dst) in [
+            ("aureole", &mut acc.total.aureole),
+            ("aureole_second", &mut acc.aureole_second),
+        ] {
+            match read_optional(path, &format!("{prefix}{name}"))? {
+                Some(v) if v.len() == na => *dst = v,
+                None if na == 0 => {}
+                _ => bail!(
+                    "'{}': sums {prefix} have no aureole of this grid's {na} cells (written before the aureole tally, or by another config)",
+                    path.display()
+                ),
+            }
+        }
         let s = &a[3];
         acc.batches = s[0] as u64;
         acc.total.escaped_top = s[1];
@@ -181,6 +217,7 @@ impl Accumulator {
         let n = self.batches.max(1) as f64;
         let per_batch = self.total.photons as f64 / n;
         let mut out = SliceTables::zeros(grid.n_cells());
+        out.aureole = self.aureole_tables(grid, mu_l);
         for (c, (sum, sec)) in self.total.cells.iter().zip(&self.second).enumerate() {
             if sum[0] == 0.0 {
                 continue;
@@ -235,6 +272,34 @@ impl Accumulator {
     }
 }
 
+impl Accumulator {
+    /// T and its standard error per aureole cell (group, plane, annulus) so far.
+    fn aureole_tables(&self, grid: &SlabGrid, mu_l: f64) -> (Vec<f64>, Vec<f64>) {
+        let n = self.batches.max(1) as f64;
+        let per_batch = self.total.photons as f64 / n;
+        let na = grid.aureole.n_bins();
+        let mut t = vec![0.0; grid.n_aureole_cells()];
+        let mut se = vec![0.0; t.len()];
+        for (c, (sum, sec)) in self
+            .total
+            .aureole
+            .iter()
+            .zip(&self.aureole_second)
+            .enumerate()
+        {
+            let scale = mu_l / (per_batch * grid.aureole.solid_angle(c % na.max(1)));
+            let mean = sum / n;
+            t[c] = scale * mean;
+            se[c] = if n > 1.0 {
+                scale * ((sec - n * mean * mean) / (n * (n - 1.0))).max(0.0).sqrt()
+            } else {
+                f64::NAN
+            };
+        }
+        (t, se)
+    }
+}
+
 /// T and its standard error for every cell of one slice (flat, in [`SlabGrid::cell`] order),
 /// with the collector. Cells no photon reached hold T = 0 and NaN elsewhere.
 #[derive(Clone, Debug)]
@@ -245,6 +310,8 @@ pub struct SliceTables {
     pub t_se: Vec<f64>,
     /// c and σ.
     pub collector: Collector,
+    /// T and its standard error per aureole cell (group, plane, annulus).
+    pub aureole: (Vec<f64>, Vec<f64>),
 }
 
 /// The collector c = (c_x, c_z) (mfp, from the viewpoint's horizontal position: x across, z
@@ -280,6 +347,7 @@ impl SliceTables {
                 sigma: nan.clone(),
                 sigma_se: nan,
             },
+            aureole: (Vec::new(), Vec::new()),
         }
     }
 

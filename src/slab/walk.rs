@@ -178,10 +178,19 @@ impl Slice<'_> {
             (first, 1.0 / dir[2], [mirror, 0.0, 0.0, 1.0])
         };
         let inv_mu = self.grid.crossing_weight(weight, inv_dz.abs());
+        let halo = if down {
+            self.aureole_cell(dir, order)
+        } else {
+            None
+        };
         let flux = if down { &mut tally.down } else { &mut tally.up };
         let cells = &mut tally.cells;
+        let aureole = &mut tally.aureole;
         visit_planes(depths, above, d1, down, |j| {
             flux[j] += weight;
+            if let Some((first, stride)) = halo {
+                aureole[first + j * stride] += inv_mu;
+            }
             let along = (depths[j] - pos[2]) * inv_dz;
             let (x, z) = (pos[0] + along * dir[0], pos[1] + along * dir[1]);
             let cell = &mut cells[first + j];
@@ -216,6 +225,16 @@ impl Slice<'_> {
             (1.0 / dir[2], 0.0, 1.0)
         };
         (first, inv_dz, [s_c, c_c, c_c, -s_c])
+    }
+
+    /// For a flight going down within the aureole's widest cone around the beam: its cell at
+    /// plane 0 and the stride from plane to plane ([`SlabGrid::aureole_cell`]).
+    #[inline]
+    fn aureole_cell(&self, dir: &[f64; 3], order: u32) -> Option<(usize, usize)> {
+        let g = self.grid;
+        let sin_l = (1.0 - self.mu_l * self.mu_l).max(0.0).sqrt();
+        let b = g.aureole.bin(dir[1] * sin_l + dir[2] * self.mu_l)?;
+        Some((g.aureole_cell(g.group(order), 0, b), g.aureole.n_bins()))
     }
 
     /// (μ_V bin, ψ_V bin, ±1 for the mirror of x) of a propagation direction.

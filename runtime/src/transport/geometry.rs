@@ -33,6 +33,19 @@ impl<F: Copy> SlabPoint<F> {
     }
 }
 
+impl SlabPoint<f64> {
+    /// The point rounded to f32, as a renderer would ask for it.
+    pub fn to_f32(&self) -> SlabPoint<f32> {
+        SlabPoint {
+            depth: self.depth as f32,
+            thickness: self.thickness as f32,
+            mu_v: self.mu_v as f32,
+            psi_v: self.psi_v as f32,
+            mu_l: self.mu_l as f32,
+        }
+    }
+}
+
 impl SlabPoint<f32> {
     /// Whether the point is in a slab the tables can be read at: t finite and > 0,
     /// 0 ≤ d ≤ t, μ_L finite and > 0, μ_V and ψ_V finite. Elsewhere every T and order 1 is 0,
