@@ -17,7 +17,7 @@ use crate::phase::{Phase, PhaseSpec};
 use anyhow::{anyhow, ensure, Context, Result};
 use nephele_runtime::fitting::{CollectorForm, Statistic};
 use nephele_runtime::phase::Cosine;
-use nephele_runtime::transport::{single_scattering, SlabPoint};
+use nephele_runtime::transport::single_scattering;
 use nephele_runtime::transport::{Transport, TransportTables};
 use rayon::prelude::*;
 use serde::Serialize;
