@@ -1,15 +1,15 @@
 //! The compressed tables at one point (nephele-runtime, f32, one core), on 4096 fixed random
 //! points over the whole domain (t = 0.5 … 128 mfp log-uniform, any depth, μ_V ∈ [−1, 1],
 //! ψ_V ∈ [0, π], μ_L ∈ [0.1, 1]): T of every group, T of one group, T, c and σ of every group
-//! and of one, and order 1 — each timed per point, for the shipped tables (version 2, β
-//! feature-major) and the same tables in the version 1 layout (β group-major), which still
-//! loads. Targets (issue 27): T of all 8 groups ≤ 1 µs, one ≤ 0.3 µs, T + c + σ of all
+//! and of one, and order 1 — each timed per point, for the shipped tables (version 3: β
+//! feature-major, with the halo near the beam), the same without the halo (version 2) and in
+//! the version 1 layout (β group-major), which still loads. Targets (issue 27): T of all 8 groups ≤ 1 µs, one ≤ 0.3 µs, T + c + σ of all
 //! ≤ 2.5 µs.
 //!
 //! `cargo bench --bench transport`
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use nephele::compress::ship::relayout;
+use nephele::compress::ship::{relayout, without_halo};
 use nephele_runtime::embedded::MIE_10UM;
 use nephele_runtime::transport::{SlabPoint, Transport, TransportTables};
 use std::hint::black_box;
@@ -38,8 +38,9 @@ fn points() -> Vec<SlabPoint<f32>> {
 
 fn bench(c: &mut Criterion) {
     let points = points();
-    let v1 = relayout(MIE_10UM, 1).expect("the version 1 layout");
-    for (layout, bytes) in [("v2", MIE_10UM), ("v1", &v1[..])] {
+    let v2 = without_halo(MIE_10UM).expect("the tables without their halo");
+    let v1 = relayout(&v2, 1).expect("the version 1 layout");
+    for (layout, bytes) in [("v3", MIE_10UM), ("v2", &v2[..]), ("v1", &v1[..])] {
         let tab = TransportTables::from_bytes(bytes).expect("valid tables");
         let mut group = c.benchmark_group(format!("transport_{layout}"));
         group.throughput(Throughput::Elements(points.len() as u64));

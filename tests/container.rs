@@ -88,15 +88,15 @@ fn the_writer_refuses_bad_arrays() {
 #[test]
 fn foreign_and_damaged_inputs_are_named() {
     let bytes = sample();
-    let mut v3 = bytes.clone();
-    v3[8] = 3;
+    let mut v4 = bytes.clone();
+    v4[8] = 4;
     assert_eq!(
-        Container::from_bytes(&v3).unwrap_err(),
-        FormatError::UnsupportedVersion(3)
+        Container::from_bytes(&v4).unwrap_err(),
+        FormatError::UnsupportedVersion(4)
     );
-    assert!(FormatError::UnsupportedVersion(3)
+    assert!(FormatError::UnsupportedVersion(4)
         .to_string()
-        .contains("version 3"));
+        .contains("version 4"));
     let mut magic = bytes.clone();
     magic[0] = b'X';
     assert_eq!(

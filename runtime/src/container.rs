@@ -20,9 +20,11 @@
 //!   L − 4     4  u32    CRC-32 (IEEE 802.3, as zlib) of bytes [0, L − 4)
 //! ```
 
-/// The version this writer writes. Version 2 stores the transport parameters feature-major
-/// ([`crate::transport::TransportTables`]); version 1 files, group-major, still load.
-pub const FORMAT_VERSION: u32 = 2;
+/// The version this writer writes. Version 3 may hold the halo around the transmitted beam
+/// (`halo_*` arrays, [`crate::transport::TransportTables`]), which a version-2 reader would
+/// ignore without a word, hence the bump; version 2 stores the transport parameters
+/// feature-major, and version 1 files, group-major, still load.
+pub const FORMAT_VERSION: u32 = 3;
 /// The oldest version this reader loads.
 pub const OLDEST_FORMAT_VERSION: u32 = 1;
 

@@ -103,7 +103,7 @@ pub fn run(args: CompressArgs, m: &clap::ArgMatches) -> Result<()> {
 }
 
 /// Prints the runtime's T near the beam against the tables there, per group.
-fn print_near_beam(nb: &NearBeamCheck) {
+fn print_near_beam(nb: &NearBeamCheck, whose: &str) {
     for (what, rows) in [
         ("aureole annuli", &nb.annuli),
         ("view bins near the beam", &nb.bins),
@@ -111,7 +111,7 @@ fn print_near_beam(nb: &NearBeamCheck) {
         if rows.is_empty() {
             continue;
         }
-        println!("near the beam, {what}: group  cells  bias  E (noise), the runtime's cell means against the tables");
+        println!("near the beam, {what}, {whose}: group  cells  bias  E (noise), cell means against the tables");
         for r in rows.iter() {
             let name = r.group.map_or("all ≥ 2".to_string(), |g| g.to_string());
             println!(
@@ -166,8 +166,16 @@ pub fn print_outcome(o: &Outcome, out: &Path) {
             n.worst_t_faint,
             n.below_f32
         );
+        if let Some(nb) = &n.near_beam_form {
+            print_near_beam(nb, "the form alone");
+        }
         if let Some(nb) = &n.near_beam {
-            print_near_beam(nb);
+            let whose = if n.near_beam_form.is_some() {
+                "with the halo"
+            } else {
+                "the runtime"
+            };
+            print_near_beam(nb, whose);
         }
     }
     let (worst, groups) = &o.coverage;

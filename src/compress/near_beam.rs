@@ -5,6 +5,7 @@
 //! energy counts wherever in the bin the form puts it.
 
 use crate::slab::aureole::{bin_extent, view_near_beam};
+use crate::slab::output::AureoleTables;
 use crate::slab::SlabTables;
 use nephele_runtime::transport::{SlabPoint, Transport, TransportTables};
 use serde::Serialize;
@@ -130,12 +131,12 @@ pub fn near_beam_check(tab: &SlabTables, rt: &TransportTables) -> NearBeamCheck 
         let mu_l = tab.mu_l[il];
         if let Some(a) = aureole {
             for b in (0..a.annuli.n_bins()).filter(|&b| a.annuli.whole(mu_l, b)) {
-                let (lo, hi) = (a.annuli.edges_deg[b], a.annuli.edges_deg[b + 1]);
-                average(rt, &mut all, &mut mean, |p, q| {
-                    let theta = (lo + (hi - lo) * p).to_radians();
-                    let (mu_v, psi_v) = view_near_beam(mu_l, theta, 2.0 * PI * q);
-                    (SlabPoint { mu_v, psi_v, ..at }, theta.sin())
-                });
+                annulus_average(
+                    rt,
+                    (&mut all, &mut mean),
+                    &at,
+                    &a.annuli.edges_deg[b..b + 2],
+                );
                 for g in 1..ng {
                     let i = a.index(&tab.shape, g, it, il, j, b);
                     annuli[g].add(a.t[i], a.t_se[i], mean[g - 1]);
@@ -182,6 +183,140 @@ pub fn near_beam_check(tab: &SlabTables, rt: &TransportTables) -> NearBeamCheck 
         },
         bins: errors(&bins),
     }
+}
+
+/// Groups of orders ≥ 2 the halo covers (orders 2 … 18): with f32 values the shipped file
+/// stays under 512 KB; the halo of the higher orders is within ±28 % of the form.
+pub const HALO_GROUPS: usize = 6;
+
+/// The halo's reach (degrees from the beam): the annuli out to it. Beyond it the form's bins
+/// hold the light well enough, and a ratio taken at the nodes does not carry between them at
+/// the far face of thick slabs (docs/compress.md, "The halo term").
+const HALO_DEG: f64 = 6.5;
+
+/// The largest |h| stored: e^30 ≈ 10¹³, within f32 for any T the form gives near the beam
+/// (order 2's form there is 10⁻⁴ … 10⁻⁸ of the halo's tally on the inner annuli).
+const H_MAX: f64 = 30.0;
+
+/// The halo correction a `.ntt` stores (nephele_runtime's `transport::halo`).
+pub struct HaloTable {
+    /// Annulus edges (degrees).
+    pub edges_deg: Vec<f64>,
+    /// Groups covered (the first ones of orders ≥ 2).
+    pub groups: usize,
+    /// Depth planes.
+    pub planes: usize,
+    /// h = ln(T_annulus / T̄_form) over [group, thickness, μ_L, plane, annulus]; where the
+    /// annulus is cut by the horizon or its tally has no light or is too noisy (relative SE ≥
+    /// 30 %), the mean of its neighbours' (filled outward).
+    pub values: Vec<f32>,
+}
+
+/// The halo of `tab`'s aureole against the form of `rt` (which has none).
+pub fn halo_table(tab: &SlabTables, aur: &AureoleTables, rt: &TransportTables) -> HaloTable {
+    let [ng, nt, nl, nd, ..] = tab.shape;
+    // The annuli out to HALO_DEG.
+    let nb = (0..aur.annuli.n_bins())
+        .take_while(|&b| aur.annuli.edges_deg[b + 1] <= HALO_DEG + 1e-9)
+        .count()
+        .max(1);
+    let groups = HALO_GROUPS.min(ng - 1);
+    let mut values = vec![0.0f32; groups * nt * nl * nd * nb];
+    let mut known = vec![false; values.len()];
+    let mut all = vec![Transport::default(); rt.groups()];
+    let mut mean = vec![0.0; rt.groups()];
+    for (it, il, j) in
+        (0..nt).flat_map(|it| (0..nl).flat_map(move |il| (0..nd).map(move |j| (it, il, j))))
+    {
+        let at = tab.point(it, il, j, 0, 0);
+        let mu_l = tab.mu_l[il];
+        for b in (0..nb).filter(|&b| aur.annuli.whole(mu_l, b)) {
+            annulus_average(
+                rt,
+                (&mut all, &mut mean),
+                &at,
+                &aur.annuli.edges_deg[b..b + 2],
+            );
+            for g in 0..groups {
+                let i = aur.index(&tab.shape, g + 1, it, il, j, b);
+                let (t, se) = (aur.t[i], aur.t_se[i]);
+                if t > 0.0 && se < 0.3 * t && mean[g] > 0.0 {
+                    let h = (t / mean[g]).ln().clamp(-H_MAX, H_MAX);
+                    let k = (((g * nt + it) * nl + il) * nd + j) * nb + b;
+                    (values[k], known[k]) = (h as f32, true);
+                }
+            }
+        }
+    }
+    fill_from_neighbours(&mut values, &mut known, [groups, nt, nl, nd, nb]);
+    HaloTable {
+        edges_deg: aur.annuli.edges_deg[..=nb].to_vec(),
+        groups,
+        planes: nd,
+        values,
+    }
+}
+
+/// Gives every entry of `values` [group, t, μ_L, plane, annulus] not `known` the mean of its
+/// known neighbours (±1 node in t, μ_L and plane), pass after pass until all are known (or
+/// none of a group's annulus is). The halo is read linearly between nodes: where the walk left
+/// an annulus without light or too noisy (order 2 at the far face of thick slabs) or cut by
+/// the horizon, h = 0 would pull its neighbours' halo halfway back to the form's hole (order 2
+/// −85 % at the far face of a 10 mfp slab, between nodes, before this fill).
+fn fill_from_neighbours(values: &mut [f32], known: &mut [bool], [ng, nt, nl, nd, nb]: [usize; 5]) {
+    let at = |g: usize, it: usize, il: usize, j: usize, b: usize| {
+        (((g * nt + it) * nl + il) * nd + j) * nb + b
+    };
+    for (g, b) in (0..ng).flat_map(|g| (0..nb).map(move |b| (g, b))) {
+        loop {
+            let mut found = Vec::new();
+            for (it, il, j) in
+                (0..nt).flat_map(|it| (0..nl).flat_map(move |il| (0..nd).map(move |j| (it, il, j))))
+            {
+                if known[at(g, it, il, j, b)] {
+                    continue;
+                }
+                let near = [
+                    (it > 0).then(|| at(g, it - 1, il, j, b)),
+                    (it + 1 < nt).then(|| at(g, it + 1, il, j, b)),
+                    (il > 0).then(|| at(g, it, il - 1, j, b)),
+                    (il + 1 < nl).then(|| at(g, it, il + 1, j, b)),
+                    (j > 0).then(|| at(g, it, il, j - 1, b)),
+                    (j + 1 < nd).then(|| at(g, it, il, j + 1, b)),
+                ];
+                let (n, sum) = near
+                    .iter()
+                    .flatten()
+                    .filter(|&&k| known[k])
+                    .fold((0, 0.0f64), |(n, s), &k| (n + 1, s + values[k] as f64));
+                if n > 0 {
+                    found.push((at(g, it, il, j, b), (sum / n as f64) as f32));
+                }
+            }
+            if found.is_empty() {
+                break;
+            }
+            for (k, v) in found {
+                (values[k], known[k]) = (v, true);
+            }
+        }
+    }
+}
+
+/// The mean of every group's T over the annulus between the angles `edges` (degrees) around
+/// the beam at `at` (its sun cosine): [`POINTS`] angles × [`POINTS`] turns, weighted by sin Θ.
+fn annulus_average(
+    rt: &TransportTables,
+    (all, mean): (&mut [Transport], &mut [f64]),
+    at: &SlabPoint<f64>,
+    edges: &[f64],
+) {
+    let (lo, hi, mu_l) = (edges[0], edges[1], at.mu_l);
+    average(rt, all, mean, |p, q| {
+        let theta = (lo + (hi - lo) * p).to_radians();
+        let (mu_v, psi_v) = view_near_beam(mu_l, theta, 2.0 * PI * q);
+        (SlabPoint { mu_v, psi_v, ..*at }, theta.sin())
+    });
 }
 
 /// The mean of every group's T over a cell: `point(p, q)` gives the point at fractions (p, q)

@@ -8,9 +8,9 @@ use super::figure;
 use super::fit::{fit_all, held_out_l, predict, predict_held_out, GroupFit};
 use super::form::Lerp;
 use super::joint::{fit_all_joint, fit_joint_groups, spanned, JointFit};
-use super::near_beam::{near_beam_check, NearBeamCheck};
+use super::near_beam::{halo_table, near_beam_check, NearBeamCheck};
 use super::report::{collector_error_on, group_error, group_error_on, CollectorError, GroupError};
-use super::ship::{ntt_bytes, phase_angles};
+use super::ship::{ntt_bytes, phase_angles, with_halo};
 use super::{LogAdditive, SlabTables};
 use crate::io::{write_atomic, AtomicFiles, Npz};
 use crate::phase::{Phase, PhaseSpec};
@@ -555,6 +555,8 @@ pub struct NttCheck {
     pub below_f32: usize,
     /// The runtime's T near the beam against the tables' tallies there.
     pub near_beam: Option<NearBeamCheck>,
+    /// The same for the form alone, where the file holds a halo (what the halo corrects).
+    pub near_beam_form: Option<NearBeamCheck>,
 }
 
 /// Writes transport.ntt (joint fits and the phase function) after loading it back with the
@@ -589,6 +591,13 @@ fn write_ntt(
         (&theta, &phase),
     )?;
     let rt = TransportTables::from_bytes(&bytes).map_err(|e| anyhow!("{e}"))?;
+    // The halo (if the run tallied an aureole) against the form without it; the checks below
+    // compare the form itself with the fit.
+    let halo = tab.aureole.as_ref().map(|a| halo_table(tab, a, &rt));
+    let written = match &halo {
+        Some(h) => with_halo(&bytes, h)?,
+        None => bytes.clone(),
+    };
     let [_, nt, nl, nd, nm, nk] = tab.shape;
     let mut check = NttCheck {
         path: out.join("transport.ntt"),
@@ -601,6 +610,7 @@ fn write_ntt(
         below_f32: 0,
         worst_t_faint: 0.0,
         near_beam: None,
+        near_beam_form: halo.as_ref().map(|_| near_beam_check(tab, &rt)),
     };
     let mut all = vec![Transport::default(); joint.len()];
     for it in 0..nt {
@@ -643,8 +653,9 @@ fn write_ntt(
             }
         }
     }
+    check.bytes = written.len();
     write_atomic(&check.path, |w| {
-        std::io::Write::write_all(w, &bytes)?;
+        std::io::Write::write_all(w, &written)?;
         Ok(())
     })?;
     Ok(check)

@@ -4,6 +4,7 @@
 
 use super::collector::CollectorFit;
 use super::joint::JointFit;
+use super::near_beam::HaloTable;
 use super::LogAdditive;
 use crate::io::container::{container_bytes, versioned_container_bytes, Array};
 use crate::slab::SlabTables;
@@ -119,6 +120,81 @@ pub fn ntt_bytes(
     container_bytes(&views)
 }
 
+/// The tables `bytes` (without a halo) with the halo `h` appended: every array as it is, then
+/// `halo_edges`, `halo_shape` and `halo` (format version 3; `nephele_runtime`'s
+/// `transport::halo`).
+pub fn with_halo(bytes: &[u8], h: &HaloTable) -> Result<Vec<u8>> {
+    let c = Container::from_bytes(bytes).map_err(|e| anyhow::anyhow!("{e}"))?;
+    ensure!(
+        c.find(names::HALO).is_none(),
+        "these tables already hold a halo"
+    );
+    let len = |name| c.find(name).map_or(0, |a| a.len());
+    let (nt, nl) = (len(names::THICKNESS), len(names::MU_L_NODES));
+    let nb = h.edges_deg.len() - 1;
+    ensure!(
+        h.values.len() == h.groups * nt * nl * h.planes * nb,
+        "a halo of {} values for {} groups, {nt} thicknesses, {nl} sun cosines, {} planes and {nb} annuli",
+        h.values.len(),
+        h.groups,
+        h.planes
+    );
+    let mut arrays: Vec<(String, Vec<usize>, Vec<f32>)> = (0..c.len())
+        .filter_map(|i| c.array(i))
+        .map(|a| {
+            (
+                a.name.to_string(),
+                a.dims[..a.rank].to_vec(),
+                a.iter().collect(),
+            )
+        })
+        .collect();
+    let edges = h.edges_deg.iter().map(|&x| x as f32).collect();
+    arrays.push((names::HALO_EDGES.into(), vec![nb + 1], edges));
+    arrays.push((
+        names::HALO_SHAPE.into(),
+        vec![2],
+        vec![h.groups as f32, h.planes as f32],
+    ));
+    arrays.push((
+        names::HALO.into(),
+        vec![h.groups, nt, nl, h.planes * nb],
+        h.values.clone(),
+    ));
+    let views: Vec<Array> = arrays
+        .iter()
+        .map(|(name, dims, values)| Array { name, dims, values })
+        .collect();
+    container_bytes(&views)
+}
+
+/// The tables `bytes` without their halo, as version 2 (every other array as it is): the form
+/// alone, for comparisons and for readers of version 2.
+pub fn without_halo(bytes: &[u8]) -> Result<Vec<u8>> {
+    let c = Container::from_bytes(bytes).map_err(|e| anyhow::anyhow!("{e}"))?;
+    ensure!(
+        c.version() >= 2,
+        "version {} tables: relayout them first",
+        c.version()
+    );
+    let kept: Vec<(String, Vec<usize>, Vec<f32>)> = (0..c.len())
+        .filter_map(|i| c.array(i))
+        .filter(|a| ![names::HALO_EDGES, names::HALO_SHAPE, names::HALO].contains(&a.name))
+        .map(|a| {
+            (
+                a.name.to_string(),
+                a.dims[..a.rank].to_vec(),
+                a.iter().collect(),
+            )
+        })
+        .collect();
+    let views: Vec<Array> = kept
+        .iter()
+        .map(|(name, dims, values)| Array { name, dims, values })
+        .collect();
+    versioned_container_bytes(&views, 2)
+}
+
 /// Per-group parameters ([P, Q] each) as one feature-major [P, G, Q] f32 array: one
 /// feature's coefficients for every group together, as the runtime sums them.
 fn feature_major(per_group: &[&[f64]], p: usize, q: usize) -> Result<Vec<f32>> {
@@ -141,14 +217,19 @@ fn feature_major(per_group: &[&[f64]], p: usize, q: usize) -> Result<Vec<f32>> {
 }
 
 /// The tables `bytes` (any version the runtime loads) rewritten in the layout of `version`
-/// (1: β group-major [G, P, Q]; 2, the current: feature-major [P, G, Q]); every other array
-/// as it is (`cargo run --release --example ntt_relayout -- OLD.ntt NEW.ntt`).
+/// (1: β group-major [G, P, Q]; 2 and 3, the current: feature-major [P, G, Q]); every other
+/// array as it is (`cargo run --release --example ntt_relayout -- OLD.ntt NEW.ntt`). A file
+/// with a halo stays at version 3: an older reader would skip the halo without a word.
 pub fn relayout(bytes: &[u8], version: u32) -> Result<Vec<u8>> {
     ensure!(
         (1..=FORMAT_VERSION).contains(&version),
         "no transport tables layout of version {version} (1 to {FORMAT_VERSION})"
     );
     let c = Container::from_bytes(bytes).map_err(|e| anyhow::anyhow!("{e}"))?;
+    ensure!(
+        version >= 3 || c.find(names::HALO).is_none(),
+        "these tables hold a halo around the beam, which readers of version {version} would ignore: they stay at version 3"
+    );
     let major = |v: u32| v >= 2;
     let mut arrays: Vec<(String, Vec<usize>, Vec<f32>)> = Vec::with_capacity(c.len());
     for i in 0..c.len() {

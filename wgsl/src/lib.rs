@@ -99,7 +99,7 @@ pub fn tables(group: u32, binding: u32) -> String {
 pub const SEARCH: &str = concat!(include_str!("search.wgsl"), include_str!("finite.wgsl"));
 
 /// Words of the index uniform ([`NttGpu::index`]).
-pub const NTT_INDEX_WORDS: usize = 44;
+pub const NTT_INDEX_WORDS: usize = 48;
 
 /// A `.ntt` as the WGSL port reads it: the arrays the shaders read as f32 bits, the Θ-hat nodes
 /// after them, and the index of where each starts.
@@ -154,6 +154,16 @@ pub fn ntt_for_gpu(bytes: &[u8]) -> Result<NttGpu, String> {
     let (phase_theta, n_phase) = word_of(names::PHASE_THETA)?;
     let (phase, _) = word_of(names::PHASE)?;
     let collector_beta = names::COLLECTOR_BETA.map(|name| word_of(name).map(|(at, _)| at));
+    // The halo (format version 3): edges, then h; its shape as two index words.
+    let halo = match c.find(names::HALO_SHAPE) {
+        Some(shape) => {
+            let (edges, n_edges) = word_of(names::HALO_EDGES)?;
+            let (values, _) = word_of(names::HALO)?;
+            let size = |i: usize| shape.get(i).unwrap_or(0.0) as u32;
+            [edges, n_edges, values, size(0), size(1)]
+        }
+        None => [0; 5],
+    };
     // The Θ-hat nodes as the runtime rounds them (π (i/(n − 1))² in f64, then f32).
     let hats = |words: &mut Vec<u32>, nodes: usize| {
         let at = words.len() as u32;
@@ -238,7 +248,9 @@ pub fn ntt_for_gpu(bytes: &[u8]) -> Result<NttGpu, String> {
     let mut all = [0u32; NTT_INDEX_WORDS];
     all[..index.len()].copy_from_slice(&index);
     all[index.len()..index.len() + collector.len()].copy_from_slice(&collector);
-    all[index.len() + collector.len()] = group_first;
+    let tail = index.len() + collector.len();
+    all[tail] = group_first;
+    all[tail + 1..tail + 1 + halo.len()].copy_from_slice(&halo);
     Ok(NttGpu { words, index: all })
 }
 

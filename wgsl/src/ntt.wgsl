@@ -46,9 +46,13 @@ struct NttIndex {
     cz_reach: u32,     // the first column of c_z's ℓ/σ̂ terms
     c_theta_hats: u32, // the collector's Θ-hat nodes (appended)
     group_first: u32,  // the first order of each group
+    halo_edges: u32,   // the halo's annulus edges (degrees), if halo_groups > 0
+    n_halo_edges: u32,
+    halo: u32,         // h over [group, thickness, μ_L, plane, annulus]
+    halo_groups: u32,  // the groups the halo covers (0: none)
+    halo_planes: u32,
     pad0: u32,
     pad1: u32,
-    pad2: u32,
 }
 
 @group(NEPHELE_NTT_GROUP) @binding(NEPHELE_NTT_BINDING)

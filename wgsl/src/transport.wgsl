@@ -8,7 +8,8 @@
 // harmonics, the view × sun interaction) each times the Legendre series in s_g (the place of
 // ln t in the group's span) of its coefficients; inside the group's fitted depths the
 // polynomial itself, beyond them continued toward the face ahead; T scaled by the share of the
-// grid weight on nodes with fitted cells and capped at 1.5 × the largest fitted T around.
+// grid weight on nodes with fitted cells and capped at 1.5 × the largest fitted T around,
+// then times the halo around the transmitted beam (if the file has one: `nt_halo`).
 // Needs ntt.wgsl and order1.wgsl (for `beam_scattered_once`) before it.
 
 const NT_MAX_LEGENDRE: u32 = 16u;
@@ -380,6 +381,66 @@ fn nt_depth_polynomial(d: array<f32, 16>, n: u32, u: f32, thickness: f32, r: vec
     return value + nt_continued_toward_face(inner - value, h_inside, h_edge, h);
 }
 
+// The median angle (degrees) of the halo's annulus b.
+fn nt_halo_centre(b: u32) -> f32 {
+    let a = ntt_f32(nephele_ntt_index.halo_edges + b);
+    let c = ntt_f32(nephele_ntt_index.halo_edges + b + 1u);
+    return sqrt(0.5 * (a * a + c * c));
+}
+
+// e^h, the halo around the transmitted beam of group g at the cell (the runtime's
+// `transport::halo`): for views going down within the last edge, h read linearly between the
+// thickness and sun-cosine nodes, the planes and the annuli's median angles, held below the
+// first and falling to 0 at the last edge; 1 elsewhere and for the groups it does not cover.
+fn nt_halo(g: u32, near_t: Lerp, c: NtCell) -> f32 {
+    let x = nephele_ntt_index;
+    if g >= x.halo_groups || x.n_halo_edges < 2u {
+        return 1.0;
+    }
+    let nb = x.n_halo_edges - 1u;
+    let last = ntt_f32(x.halo_edges + nb);
+    let deg = c.theta * (180.0 / PI);
+    if !(c.at.mu_v < 0.0) || !(deg < last) {
+        return 1.0;
+    }
+    var ab = vec2<u32>(0u, 0u);
+    var aw = vec2<f32>(1.0, 0.0);
+    let top = nt_halo_centre(nb - 1u);
+    if deg >= top {
+        ab.x = nb - 1u;
+        aw.x = (last - deg) / (last - top);
+    } else if deg > nt_halo_centre(0u) {
+        var b = 0u;
+        while b + 2u < nb && nt_halo_centre(b + 1u) <= deg {
+            b += 1u;
+        }
+        let w = (deg - nt_halo_centre(b)) / (nt_halo_centre(b + 1u) - nt_halo_centre(b));
+        ab = vec2<u32>(b, b + 1u);
+        aw = vec2<f32>(1.0 - w, w);
+    }
+    let planes = x.halo_planes;
+    let xj = clamp(c.u, 0.0, 1.0) * f32(planes - 1u);
+    let j0 = min(u32(xj), planes - 1u);
+    let j1 = min(j0 + 1u, planes - 1u);
+    let wj = xj - f32(j0);
+    let base = x.halo + g * x.n_t * x.n_l * planes * nb;
+    var h = 0.0;
+    for (var a = 0u; a < lerp_nodes(near_t); a++) {
+        for (var b = 0u; b < lerp_nodes(c.l); b++) {
+            let wtl = lerp_weight(near_t, a) * lerp_weight(c.l, b);
+            for (var k = 0u; k < 2u; k++) {
+                let j = select(j0, j1, k == 1u);
+                let wjk = select(1.0 - wj, wj, k == 1u);
+                let row = ((lerp_node(near_t, a) * x.n_l + lerp_node(c.l, b)) * planes + j) * nb;
+                for (var e = 0u; e < 2u; e++) {
+                    h += wtl * wjk * aw[e] * ntt_f32(base + row + ab[e]);
+                }
+            }
+        }
+    }
+    return nephele_exp(h);
+}
+
 // T of group g at a point, with what the collector needs of it.
 struct NtT {
     t: f32,
@@ -429,7 +490,7 @@ fn nt_transport(g: u32, at: SlabPoint) -> NtT {
     let depth = nt_depth_polynomial(dj, x.depth_terms, r.cell.u, t, r.range);
     let v = r.range.z * nephele_exp(boundary.x + depth);
     let top = nt_ceiling(g, near_t, r.cell);
-    r.t = select(v, top, top >= 0.0 && v > top);
+    r.t = select(v, top, top >= 0.0 && v > top) * nt_halo(g, near_t, r.cell);
     return r;
 }
 

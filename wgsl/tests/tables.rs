@@ -75,6 +75,60 @@ struct Wide {
     ceiling: Option<Vec<f64>>,
     phase_theta: Vec<f64>,
     phase: Vec<f64>,
+    halo: Option<WideHalo>,
+}
+
+/// The halo around the transmitted beam (format version 3), in f64.
+struct WideHalo {
+    edges: Vec<f64>,
+    groups: usize,
+    planes: usize,
+    values: Vec<f64>,
+}
+
+impl WideHalo {
+    /// e^h of group `g` at `cell`, `near_t` among `nt` thickness nodes (1 outside the halo).
+    fn factor(
+        &self,
+        g: usize,
+        cell: &nephele_runtime::fitting::Cell<f64>,
+        near_t: nephele_runtime::fitting::Lerp<f64>,
+        (nt, nl): (usize, usize),
+    ) -> f64 {
+        let nb = self.edges.len() - 1;
+        let (last, deg) = (self.edges[nb], cell.theta.to_degrees());
+        if g >= self.groups || !(cell.at.mu_v < 0.0) || !(deg < last) {
+            return 1.0;
+        }
+        let centre = |b: usize| (0.5 * (self.edges[b].powi(2) + self.edges[b + 1].powi(2))).sqrt();
+        let annuli = if deg >= centre(nb - 1) {
+            vec![(nb - 1, (last - deg) / (last - centre(nb - 1)))]
+        } else if deg <= centre(0) {
+            vec![(0, 1.0)]
+        } else {
+            let b = (0..nb - 1).rfind(|&b| centre(b) <= deg).unwrap_or(0);
+            let w = (deg - centre(b)) / (centre(b + 1) - centre(b));
+            vec![(b, 1.0 - w), (b + 1, w)]
+        };
+        let x = cell.u.clamp(0.0, 1.0) * (self.planes - 1) as f64;
+        let j0 = (x as usize).min(self.planes - 1);
+        let planes = [
+            (j0, 1.0 - (x - j0 as f64)),
+            ((j0 + 1).min(self.planes - 1), x - j0 as f64),
+        ];
+        let mut h = 0.0;
+        near_t.each(|it, wt| {
+            cell.l.each(|il, wl| {
+                for (j, wj) in planes {
+                    let row = ((((g * nt + it) * nl + il) * self.planes) + j) * nb;
+                    for &(b, wb) in &annuli {
+                        h += wt * wl * wj * wb * self.values[row + b];
+                    }
+                }
+            })
+        });
+        h.exp()
+    }
 }
 
 impl Wide {
@@ -106,6 +160,12 @@ impl Wide {
             ceiling: array(names::T_CEILING),
             phase_theta: array(names::PHASE_THETA).unwrap(),
             phase: array(names::PHASE).unwrap(),
+            halo: array(names::HALO_SHAPE).map(|shape| WideHalo {
+                edges: array(names::HALO_EDGES).unwrap(),
+                groups: shape[0] as usize,
+                planes: shape[1] as usize,
+                values: array(names::HALO).unwrap(),
+            }),
         }
     }
 
@@ -163,7 +223,7 @@ impl Wide {
             return 0.0;
         }
         let v = range.share * (offset + depth_polynomial(&dj, terms, u, t, &range)).exp();
-        match &self.ceiling {
+        let capped = match &self.ceiling {
             Some(top) => {
                 let most = tops
                     .iter()
@@ -172,7 +232,12 @@ impl Wide {
                 v.min(CEILING_FACTOR * most)
             }
             None => v,
-        }
+        };
+        capped
+            * self
+                .halo
+                .as_ref()
+                .map_or(1.0, |h| h.factor(g, &cell, near_t, (nt, nl)))
     }
 
     /// Order 1 at `at` (albedo 1), the stored p between its nodes with 2π p sin θ linear in θ.

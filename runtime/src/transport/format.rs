@@ -20,10 +20,15 @@
 //! | `phase` | [n] | phase function p(θ) (sr⁻¹) |
 //! | `collector_form` | [4] | optional: the collector form's J, K, Θ nodes, Q |
 //! | `sigma_beta`, `cz_beta`, `cx_beta` | [P_s, G, Q] | with it: ln σ, c_z/σ̂, c_x/σ̂ ([`super::collector`]), feature-major as `beta` |
+//! | `halo_edges` | [B + 1] | optional (version 3): the halo's annulus edges Θ (degrees from the transmitted beam, increasing from 0) |
+//! | `halo_shape` | [2] | with it: the groups it covers (the first H ≤ G), the depth planes D (≥ 2) |
+//! | `halo` | [H, N, L, D·B] | with it: h = ln(T_annulus / T̄_form) per plane d and annulus b at d·B + b (transport/halo.rs) |
 //!
 //! Files without the collector arrays load too; their [`super::Transport`] has c = 0, σ = 0.
+//! Files without the halo arrays have T = the form's everywhere.
 
 use super::collector::{CollectorForm, Statistic};
+use super::halo::Halo;
 use super::log_additive::{LogAdditive, MAX_LEGENDRE};
 use super::tables::TransportTables;
 use crate::container::{ArrayView, Container, FormatError};
@@ -49,6 +54,12 @@ pub mod names {
     pub const U_RANGE: &str = "u_range";
     /// The largest T of the fitted cells per group, thickness and sun cosine.
     pub const T_CEILING: &str = "t_ceiling";
+    /// Optional: the halo's annulus edges (degrees from the beam).
+    pub const HALO_EDGES: &str = "halo_edges";
+    /// Optional: [groups covered, planes].
+    pub const HALO_SHAPE: &str = "halo_shape";
+    /// Optional: h = ln(T_annulus / T̄_form) over [group, thickness, μ_L, plane, annulus].
+    pub const HALO: &str = "halo";
     /// Phase function angles (degrees).
     pub const PHASE_THETA: &str = "phase_theta";
     /// Phase function values (sr⁻¹).
@@ -296,6 +307,7 @@ impl<'a> TransportTables<'a> {
             },
             phase_theta: need(c, names::PHASE_THETA, theta_len)?,
             phase: need(c, names::PHASE, theta_len)?,
+            halo: halo_part(c, g, n, l)?,
         })
     }
 
@@ -322,6 +334,32 @@ impl<'a> TransportTables<'a> {
         }
         Ok(())
     }
+}
+
+/// The halo's arrays if the file has them: edges increasing from 0, at most `g` groups.
+fn halo_part<'a>(c: &Container<'a>, g: usize, n: usize, l: usize) -> Result<Option<Halo<'a>>, FormatError> {
+    let Some(edges) = c.find(names::HALO_EDGES) else {
+        return Ok(None);
+    };
+    let shape = need(c, names::HALO_SHAPE, 2)?;
+    let (groups, planes) = (
+        shape.get(0).unwrap_or(0.0) as usize,
+        shape.get(1).unwrap_or(0.0) as usize,
+    );
+    let nb = edges.len().saturating_sub(1);
+    if nb == 0 || edges.get(0) != Some(0.0) || !increasing(&edges) || groups > g || planes < 2 {
+        return Err(FormatError::BadArray(names::HALO_EDGES));
+    }
+    let len = [groups, n, l, planes, nb]
+        .iter()
+        .try_fold(1usize, |acc, &k| acc.checked_mul(k))
+        .ok_or(FormatError::BadArray(names::HALO))?;
+    Ok(Some(Halo {
+        edges,
+        values: need(c, names::HALO, len)?,
+        groups,
+        planes,
+    }))
 }
 
 #[cfg(test)]

@@ -23,6 +23,7 @@ form_module!(collector, format, log_additive, single, tables);
 pub mod batch;
 mod finite;
 mod geometry;
+mod halo;
 pub mod leakage;
 #[cfg(feature = "std")]
 mod owned;

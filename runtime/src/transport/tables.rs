@@ -10,6 +10,7 @@
 use super::collector::{Statistic, MAX_COLLECTOR_HARMONICS, MAX_COLLECTOR_LEGENDRE};
 use super::format::{unpack_u_range, CollectorPart, Strides, EMPTY_RANGE, MAX_Q};
 use super::geometry::SlabPoint;
+use super::halo::{Halo, HaloAt};
 use super::log_additive::{
     depth_polynomial, legendre, ln_boundary, ln_t_position, stretched_u_at, Cell, FittedDepths,
     Lerp, LogAdditive, MAX_CROSS, MAX_HARMONICS, MAX_LEGENDRE,
@@ -88,6 +89,7 @@ pub struct TransportTables<'a> {
     pub(super) t_ceiling: Option<ArrayView<'a>>,
     pub(super) phase_theta: ArrayView<'a>,
     pub(super) phase: ArrayView<'a>,
+    pub(super) halo: Option<Halo<'a>>,
 }
 
 impl<'a> TransportTables<'a> {
@@ -317,7 +319,9 @@ impl<'a> TransportTables<'a> {
                 })
             })
         });
+        let nodes = (nt, nl);
         Some(Point {
+            halo: self.halo.as_ref().and_then(|h| h.at(&cell, near_t, nodes)),
             cell,
             offset,
             ln_t,
@@ -437,6 +441,9 @@ impl<'a> TransportTables<'a> {
                 Some(top) if v > top => top,
                 _ => v,
             };
+            if let (Some(halo), Some(at)) = (&self.halo, &pt.halo) {
+                t[i] *= at.factor(halo, g0 + i);
+            }
         }
         (t, ranges)
     }
@@ -575,6 +582,8 @@ impl<'a> TransportTables<'a> {
 /// The geometry of T at one point, the same for every group.
 struct Point {
     cell: Cell<f32>,
+    /// Where the point reads the halo (None outside it).
+    halo: Option<HaloAt>,
     offset: f32,
     ln_t: f32,
     /// (index within a group's depth ranges, weight) of the grid corners the point draws on.
