@@ -131,7 +131,7 @@ fn ns_angle(c: f32, s: f32) -> f32 {
 }
 
 // The slab tangent to `s` that holds the viewpoint, the sun toward `sun`: μ_L = n̄·ω_L,
-// t = τ_chord μ_L, d = κ̄ (entry − p)·n̄ held within the view ray's own medium, μ_V = ω_V·n̄,
+// t = max(τ_chord μ_L, d), d = κ̄ (entry − p)·n̄ held within the view ray's own medium, μ_V = ω_V·n̄,
 // ψ_V between the horizontal parts of the beam's travel and of ω_V; t and μ_L held within the
 // tables' grid (the runtime's `local_slab`).
 fn local_slab(s: LitSample, v: Viewpoint, sun: vec3<f32>) -> LocalSlab {
@@ -146,11 +146,12 @@ fn local_slab(s: LitSample, v: Viewpoint, sun: vec3<f32>) -> LocalSlab {
     if s.length > 0.0 {
         extinction = s.optical_length / s.length;
     }
-    let t_raw = s.optical_length * mu_l;
-    let thickness = ns_clamp(t_raw, ntt_f32(x.thickness), ntt_f32(x.thickness + x.n_t - 1u));
-    clamps |= select(0u, 1u, thickness != t_raw);
     let below = ns_dot(vec3<f32>(s.entry.x - p.x, s.entry.y - p.y, s.entry.z - p.z), n);
     let d_raw = extinction * below;
+    // The slab holds the viewpoint: at least as thick as p lies deep.
+    let t_raw = max(s.optical_length * mu_l, d_raw);
+    let thickness = ns_clamp(t_raw, ntt_f32(x.thickness), ntt_f32(x.thickness + x.n_t - 1u));
+    clamps |= select(0u, 1u, thickness != t_raw);
     let depth = ns_clamp(d_raw, 0.0, thickness);
     clamps |= select(0u, 4u, depth != d_raw);
     let mu_v = ns_clamp(ns_dot(v.view, n), -1.0, 1.0);

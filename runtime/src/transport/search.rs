@@ -216,7 +216,8 @@ fn angle_of(cos: f32, sin: f32) -> f32 {
 }
 
 /// The slab tangent to `s` that holds the viewpoint `v` with the sun toward `sun` (unit):
-/// μ_L = n̄·ω_L, t = τ_chord μ_L (the chord crosses the slab obliquely), d = κ̄ (entry − p)·n̄,
+/// μ_L = n̄·ω_L, t = max(τ_chord μ_L, d) (the chord crosses the slab obliquely; the slab holds
+/// p), d = κ̄ (entry − p)·n̄,
 /// μ_V = ω_V·n̄, ψ_V the angle between the horizontal parts of the beam's travel (−ω_L) and of
 /// ω_V. t and μ_L are held within `tables`' domain, d within [0, t] (each flagged). Then d is
 /// held where the slab's path beyond p along −ω_V — (t − d)/μ_V for μ_V > 0, d/|μ_V| for
@@ -242,11 +243,15 @@ pub fn local_slab(
     } else {
         0.0
     };
-    let t_raw = s.optical_length * mu_l;
-    let thickness = t_raw.clamp_to(domain.thickness.0, domain.thickness.1);
-    clamps.thickness = thickness != t_raw;
     let below = dot([s.entry[0] - p[0], s.entry[1] - p[1], s.entry[2] - p[2]], n);
     let d_raw = extinction * below;
+    // The slab holds the viewpoint: at least as thick as p lies deep. The chord at the
+    // filtered surface can be shorter than the medium above p (a cloud lit from behind, p on
+    // its far face): read at its far face, the slab would hand p the light of a thinner cloud
+    // (docs/collector.md, "cloud_behind").
+    let t_raw = (s.optical_length * mu_l).max(d_raw);
+    let thickness = t_raw.clamp_to(domain.thickness.0, domain.thickness.1);
+    clamps.thickness = thickness != t_raw;
     let depth = d_raw.clamp_to(0.0, thickness);
     clamps.depth = depth != d_raw;
     let mu_v = dot(view, n).clamp_to(-1.0, 1.0);
