@@ -185,8 +185,8 @@ pub fn near_beam_check(tab: &SlabTables, rt: &TransportTables) -> NearBeamCheck 
     }
 }
 
-/// Groups of orders ≥ 2 the halo covers (orders 2 … 18): with f32 values the shipped file
-/// stays under 512 KB; the halo of the higher orders is within ±28 % of the form.
+/// Groups of orders ≥ 2 the halo covers (orders 2 … 18): the form of the higher orders is
+/// within +9 … +27 % on the annuli, and two more groups would add a third to the table.
 pub const HALO_GROUPS: usize = 6;
 
 /// The halo's reach (degrees from the beam): the annuli out to it. Beyond it the form's bins

@@ -14,7 +14,8 @@
 //!
 //! h read linearly between the thickness and sun-cosine nodes, the planes (equal steps in the
 //! stretched depth u) and the annuli's median angles √((Θ_b² + Θ_{b+1}²)/2), held below the
-//! first, and falling linearly to 0 from the last to the last edge. Elsewhere T is the form's.
+//! first, and falling linearly to 0 from the last median angle to the last edge. Elsewhere T is
+//! the form's.
 
 use super::log_additive::{Cell, Lerp};
 use crate::container::ArrayView;
