@@ -124,25 +124,18 @@ pub fn near_beam_check(tab: &SlabTables, rt: &TransportTables) -> NearBeamCheck 
     let near = NearBeam::within(tab, NEAR_BEAM_DEG.to_radians());
     let mut all = vec![Transport::default(); ng - 1];
     let mut mean = vec![0.0; ng - 1];
+    if let Some(a) = aureole {
+        each_annulus(tab, a, rt, a.annuli.n_bins(), |[it, il, j, b], mean| {
+            for g in 1..ng {
+                let i = a.index(&tab.shape, g, it, il, j, b);
+                annuli[g].add(a.t[i], a.t_se[i], mean[g - 1]);
+            }
+        });
+    }
     for (it, il, j) in
         (0..nt).flat_map(|it| (0..nl).flat_map(move |il| (0..nd).map(move |j| (it, il, j))))
     {
         let at = tab.point(it, il, j, 0, 0);
-        let mu_l = tab.mu_l[il];
-        if let Some(a) = aureole {
-            for b in (0..a.annuli.n_bins()).filter(|&b| a.annuli.whole(mu_l, b)) {
-                annulus_average(
-                    rt,
-                    (&mut all, &mut mean),
-                    &at,
-                    &a.annuli.edges_deg[b..b + 2],
-                );
-                for g in 1..ng {
-                    let i = a.index(&tab.shape, g, it, il, j, b);
-                    annuli[g].add(a.t[i], a.t_se[i], mean[g - 1]);
-                }
-            }
-        }
         for (m, k) in (0..nm).flat_map(|m| (0..nk).map(move |k| (m, k))) {
             if !near.holds(il, m, k) {
                 continue;
@@ -223,31 +216,17 @@ pub fn halo_table(tab: &SlabTables, aur: &AureoleTables, rt: &TransportTables) -
     let groups = HALO_GROUPS.min(ng - 1);
     let mut values = vec![0.0f32; groups * nt * nl * nd * nb];
     let mut known = vec![false; values.len()];
-    let mut all = vec![Transport::default(); rt.groups()];
-    let mut mean = vec![0.0; rt.groups()];
-    for (it, il, j) in
-        (0..nt).flat_map(|it| (0..nl).flat_map(move |il| (0..nd).map(move |j| (it, il, j))))
-    {
-        let at = tab.point(it, il, j, 0, 0);
-        let mu_l = tab.mu_l[il];
-        for b in (0..nb).filter(|&b| aur.annuli.whole(mu_l, b)) {
-            annulus_average(
-                rt,
-                (&mut all, &mut mean),
-                &at,
-                &aur.annuli.edges_deg[b..b + 2],
-            );
-            for g in 0..groups {
-                let i = aur.index(&tab.shape, g + 1, it, il, j, b);
-                let (t, se) = (aur.t[i], aur.t_se[i]);
-                if t > 0.0 && se < 0.3 * t && mean[g] > 0.0 {
-                    let h = (t / mean[g]).ln().clamp(-H_MAX, H_MAX);
-                    let k = (((g * nt + it) * nl + il) * nd + j) * nb + b;
-                    (values[k], known[k]) = (h as f32, true);
-                }
+    each_annulus(tab, aur, rt, nb, |[it, il, j, b], mean| {
+        for g in 0..groups {
+            let i = aur.index(&tab.shape, g + 1, it, il, j, b);
+            let (t, se) = (aur.t[i], aur.t_se[i]);
+            if t > 0.0 && se < 0.3 * t && mean[g] > 0.0 {
+                let h = (t / mean[g]).ln().clamp(-H_MAX, H_MAX);
+                let k = (((g * nt + it) * nl + il) * nd + j) * nb + b;
+                (values[k], known[k]) = (h as f32, true);
             }
         }
-    }
+    });
     fill_from_neighbours(&mut values, &mut known, [groups, nt, nl, nd, nb]);
     HaloTable {
         edges_deg: aur.annuli.edges_deg[..=nb].to_vec(),
@@ -303,20 +282,35 @@ fn fill_from_neighbours(values: &mut [f32], known: &mut [bool], [ng, nt, nl, nd,
     }
 }
 
-/// The mean of every group's T over the annulus between the angles `edges` (degrees) around
-/// the beam at `at` (its sun cosine): [`POINTS`] angles × [`POINTS`] turns, weighted by sin Θ.
-fn annulus_average(
+/// `f([it, il, j, b], means)` for every (thickness, sun cosine, plane) of `tab` and each of
+/// the first `nb` annuli of `aur` that lies whole below the horizon, `means` every runtime
+/// group's T averaged over the annulus ([`POINTS`] angles × [`POINTS`] turns about the beam,
+/// weighted by sin Θ).
+fn each_annulus(
+    tab: &SlabTables,
+    aur: &AureoleTables,
     rt: &TransportTables,
-    (all, mean): (&mut [Transport], &mut [f64]),
-    at: &SlabPoint<f64>,
-    edges: &[f64],
+    nb: usize,
+    mut f: impl FnMut([usize; 4], &[f64]),
 ) {
-    let (lo, hi, mu_l) = (edges[0], edges[1], at.mu_l);
-    average(rt, all, mean, |p, q| {
-        let theta = (lo + (hi - lo) * p).to_radians();
-        let (mu_v, psi_v) = view_near_beam(mu_l, theta, 2.0 * PI * q);
-        (SlabPoint { mu_v, psi_v, ..*at }, theta.sin())
-    });
+    let [_, nt, nl, nd, ..] = tab.shape;
+    let mut all = vec![Transport::default(); rt.groups()];
+    let mut mean = vec![0.0; rt.groups()];
+    for (it, il, j) in
+        (0..nt).flat_map(|it| (0..nl).flat_map(move |il| (0..nd).map(move |j| (it, il, j))))
+    {
+        let at = tab.point(it, il, j, 0, 0);
+        let mu_l = tab.mu_l[il];
+        for b in (0..nb).filter(|&b| aur.annuli.whole(mu_l, b)) {
+            let (lo, hi) = (aur.annuli.edges_deg[b], aur.annuli.edges_deg[b + 1]);
+            average(rt, &mut all, &mut mean, |p, q| {
+                let theta = (lo + (hi - lo) * p).to_radians();
+                let (mu_v, psi_v) = view_near_beam(mu_l, theta, 2.0 * PI * q);
+                (SlabPoint { mu_v, psi_v, ..at }, theta.sin())
+            });
+            f([it, il, j, b], &mean);
+        }
+    }
 }
 
 /// The mean of every group's T over a cell: `point(p, q)` gives the point at fractions (p, q)

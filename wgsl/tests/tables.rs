@@ -175,7 +175,7 @@ impl Wide {
             depth_polynomial, ln_boundary, ln_t_position, unpack_u_range, Cell, FittedDepths,
             Legendre, Lerp, CEILING_FACTOR, MAX_LEGENDRE,
         };
-        let p = widen(at);
+        let p = at.to_f64();
         let (t, d) = (p.thickness, p.depth);
         if !(t > 0.0 && d >= 0.0 && d <= t) {
             return 0.0;
@@ -272,17 +272,7 @@ impl Wide {
                 (fa + (fb - fa) * (theta - ta) / (tb - ta)) / (two_pi * sin)
             }
         }
-        single_scattering(&Stored(self), 1.0, &widen(at))
-    }
-}
-
-fn widen(at: &SlabPoint<f32>) -> SlabPoint<f64> {
-    SlabPoint {
-        depth: at.depth as f64,
-        thickness: at.thickness as f64,
-        mu_v: at.mu_v as f64,
-        psi_v: at.psi_v as f64,
-        mu_l: at.mu_l as f64,
+        single_scattering(&Stored(self), 1.0, &at.to_f64())
     }
 }
 

@@ -47,6 +47,17 @@ impl SlabPoint<f64> {
 }
 
 impl SlabPoint<f32> {
+    /// The point in f64 (exactly), for an f64 reference evaluation.
+    pub fn to_f64(&self) -> SlabPoint<f64> {
+        SlabPoint {
+            depth: self.depth as f64,
+            thickness: self.thickness as f64,
+            mu_v: self.mu_v as f64,
+            psi_v: self.psi_v as f64,
+            mu_l: self.mu_l as f64,
+        }
+    }
+
     /// Whether the point is in a slab the tables can be read at: t finite and > 0,
     /// 0 ≤ d ≤ t, μ_L finite and > 0, μ_V and ψ_V finite. Elsewhere every T and order 1 is 0,
     /// so a caller computing d or μ_L from positions clamps them first (d a few ulps below 0
