@@ -160,14 +160,16 @@ typedef struct NepheleLitSurface {
 
 /**
  * Where the light is seen: p (m, world), the direction the light travels toward the eye
- * (unit), and the optical depth (mean free paths) the view ray holds beyond p, at least
- * `behind_min` and at most `behind_max` (infinity when unknown).
+ * (unit), the optical depth (mean free paths) the view ray holds beyond p, at least
+ * `behind_min` and at most `behind_max` (infinity when unknown), and p's optical depth to the
+ * sun through the cloud as it is, `sun_depth` (infinity when unknown).
  */
 typedef struct NepheleViewpoint {
   float position[3];
   float view[3];
   float behind_min;
   float behind_max;
+  float sun_depth;
 } NepheleViewpoint;
 
 /**
@@ -175,7 +177,8 @@ typedef struct NepheleViewpoint {
  * or the tables hold no light there (the rest 0); else T, c and σ of the last read, the slab
  * it was read at, the collector's centre on the filtered lit face (m, world) and spread σ
  * (m), the reads, whether it converged (1) before the cap, the parameters held at the
- * tables' domain (bits: 1 thickness, 2 μ_L, 4 depth, 8 view) and κ̄ (1/m).
+ * tables' domain (bits: 1 thickness, 2 μ_L, 4 depth, 8 view, 16 the slab cut to p's depth to
+ * the sun) and κ̄ (1/m).
  */
 typedef struct NepheleCollector {
   int32_t found;

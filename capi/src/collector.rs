@@ -69,8 +69,9 @@ pub struct NepheleLitSurface {
 }
 
 /// Where the light is seen: p (m, world), the direction the light travels toward the eye
-/// (unit), and the optical depth (mean free paths) the view ray holds beyond p, at least
-/// `behind_min` and at most `behind_max` (infinity when unknown).
+/// (unit), the optical depth (mean free paths) the view ray holds beyond p, at least
+/// `behind_min` and at most `behind_max` (infinity when unknown), and p's optical depth to the
+/// sun through the cloud as it is, `sun_depth` (infinity when unknown).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct NepheleViewpoint {
@@ -78,6 +79,7 @@ pub struct NepheleViewpoint {
     pub view: [f32; 3],
     pub behind_min: f32,
     pub behind_max: f32,
+    pub sun_depth: f32,
 }
 
 /// The search's settings (`nephele_search_options_default` gives the runtime's): most table
@@ -119,7 +121,8 @@ pub struct NepheleFiniteCloud {
 /// or the tables hold no light there (the rest 0); else T, c and σ of the last read, the slab
 /// it was read at, the collector's centre on the filtered lit face (m, world) and spread σ
 /// (m), the reads, whether it converged (1) before the cap, the parameters held at the
-/// tables' domain (bits: 1 thickness, 2 μ_L, 4 depth, 8 view) and κ̄ (1/m).
+/// tables' domain (bits: 1 thickness, 2 μ_L, 4 depth, 8 view, 16 the slab cut to p's depth to
+/// the sun) and κ̄ (1/m).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct NepheleCollector {
@@ -199,8 +202,15 @@ fn search_inputs(
     if !v.position.iter().all(|x| x.is_finite()) || !unit(&v.view) || !unit(sun) {
         return bad("viewpoint.position finite, viewpoint.view and sun unit vectors");
     }
-    if opts.max_reads == 0 || !(opts.tolerance >= 0.0) || !(v.behind_min >= 0.0) {
-        return bad("options.max_reads ≥ 1, options.tolerance ≥ 0, viewpoint.behind_min ≥ 0");
+    if opts.max_reads == 0
+        || !(opts.tolerance >= 0.0)
+        || !(v.behind_min >= 0.0)
+        || !(v.sun_depth >= 0.0)
+    {
+        return bad(
+            "options.max_reads ≥ 1, options.tolerance ≥ 0, viewpoint.behind_min ≥ 0, \
+             viewpoint.sun_depth ≥ 0",
+        );
     }
     Ok((
         CSurface(*surface),
@@ -209,6 +219,7 @@ fn search_inputs(
             view: v.view,
             behind_min: v.behind_min,
             behind_max: v.behind_max,
+            sun_depth: v.sun_depth,
         },
         SearchOptions {
             max_reads: opts.max_reads,
@@ -235,7 +246,8 @@ fn collector(c: Option<Collector>) -> NepheleCollector {
         clamps: bit(c.clamps.thickness, 1)
             | bit(c.clamps.mu_l, 2)
             | bit(c.clamps.depth, 4)
-            | bit(c.clamps.view, 8),
+            | bit(c.clamps.view, 8)
+            | bit(c.clamps.sun, 16),
         extinction: c.extinction,
     }
 }
@@ -415,6 +427,7 @@ pub unsafe extern "C" fn nephele_finite_cloud(
                     mu_l: c.clamps & 2 != 0,
                     depth: c.clamps & 4 != 0,
                     view: c.clamps & 8 != 0,
+                    sun: c.clamps & 16 != 0,
                 },
                 extinction: c.extinction,
             };

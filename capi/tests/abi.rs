@@ -286,10 +286,20 @@ fn viewpoint(i: usize) -> Viewpoint {
         [1.0, 0.0, 0.0],
     ];
     let k = (i / 4) as f32;
-    Viewpoint::new(
+    let v = Viewpoint::new(
         [120.0 * k - 150.0, 60.0 * k - 80.0, 50.0 * k - 100.0],
         views[i % 4],
-    )
+    );
+    if i >= 12 {
+        Viewpoint {
+            behind_min: 1.0,
+            behind_max: 2.0,
+            sun_depth: 1.0,
+            ..v
+        }
+    } else {
+        v
+    }
 }
 
 /// The C program's "collector" lines against the runtime's search and finite-cloud correction
@@ -326,7 +336,8 @@ fn the_collectors_are_the_runtimes(lines: &[&str], tab: &TransportTables) {
                     let clamps = u32::from(c.clamps.thickness)
                         | u32::from(c.clamps.mu_l) << 1
                         | u32::from(c.clamps.depth) << 2
-                        | u32::from(c.clamps.view) << 3;
+                        | u32::from(c.clamps.view) << 3
+                        | u32::from(c.clamps.sun) << 4;
                     line += &format!(" 1 {} {} {clamps}", c.reads, u32::from(c.converged));
                     (*c, [k.factor, k.radius, k.coverage])
                 }

@@ -211,7 +211,7 @@ proptest! {
             lateral: None,
             initial_scale: scale,
         };
-        let v = NepheleViewpoint { position, view: unit(view), behind_min: 0.0, behind_max: f32::INFINITY };
+        let v = NepheleViewpoint { position, view: unit(view), behind_min: 0.0, behind_max: f32::INFINITY, sun_depth: f32::INFINITY };
         let mut opts = NepheleSearchOptions::default();
         unsafe { nephele_search_options_default(&mut opts) };
         opts.max_reads = reads;

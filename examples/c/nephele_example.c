@@ -102,7 +102,9 @@ static int32_t sphere_lateral(void *user, const float *at, float sigma, NepheleL
     return 1;
 }
 
-/* The viewpoints of the collector search: four points inside the sphere, four views. */
+/* The viewpoints of the collector search: four points inside the sphere, four views; the last
+   four know the view ray's medium beyond p (1 to 2 mean free paths) and p's depth to the sun
+   (1 mean free path). */
 static void viewpoint(int i, NepheleViewpoint *v) {
     static const float views[4][3] = {
         {0.0f, 0.0f, 1.0f}, {0.6f, 0.0f, 0.8f}, {0.0f, -0.6f, -0.8f}, {1.0f, 0.0f, 0.0f}};
@@ -111,8 +113,9 @@ static void viewpoint(int i, NepheleViewpoint *v) {
     v->position[1] = 60.0f * k - 80.0f;
     v->position[2] = 50.0f * k - 100.0f;
     memcpy(v->view, views[i % 4], sizeof v->view);
-    v->behind_min = 0.0f;
-    v->behind_max = INFINITY;
+    v->behind_min = i >= 12 ? 1.0f : 0.0f;
+    v->behind_max = i >= 12 ? 2.0f : INFINITY;
+    v->sun_depth = i >= 12 ? 1.0f : INFINITY;
 }
 
 int main(int argc, char **argv) {

@@ -488,7 +488,7 @@ fn print_search_stats(groups: &serde_json::Value) {
         println!(
             "  orders {:>2}+: {:.2} table reads a pixel, {:.1} % converged; held at the tables' \
              edge: thickness {:.1} %, sun angle {:.1} %, depth {:.1} %; depth set by the medium \
-             behind the view point {:.1} %; no lit surface found {:.1} % (of which dark {:.2} %)",
+             behind the view point {:.1} %; cut above it to its depth to the sun {:.1} %; no lit surface found {:.1} % (of which dark {:.2} %)",
             g["first_order"],
             f(g, "reads") / (n - f(g, "empty")).max(1.0),
             pct("converged"),
@@ -496,6 +496,7 @@ fn print_search_stats(groups: &serde_json::Value) {
             pct("clamped_mu_l"),
             pct("clamped_depth"),
             pct("held_by_view"),
+            pct("held_by_sun"),
             pct("empty"),
             pct("dark"),
         );

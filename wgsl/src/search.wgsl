@@ -39,14 +39,16 @@ struct LateralSample {
     hit: u32,
 }
 
-// p (m, world), the direction the light travels toward the eye (unit), and the optical depth
-// the view ray holds beyond p: at least `behind_min`, at most `behind_max` (mfp; unknown:
-// NEPHELE_F32_MAX, as WGSL has no infinity constant).
+// p (m, world), the direction the light travels toward the eye (unit), the optical depth
+// the view ray holds beyond p: at least `behind_min`, at most `behind_max`, and p's optical
+// depth to the sun through the cloud as it is, `sun_depth` (mfp; unknown: NEPHELE_F32_MAX, as
+// WGSL has no infinity constant).
 struct Viewpoint {
     position: vec3<f32>,
     view: vec3<f32>,
     behind_min: f32,
     behind_max: f32,
+    sun_depth: f32,
 }
 
 // Most reads N, tolerance ε, the step clamp and the filtering at σ (1 on).
@@ -131,9 +133,10 @@ fn ns_angle(c: f32, s: f32) -> f32 {
 }
 
 // The slab tangent to `s` that holds the viewpoint, the sun toward `sun`: μ_L = n̄·ω_L,
-// t = max(τ_chord μ_L, d), d = κ̄ (entry − p)·n̄ held within the view ray's own medium, μ_V = ω_V·n̄,
-// ψ_V between the horizontal parts of the beam's travel and of ω_V; t and μ_L held within the
-// tables' grid (the runtime's `local_slab`).
+// t = max(τ_chord μ_L, d + μ_V⁺ behind_min), d = κ̄ (entry − p)·n̄ held within the view ray's own
+// medium, μ_V = ω_V·n̄, ψ_V between the horizontal parts of the beam's travel and of ω_V; t and
+// μ_L held within the tables' grid; seen going up, where p lies deeper than μ_L τ_☉, the slab
+// above p cut to it (the runtime's `local_slab`).
 fn local_slab(s: LitSample, v: Viewpoint, sun: vec3<f32>) -> LocalSlab {
     let x = nephele_ntt_index;
     let p = v.position;
@@ -148,13 +151,17 @@ fn local_slab(s: LitSample, v: Viewpoint, sun: vec3<f32>) -> LocalSlab {
     }
     let below = ns_dot(vec3<f32>(s.entry.x - p.x, s.entry.y - p.y, s.entry.z - p.z), n);
     let d_raw = extinction * below;
-    // The slab holds the viewpoint: at least as thick as p lies deep.
-    let t_raw = max(s.optical_length * mu_l, d_raw);
+    let mu_v = ns_clamp(ns_dot(v.view, n), -1.0, 1.0);
+    // The slab holds the viewpoint, and seen going up the view ray's medium below p.
+    var held = d_raw;
+    if mu_v > 0.0 {
+        held = d_raw + mu_v * v.behind_min;
+    }
+    let t_raw = max(s.optical_length * mu_l, held);
     let thickness = ns_clamp(t_raw, ntt_f32(x.thickness), ntt_f32(x.thickness + x.n_t - 1u));
     clamps |= select(0u, 1u, thickness != t_raw);
     let depth = ns_clamp(d_raw, 0.0, thickness);
     clamps |= select(0u, 4u, depth != d_raw);
-    let mu_v = ns_clamp(ns_dot(v.view, n), -1.0, 1.0);
     var lo = 0.0;
     var hi = thickness;
     if mu_v > 0.0 {
@@ -166,8 +173,17 @@ fn local_slab(s: LitSample, v: Viewpoint, sun: vec3<f32>) -> LocalSlab {
     }
     lo = ns_clamp(lo, 0.0, thickness);
     hi = ns_clamp(hi, 0.0, thickness);
-    let depth_v = ns_clamp(depth, lo, max(hi, lo));
+    var depth_v = ns_clamp(depth, lo, max(hi, lo));
     clamps |= select(0u, 8u, depth_v != depth);
+    var thickness_v = thickness;
+    // Seen going up, p lies no deeper than its own depth to the sun.
+    let d_sun = mu_l * v.sun_depth;
+    if mu_v > 0.0 && depth_v > d_sun {
+        clamps |= 16u;
+        thickness_v = ns_clamp(d_sun + (thickness - depth_v), ntt_f32(x.thickness),
+            ntt_f32(x.thickness + x.n_t - 1u));
+        depth_v = min(d_sun, thickness_v);
+    }
     let beam_h = ns_add(-sun, n, mu_l_raw);
     let view_h = ns_add(v.view, n, -mu_v);
     let bl = ns_length(beam_h);
@@ -189,7 +205,7 @@ fn local_slab(s: LitSample, v: Viewpoint, sun: vec3<f32>) -> LocalSlab {
     } else {
         x_axis = ns_cross(n, z_axis);
     }
-    return LocalSlab(SlabPoint(depth_v, thickness, mu_v, ns_angle(cos_psi, al), mu_l), clamps,
+    return LocalSlab(SlabPoint(depth_v, thickness_v, mu_v, ns_angle(cos_psi, al), mu_l), clamps,
         ns_add(p, n, below), z_axis, x_axis, extinction);
 }
 

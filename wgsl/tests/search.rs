@@ -62,8 +62,11 @@ impl LitSurface for Sphere {
 }
 
 /// Viewpoints inside the sphere: the centre, just under the lit top, the bottom, then random
-/// positions (uniform in the ball of 0.98 R) with random views (xorshift, fixed seed).
-fn viewpoints(n: usize) -> Vec<[f32; 6]> {
+/// positions (uniform in the ball of 0.98 R) with random views (xorshift, fixed seed): position,
+/// view, behind_min, behind_max and sun_depth (the port's unknown: the largest f32). The
+/// second half knows the view ray's medium beyond p (1 to 2 mfp) and p's depth to the sun
+/// through the sphere, so the slab holds the view's medium and is cut to the sun's depth there.
+fn viewpoints(n: usize) -> Vec<[f32; 9]> {
     let mut s = 0x5DEE_CE66_D1CE_4E5Bu64;
     let mut r = || {
         s ^= s << 13;
@@ -71,10 +74,31 @@ fn viewpoints(n: usize) -> Vec<[f32; 6]> {
         s ^= s << 17;
         2.0 * ((s >> 40) as f32 / (1u64 << 24) as f32) - 1.0
     };
+    const UNKNOWN: f32 = f32::MAX;
     let mut v = vec![
-        [0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
-        [0.0, 0.6 * 495.0, 0.8 * 495.0, 0.6, 0.0, 0.8],
-        [0.0, -0.6 * 490.0, -0.8 * 490.0, 0.0, -0.6, -0.8],
+        [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, UNKNOWN, UNKNOWN],
+        [
+            0.0,
+            0.6 * 495.0,
+            0.8 * 495.0,
+            0.6,
+            0.0,
+            0.8,
+            0.0,
+            UNKNOWN,
+            UNKNOWN,
+        ],
+        [
+            0.0,
+            -0.6 * 490.0,
+            -0.8 * 490.0,
+            0.0,
+            -0.6,
+            -0.8,
+            0.0,
+            UNKNOWN,
+            UNKNOWN,
+        ],
     ];
     while v.len() < n {
         let p = [r(), r(), r()];
@@ -87,16 +111,37 @@ fn viewpoints(n: usize) -> Vec<[f32; 6]> {
             continue;
         }
         let dl = dd.sqrt();
+        let at = p.map(|x| 0.98 * RADIUS * x);
+        let (behind_min, behind_max, sun_depth) = if v.len() < n / 2 {
+            (0.0, UNKNOWN, UNKNOWN)
+        } else {
+            let (disc, b) = disc(at);
+            (1.0, 2.0, KAPPA * (disc.sqrt() - b))
+        };
         v.push([
-            0.98 * RADIUS * p[0],
-            0.98 * RADIUS * p[1],
-            0.98 * RADIUS * p[2],
+            at[0],
+            at[1],
+            at[2],
             d[0] / dl,
             d[1] / dl,
             d[2] / dl,
+            behind_min,
+            behind_max,
+            sun_depth,
         ]);
     }
     v
+}
+
+/// The runtime's viewpoint from a row of [`viewpoints`] (its unknown: +∞).
+fn viewpoint(vp: &[f32; 9]) -> Viewpoint {
+    let known = |x: f32| if x == f32::MAX { f32::INFINITY } else { x };
+    Viewpoint {
+        behind_min: vp[6],
+        behind_max: known(vp[7]),
+        sun_depth: known(vp[8]),
+        ..Viewpoint::new([vp[0], vp[1], vp[2]], [vp[3], vp[4], vp[5]])
+    }
 }
 
 #[test]
@@ -129,7 +174,7 @@ fn the_search_on_the_gpu_follows_the_runtime() {
     let got: &[f32] = bytemuck::cast_slice(&out);
     let start = std::time::Instant::now();
     for vp in &vps {
-        let v = Viewpoint::new([vp[0], vp[1], vp[2]], [vp[3], vp[4], vp[5]]);
+        let v = viewpoint(vp);
         for g in 0..groups {
             let c = find_collector(&tables, g, &Sphere, &v, SUN, &SearchOptions::default());
             std::hint::black_box(c.map(|c| finite_cloud(&tables, g, &Sphere, &c, &finite)));
@@ -137,11 +182,12 @@ fn the_search_on_the_gpu_follows_the_runtime() {
     }
     let cpu_s = start.elapsed().as_secs_f64();
     let (mut identical, mut found, mut found_mismatch, mut steps_mismatch) = (0, 0, 0, 0);
+    let mut cut = 0;
     let (mut d_t, mut d_sigma, mut d_centre, mut d_factor) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let (mut d_t_same, mut d_slab) = (Vec::new(), Vec::new());
     for (k, vp) in vps.iter().enumerate() {
-        let v = Viewpoint::new([vp[0], vp[1], vp[2]], [vp[3], vp[4], vp[5]]);
+        let v = viewpoint(vp);
         for g in 0..groups {
             let o = &got[24 * (k * groups + g)..24 * (k * groups + g) + 21];
             let want = find_collector(&tables, g, &Sphere, &v, SUN, &SearchOptions::default());
@@ -158,10 +204,12 @@ fn the_search_on_the_gpu_follows_the_runtime() {
                 continue;
             }
             let kept = finite_cloud(&tables, g, &Sphere, &c, &finite);
+            cut += usize::from(c.clamps.sun);
             let clamps = u32::from(c.clamps.thickness)
                 | u32::from(c.clamps.mu_l) << 1
                 | u32::from(c.clamps.depth) << 2
-                | u32::from(c.clamps.view) << 3;
+                | u32::from(c.clamps.view) << 3
+                | u32::from(c.clamps.sun) << 4;
             let t = c.transport;
             let want_row = [
                 1.0,
@@ -238,7 +286,7 @@ fn the_search_on_the_gpu_follows_the_runtime() {
     println!(
         "collector search, {total} searches ({found} find a collector): {identical} bit for bit \
          the runtime's ({:.1} %), {found_mismatch} found on one side only, {steps_mismatch} with \
-         other reads, convergence or clamps\n  slab point (relative, or absolute below 1): {}\n  \
+         other reads, convergence or clamps; {cut} with the slab cut to p's depth to the sun\n  slab point (relative, or absolute below 1): {}\n  \
          T (relative): {}\n  T against the runtime's at the GPU's slab point: {}\n  \
          σ (m, relative): {}\n  centre (in σ): {}\n  kept factor (absolute): {}",
         100.0 * identical as f64 / total as f64,
@@ -261,6 +309,10 @@ fn the_search_on_the_gpu_follows_the_runtime() {
         "the sphere holds light: {found} of {total}"
     );
     assert_eq!(found_mismatch, 0);
+    assert!(
+        cut * 20 > found,
+        "the sun's depth cut the slab in {cut} of {found} only"
+    );
     assert!(steps_mismatch * 100 <= found, "{steps_mismatch} of {found}");
     // The same steps everywhere; the continuous results within twice the runtime's own f32
     // distance from f64 at the 99th percentile (tests/tables.rs: at most 2.6e-5, T of the

@@ -1,6 +1,7 @@
 // The test kernel around the WGSL collector search (tests/search.rs, tests/naga_outputs.rs):
 // the renderer's lit surface is a sphere of cloud of radius 500 m, κ = 0.05/m, lit by a sun
-// toward (0, 0.6, 0.8); viewpoints (position, view: 6 f32 each) in; per viewpoint and group
+// toward (0, 0.6, 0.8); viewpoints (position, view, behind_min,
+// behind_max, sun_depth: 9 f32 each) in; per viewpoint and group
 // the search and the finite-cloud factor out (24 f32). The `.ntt` at bindings 3 and 4.
 @group(0) @binding(0) var<uniform> job: vec4<u32>;   // viewpoints, groups, mean cosine bits
 @group(0) @binding(1) var<storage, read> viewpoints: array<f32>;
@@ -48,10 +49,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let k = i / job.y;
     let g = i % job.y;
-    let b = 6u * k;
+    let b = 9u * k;
     let v = Viewpoint(vec3<f32>(viewpoints[b], viewpoints[b + 1u], viewpoints[b + 2u]),
-        vec3<f32>(viewpoints[b + 3u], viewpoints[b + 4u], viewpoints[b + 5u]), 0.0,
-        NEPHELE_F32_MAX);
+        vec3<f32>(viewpoints[b + 3u], viewpoints[b + 4u], viewpoints[b + 5u]), viewpoints[b + 6u],
+        viewpoints[b + 7u], viewpoints[b + 8u]);
     let c = find_collector(g, v, SUN, SearchOptions(8u, 0.1, 1u, 1u));
     var kept = Kept(1.0, NEPHELE_F32_MAX, 1.0);
     if c.found != 0u {

@@ -114,16 +114,20 @@ pub struct Viewpoint {
     pub behind_min: f32,
     /// …and at most this (infinite when unknown).
     pub behind_max: f32,
+    /// The optical depth (mfp) from p toward the sun through the cloud as it is, unfiltered
+    /// (a light map's; infinite when unknown).
+    pub sun_depth: f32,
 }
 
 impl Viewpoint {
-    /// p seen along `view`, nothing known of the medium beyond it.
+    /// p seen along `view`, nothing known of the medium beyond it nor of its depth to the sun.
     pub fn new(position: Vec3<f32>, view: Vec3<f32>) -> Self {
         Self {
             position,
             view,
             behind_min: 0.0,
             behind_max: f32::INFINITY,
+            sun_depth: f32::INFINITY,
         }
     }
 }
@@ -140,12 +144,15 @@ pub struct Clamps {
     /// d moved so that the slab holds the view ray's medium beyond p (a side wall seen from
     /// the side: the far face of the light's slab, with the view going into it).
     pub view: bool,
+    /// The slab above p cut to p's own depth to the sun, which the filtered face put deeper
+    /// (a cloud's sunlit edge seen grazing).
+    pub sun: bool,
 }
 
 impl Clamps {
     /// Whether any parameter was clamped.
     pub fn any(&self) -> bool {
-        self.thickness || self.mu_l || self.depth || self.view
+        self.thickness || self.mu_l || self.depth || self.view || self.sun
     }
 }
 
@@ -216,15 +223,18 @@ fn angle_of(cos: f32, sin: f32) -> f32 {
 }
 
 /// The slab tangent to `s` that holds the viewpoint `v` with the sun toward `sun` (unit):
-/// μ_L = n̄·ω_L, t = max(τ_chord μ_L, d) (the chord crosses the slab obliquely; the slab holds
-/// p), d = κ̄ (entry − p)·n̄,
-/// μ_V = ω_V·n̄, ψ_V the angle between the horizontal parts of the beam's travel (−ω_L) and of
-/// ω_V. t and μ_L are held within `tables`' domain, d within [0, t] (each flagged). Then d is
-/// held where the slab's path beyond p along −ω_V — (t − d)/μ_V for μ_V > 0, d/|μ_V| for
-/// μ_V < 0 — lies within the view ray's own [behind_min, behind_max] (flagged `view`): the
-/// radiance at p toward the eye is scattered by the medium behind p, and a slab fitted to the
-/// light alone may have none there (a cloud's side seen from the side: p on the light's far
-/// face, the view going up into the slab) or far more than the cloud (a thin wisp).
+/// μ_L = n̄·ω_L, d = κ̄ (entry − p)·n̄, μ_V = ω_V·n̄, ψ_V the angle between the horizontal parts
+/// of the beam's travel (−ω_L) and of ω_V, and t = max(τ_chord μ_L, d + μ_V⁺ behind_min): the
+/// chord crosses the slab obliquely, and the slab holds p and, seen going up, the medium the
+/// view ray holds beyond p, below it. t and μ_L are held within `tables`' domain, d within
+/// [0, t] (each flagged). Then d is held where the slab's path beyond p along −ω_V —
+/// (t − d)/μ_V for μ_V > 0, d/|μ_V| for μ_V < 0 — lies within the view ray's own
+/// [behind_min, behind_max] (flagged `view`): the radiance at p toward the eye is scattered by
+/// the medium behind p, and a slab fitted to the light alone may have far more there than the
+/// cloud (a thin wisp, a grazing ray) or, seen going down, less. Last, seen going up, p lies
+/// no deeper than its own depth to the sun, d_☉ = μ_L τ_☉ (`v.sun_depth`): where d > d_☉ the
+/// slab above p is cut to it, d = d_☉ and t = d_☉ + (t − d), the medium below p kept (flagged
+/// `sun`).
 pub fn local_slab(
     tables: &TransportTables,
     s: &FilteredSurface,
@@ -245,16 +255,23 @@ pub fn local_slab(
     };
     let below = dot([s.entry[0] - p[0], s.entry[1] - p[1], s.entry[2] - p[2]], n);
     let d_raw = extinction * below;
+    let mu_v = dot(view, n).clamp_to(-1.0, 1.0);
     // The slab holds the viewpoint: at least as thick as p lies deep. The chord at the
     // filtered surface can be shorter than the medium above p (a cloud lit from behind, p on
     // its far face): read at its far face, the slab would hand p the light of a thinner cloud
-    // (docs/collector.md, "cloud_behind").
-    let t_raw = (s.optical_length * mu_l).max(d_raw);
+    // (docs/collector.md, "cloud_behind"). Seen going up, it holds the view ray's medium
+    // beyond p below p too, rather than lift p toward the light for it, which would hand a
+    // shadowed face the light of the lit one (docs/collector.md, "Shadowed faces").
+    let held = if mu_v > 0.0 {
+        d_raw + mu_v * v.behind_min
+    } else {
+        d_raw
+    };
+    let t_raw = (s.optical_length * mu_l).max(held);
     let thickness = t_raw.clamp_to(domain.thickness.0, domain.thickness.1);
     clamps.thickness = thickness != t_raw;
     let depth = d_raw.clamp_to(0.0, thickness);
     clamps.depth = depth != d_raw;
-    let mu_v = dot(view, n).clamp_to(-1.0, 1.0);
     let (lo, hi) = if mu_v > 0.0 {
         (
             thickness - mu_v * v.behind_max,
@@ -268,7 +285,18 @@ pub fn local_slab(
     let (lo, hi) = (lo.clamp_to(0.0, thickness), hi.clamp_to(0.0, thickness));
     let depth_v = depth.clamp_to(lo, hi.max(lo));
     clamps.view = depth_v != depth;
-    let depth = depth_v;
+    // p lies no deeper than the sun's own path to it: the plane under a filtered face puts a
+    // cloud's sunlit edge, which a grazing ray sees, at the far face of a thick slab, whose
+    // light has crossed all of it, while the sun reaches p through μ_L τ_☉
+    // (docs/collector.md, "Silhouettes").
+    let d_sun = mu_l * v.sun_depth;
+    let (depth, thickness) = if mu_v > 0.0 && depth_v > d_sun {
+        clamps.sun = true;
+        let t = (d_sun + (thickness - depth_v)).clamp_to(domain.thickness.0, domain.thickness.1);
+        (d_sun.min(t), t)
+    } else {
+        (depth_v, thickness)
+    };
     // Horizontal parts (⊥ n̄) of the beam's travel and of the view.
     let beam_h = add([-sun[0], -sun[1], -sun[2]], n, mu_l_raw);
     let view_h = add(view, n, -mu_v);
@@ -582,8 +610,9 @@ mod tests {
     }
 
     /// The slab holds the view ray's medium beyond p: on the light's far face with the view
-    /// going up into the slab, d moves up by μ_V × the medium the view ray is known to have; a
-    /// view whose ray holds all of the slab's path keeps its d.
+    /// going up into the slab, the slab grows below p by μ_V × the medium the view ray is
+    /// known to have, p keeping its depth; a view whose ray holds all of the slab's path
+    /// keeps the slab; a ray holding less than the slab's path moves p down to the far face.
     #[test]
     fn the_slab_holds_the_view_rays_medium() {
         let tables = crate::embedded::mie_10um();
@@ -596,11 +625,10 @@ mod tests {
         assert!((free.at.depth - 10.0).abs() < 1e-4 && !free.clamps.view);
         vp.behind_min = 5.0;
         let held = local_slab(&tables, &s, &vp, sun);
-        let want = 10.0 - view[2] * 5.0;
-        assert!(
-            (held.at.depth - want).abs() < 1e-4 && held.clamps.view,
-            "{held:?}"
-        );
+        let want = 10.0 + view[2] * 5.0;
+        assert!((held.at.depth - 10.0).abs() < 1e-4, "{held:?}");
+        assert!((held.at.thickness - want).abs() < 1e-4, "{held:?}");
+        assert!(!held.clamps.any(), "{held:?}");
         // From above, the ray holds at least 9 mfp: the lit face keeps d = 0.
         let mut top = Viewpoint::new([0.0, 0.0, 200.0], view);
         top.behind_min = 9.0;
@@ -611,6 +639,59 @@ mod tests {
             sun,
         );
         assert!(at.at.depth.abs() < 1e-4 && !at.clamps.view, "{at:?}");
+        // Halfway down, the ray holds at most 2 mfp beyond p: p moves down to 2 μ_V above the
+        // far face.
+        let mut mid = Viewpoint::new([0.0, 0.0, 100.0], view);
+        mid.behind_max = 2.0;
+        let s = Chord(&plane, sun).filtered(mid.position, 1.0).unwrap();
+        let thin = local_slab(&tables, &s, &mid, sun);
+        assert!(
+            (thin.at.depth - (10.0 - view[2] * 2.0)).abs() < 1e-4,
+            "{thin:?}"
+        );
+        assert!(thin.clamps.view, "{thin:?}");
+    }
+
+    /// Seen going up, p lies no deeper than its own depth to the sun: the slab is cut above
+    /// it, the medium below p kept, whether the view ray held p at the far face or not; a
+    /// depth to the sun beyond p's, or a view going down, changes nothing.
+    #[test]
+    fn p_lies_no_deeper_than_its_depth_to_the_sun() {
+        let tables = crate::embedded::mie_10um();
+        let sun = unit([0.0, 0.6, 0.8]);
+        let plane = Plane { h: 200.0, k: 0.05 };
+        // p halfway down the 10-mfp slab, its ray holding at most 2 mfp beyond it.
+        let s = Chord(&plane, sun).filtered([0.0, 0.0, 100.0], 1.0).unwrap();
+        let view = unit([0.3, -0.2, 0.5]);
+        let mut vp = Viewpoint::new([0.0, 0.0, 100.0], view);
+        vp.behind_max = 2.0;
+        let held = local_slab(&tables, &s, &vp, sun);
+        let below = view[2] * 2.0;
+        assert!((held.at.depth - (10.0 - below)).abs() < 1e-4, "{held:?}");
+        assert!(held.clamps.view && !held.clamps.sun, "{held:?}");
+        vp.sun_depth = 1.5;
+        let cut = local_slab(&tables, &s, &vp, sun);
+        let d_sun = 0.8 * 1.5;
+        assert!(cut.clamps.view && cut.clamps.sun, "{cut:?}");
+        assert!((cut.at.depth - d_sun).abs() < 1e-5, "{cut:?}");
+        assert!((cut.at.thickness - (d_sun + below)).abs() < 1e-4, "{cut:?}");
+        vp.sun_depth = 20.0;
+        assert_eq!(local_slab(&tables, &s, &vp, sun), held);
+        let down = Viewpoint {
+            view: [view[0], view[1], -view[2]],
+            sun_depth: 1.5,
+            ..vp
+        };
+        assert!(!local_slab(&tables, &s, &down, sun).clamps.sun);
+        // Nothing known beyond p: the slab below p (5 mfp) is kept.
+        let open = Viewpoint {
+            sun_depth: 1.5,
+            ..Viewpoint::new(vp.position, view)
+        };
+        let cut = local_slab(&tables, &s, &open, sun);
+        assert!(cut.clamps.sun && !cut.clamps.view, "{cut:?}");
+        assert!((cut.at.depth - d_sun).abs() < 1e-5, "{cut:?}");
+        assert!((cut.at.thickness - (d_sun + 5.0)).abs() < 1e-4, "{cut:?}");
     }
 
     /// The plane as a light-space map sees it: the chord along the light is t/μ_L.

@@ -138,6 +138,8 @@ pub struct GroupStats {
     pub clamped_depth: u64,
     /// Searches whose last read moved d so that the slab holds the view ray's medium beyond p.
     pub held_by_view: u64,
+    /// Searches whose last read cut the slab above p to p's depth to the sun.
+    pub held_by_sun: u64,
     /// The finite-cloud correction's factors on T, summed over the searches that found a
     /// collector (their mean: the share of the slab's light the cloud keeps).
     pub kept: f64,
@@ -155,6 +157,7 @@ impl GroupStats {
         self.clamped_mu_l += o.clamped_mu_l;
         self.clamped_depth += o.clamped_depth;
         self.held_by_view += o.held_by_view;
+        self.held_by_sun += o.held_by_sun;
         self.kept += o.kept;
     }
 }
@@ -201,6 +204,7 @@ impl Frame<'_> {
             st.clamped_mu_l += f.clamps.mu_l as u64;
             st.clamped_depth += f.clamps.depth as u64;
             st.held_by_view += f.clamps.view as u64;
+            st.held_by_sun += f.clamps.sun as u64;
             let kept = finite_cloud(self.tables, g, &self.side, &f, &self.finite).factor as f64;
             st.kept += kept;
             px.sun[g + 1] = [alpha * kept * f.transport.t as f64; 3];

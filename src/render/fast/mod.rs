@@ -497,10 +497,10 @@ impl Frame<'_> {
             *p = albedo * phase.with(|f| f.eval(cos)) * v.integrals[0];
         }
         self.sky_term(&mut px, v.transmittance);
-        let (Some(p), Some(vp)) = (v.surface, v.viewpoint(w)) else {
+        let Some(vp) = v.viewpoint(w) else {
             return (px, v);
         };
-        px.sun_tau = self.side.optical_depth(p);
+        px.sun_tau = v.sun_depth;
         let sun32 = sun.map(|x| x as f32);
         match (self.opts.method, stats) {
             (Method::Collector, Some(stats)) => self.collector(&mut px, alpha, &vp, sun32, stats),

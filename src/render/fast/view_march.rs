@@ -3,7 +3,8 @@
 //! I_{aⁱ} = ∫ σ T_v e^{−aⁱ τ_sun} ds of order 1 and the octaves (closed form per sub-step, τ_sun
 //! linear over it), and the surface point p where it first crosses the lit surface's iso-level
 //! ρ₀ (interpolated between sub-steps; where it never does, the sub-step of largest σ), with
-//! what it knows of the medium beyond p: what the collector search takes as its viewpoint.
+//! what it knows of the medium beyond p and p's optical depth to the sun: what the collector
+//! search takes as its viewpoint.
 
 use super::march::substeps;
 use super::octaves::MAX_OCTAVES;
@@ -25,6 +26,8 @@ pub(super) struct ViewRay {
     /// it (the ray left the medium) or a lower bound (the march stopped where T_v < 10⁻⁴).
     behind: f64,
     behind_exact: bool,
+    /// The sun's optical depth at the surface point (mfp; infinite without one).
+    pub(super) sun_depth: f64,
 }
 
 impl ViewRay {
@@ -42,6 +45,7 @@ impl ViewRay {
             } else {
                 f32::INFINITY
             },
+            sun_depth: self.sun_depth as f32,
         })
     }
 }
@@ -126,6 +130,9 @@ impl Frame<'_> {
         }
         v.behind = (tau_v - tau_at_p.unwrap_or(tau_v)).max(0.0);
         v.behind_exact = !stopped;
+        v.sun_depth = v
+            .surface
+            .map_or(f64::INFINITY, |p| self.side.optical_depth(p));
         v
     }
 }
