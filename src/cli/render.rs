@@ -89,6 +89,10 @@ pub struct FastArgs {
     /// searches).
     #[arg(long)]
     pub search_every_ray: bool,
+    /// Collector: do not tell the search p's optical depth to the sun (an ablation: the local
+    /// slab is not cut to it; docs/collector.md, "Silhouettes").
+    #[arg(long)]
+    pub no_sun_depth: bool,
     /// Collector search: most table reads per group.
     #[arg(long, default_value_t = 8, value_name = "N")]
     pub iterations: u32,
@@ -195,6 +199,7 @@ impl FastArgs {
             surface_density: self.surface_density,
             rays: self.rays,
             search_every_ray: self.search_every_ray,
+            no_sun_depth: self.no_sun_depth,
             search: SearchOptions {
                 max_reads: self.iterations,
                 tolerance: self.tolerance,
@@ -268,8 +273,9 @@ const FAST_ONLY: [&str; 8] = [
     "surface_density",
     "rays",
 ];
-const COLLECTOR_ONLY: [&str; 12] = [
+const COLLECTOR_ONLY: [&str; 13] = [
     "search_every_ray",
+    "no_sun_depth",
     "iterations",
     "tolerance",
     "no_step_clamp",

@@ -175,6 +175,14 @@ impl Frame<'_> {
         stats: &mut [GroupStats],
     ) {
         let mut found = [None; GROUP_FIRST.len()];
+        let vp = &Viewpoint {
+            sun_depth: if self.opts.no_sun_depth {
+                f32::INFINITY
+            } else {
+                vp.sun_depth
+            },
+            ..*vp
+        };
         find_collectors(
             self.tables,
             &self.side,

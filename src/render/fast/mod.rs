@@ -93,6 +93,9 @@ pub struct FastOptions {
     pub rays: u32,
     /// The collector searches on every ray of a pixel, not once per pixel (an ablation).
     pub search_every_ray: bool,
+    /// The collector search is not told p's depth to the sun (an ablation: the local slab
+    /// is not cut to it).
+    pub no_sun_depth: bool,
     /// Collector search settings.
     #[serde(skip)]
     pub search: SearchOptions,
@@ -116,6 +119,7 @@ impl Default for FastOptions {
             surface_density: 0.5,
             rays: 2,
             search_every_ray: false,
+            no_sun_depth: false,
             search: SearchOptions::default(),
             octaves: Octaves::default(),
             allow_mismatch: false,
