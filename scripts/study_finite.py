@@ -3,8 +3,9 @@
 collector as published, with the finite-cloud correction (the default: lateral leakage counted
 by the walk's spread across the light, R from the larger of the cloud's sections across the
 light and along its lit surface; no fitted constant) and its ablations (coverage alone, leakage
-and coverage, R from each section alone or from the whole projection, and the correction of
-2 Dec: leakage order by order with R from the projection), and the octaves
+and coverage, R from each section alone or from the whole projection, the correction of
+2 Dec: leakage order by order with R from the projection, and the local slab not cut to p's
+depth to the sun: `--no-sun-depth`), and the octaves
 fitted on cloud_side; each compared with its path-traced reference by
 `nephele compare`. Writes finite.json, finite.md (the tables of docs/collector.md) and
 finite_orders.png (per group: truth / slab against the correction's share, on the spheres)
@@ -37,6 +38,7 @@ VARIANTS = {
     "leakage, R along the surface": ["--lateral", "surface"],
     "leakage by order, R from the projection (2 Dec)": ["--leakage-count", "orders",
                                                         "--lateral", "projection"],
+    "leakage, slab not cut to the sun's depth": ["--no-sun-depth"],
 }
 GROUPS = ["order 2", "orders 3-4", "orders 5-6", "orders 7-8", "orders 9-12", "orders 13-18",
           "orders 19-30", "orders 31+"]

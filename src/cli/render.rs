@@ -90,7 +90,7 @@ pub struct FastArgs {
     #[arg(long)]
     pub search_every_ray: bool,
     /// Collector: do not tell the search p's optical depth to the sun (an ablation: the local
-    /// slab is not cut to it; docs/collector.md, "Silhouettes").
+    /// slab is not cut to it; docs/collector.md, "Shadowed faces and silhouettes").
     #[arg(long)]
     pub no_sun_depth: bool,
     /// Collector search: most table reads per group.
@@ -494,7 +494,8 @@ fn print_search_stats(groups: &serde_json::Value) {
         println!(
             "  orders {:>2}+: {:.2} table reads a pixel, {:.1} % converged; held at the tables' \
              edge: thickness {:.1} %, sun angle {:.1} %, depth {:.1} %; depth set by the medium \
-             behind the view point {:.1} %; cut above it to its depth to the sun {:.1} %; no lit surface found {:.1} % (of which dark {:.2} %)",
+             behind the view point {:.1} %; cut above it to its depth to the sun {:.1} %; no \
+             lit surface found {:.1} % (of which dark {:.2} %)",
             g["first_order"],
             f(g, "reads") / (n - f(g, "empty")).max(1.0),
             pct("converged"),

@@ -141,8 +141,9 @@ pub struct Clamps {
     pub mu_l: bool,
     /// p above the filtered lit face (d < 0) or below its far face (d > t).
     pub depth: bool,
-    /// d moved so that the slab holds the view ray's medium beyond p (a side wall seen from
-    /// the side: the far face of the light's slab, with the view going into it).
+    /// d moved so that the slab's path beyond p matches the view ray's medium beyond p (a thin
+    /// or grazing ray seen going up: p moved down toward the far face; seen going down, p
+    /// moved to hold the ray's medium above it).
     pub view: bool,
     /// The slab above p cut to p's own depth to the sun, which the filtered face put deeper
     /// (a cloud's sunlit edge seen grazing).
@@ -261,7 +262,8 @@ pub fn local_slab(
     // its far face): read at its far face, the slab would hand p the light of a thinner cloud
     // (docs/collector.md, "cloud_behind"). Seen going up, it holds the view ray's medium
     // beyond p below p too, rather than lift p toward the light for it, which would hand a
-    // shadowed face the light of the lit one (docs/collector.md, "Shadowed faces").
+    // shadowed face the light of the lit one (docs/collector.md, "Shadowed faces and
+    // silhouettes").
     let held = if mu_v > 0.0 {
         d_raw + mu_v * v.behind_min
     } else {
@@ -288,7 +290,7 @@ pub fn local_slab(
     // p lies no deeper than the sun's own path to it: the plane under a filtered face puts a
     // cloud's sunlit edge, which a grazing ray sees, at the far face of a thick slab, whose
     // light has crossed all of it, while the sun reaches p through μ_L τ_☉
-    // (docs/collector.md, "Silhouettes").
+    // (docs/collector.md, "Shadowed faces and silhouettes").
     let d_sun = mu_l * v.sun_depth;
     let (depth, thickness) = if mu_v > 0.0 && depth_v > d_sun {
         clamps.sun = true;
