@@ -316,7 +316,8 @@ impl Prepared<'_> {
         r.seconds = seconds;
         r.details = serde_json::json!({
             "method": opts.method,
-            "correction": opts.finite.name(),
+            "correction": opts.finite.name()
+                + if opts.no_sun_depth { ", slab not cut to the sun's depth" } else { "" },
             "options": opts,
             "search": {
                 "max_reads": opts.search.max_reads,
