@@ -344,6 +344,17 @@ enum NepheleStatus nephele_order1(const struct NepheleTables *tables,
                                   float *out);
 
 /**
+ * The weight of T at `*at` in a pixel whose view ray has opacity `alpha` (in [0, 1]) into
+ * `*out`: α / (1 − e^{−τ_b}), τ_b the slab's own optical path beyond the viewpoint, its
+ * opacity held ≥ 10⁻³ (T holds the slab's sources over that path, the pixel over its own ray:
+ * the radiance of orders ≥ 2 is E_sun × weight × kept × T).
+ *
+ * # Safety
+ * The pointers are valid (or null).
+ */
+enum NepheleStatus nephele_view_weight(const struct NepheleSlabPoint *at, float alpha, float *out);
+
+/**
  * Henyey–Greenstein, g ∈ (−1, 1).
  *
  * # Safety

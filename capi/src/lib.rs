@@ -427,6 +427,34 @@ pub unsafe extern "C" fn nephele_order1(
     )
 }
 
+/// The weight of T at `*at` in a pixel whose view ray has opacity `alpha` (in [0, 1]) into
+/// `*out`: α / (1 − e^{−τ_b}), τ_b the slab's own optical path beyond the viewpoint, its
+/// opacity held ≥ 10⁻³ (T holds the slab's sources over that path, the pixel over its own ray:
+/// the radiance of orders ≥ 2 is E_sun × weight × kept × T).
+///
+/// # Safety
+/// The pointers are valid (or null).
+#[no_mangle]
+pub unsafe extern "C" fn nephele_view_weight(
+    at: *const NepheleSlabPoint,
+    alpha: f32,
+    out: *mut f32,
+) -> NepheleStatus {
+    guarded(|| match unsafe { (get(at, "at"), get_mut(out, "out")) } {
+        (Ok(a), Ok(o)) => {
+            if !(0.0..=1.0).contains(&alpha) {
+                return fail(
+                    NepheleStatus::BadArgument,
+                    format!("alpha {alpha} is not in [0, 1]"),
+                );
+            }
+            *o = slab_point(a).view_weight(alpha);
+            NepheleStatus::Ok
+        }
+        (Err(s), _) | (_, Err(s)) => s,
+    })
+}
+
 /// Boxes `model` into `*out`.
 ///
 /// # Safety

@@ -464,6 +464,16 @@ fn the_entry_points_answer_as_the_runtime() {
         mu_v: at.mu_v,
         psi_v: at.psi_v,
     };
+    let mut weight = 0.0f32;
+    assert_eq!(
+        unsafe { nephele_view_weight(&at, 0.4, &mut weight) },
+        NepheleStatus::Ok
+    );
+    assert_eq!(weight.to_bits(), rt.view_weight(0.4).to_bits());
+    assert_eq!(
+        unsafe { nephele_view_weight(&at, 1.5, &mut weight) },
+        NepheleStatus::BadArgument
+    );
     let mut groups = 0usize;
     assert_eq!(
         unsafe { nephele_tables_groups(t, &mut groups) },

@@ -74,6 +74,20 @@ struct SlabPoint {
     mu_l: f32,
 }
 
+// The weight of T at `at` in a pixel whose view ray has opacity `alpha`: α / (1 − e^{−τ_b}),
+// τ_b the slab's own path beyond the viewpoint — (t − d)/μ_V going up, d/|μ_V| going down,
+// unbounded along the faces — its opacity held ≥ 10⁻³ (the runtime's `SlabPoint::view_weight`:
+// T holds the slab's sources over that path, the pixel over its own ray).
+fn nephele_view_weight(at: SlabPoint, alpha: f32) -> f32 {
+    var opacity = 1.0;
+    if at.mu_v > 0.0 {
+        opacity = -nephele_exp_m1(-(at.thickness - at.depth) / at.mu_v);
+    } else if at.mu_v < 0.0 {
+        opacity = -nephele_exp_m1(at.depth / at.mu_v);
+    }
+    return alpha / max(opacity, 1e-3);
+}
+
 // Whether the tables can be read at `at` (the runtime's `SlabPoint::in_slab`): t finite and
 // > 0, 0 ≤ d ≤ t, μ_L finite and > 0, μ_V and ψ_V finite. Elsewhere T and order 1 are 0. (A
 // driver may assume no NaN or infinity: pass finite values.)

@@ -185,11 +185,11 @@ fn the_search_on_the_gpu_follows_the_runtime() {
     let mut cut = 0;
     let (mut d_t, mut d_sigma, mut d_centre, mut d_factor) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    let (mut d_t_same, mut d_slab) = (Vec::new(), Vec::new());
+    let (mut d_t_same, mut d_slab, mut d_weight) = (Vec::new(), Vec::new(), Vec::new());
     for (k, vp) in vps.iter().enumerate() {
         let v = viewpoint(vp);
         for g in 0..groups {
-            let o = &got[24 * (k * groups + g)..24 * (k * groups + g) + 21];
+            let o = &got[24 * (k * groups + g)..24 * (k * groups + g) + 22];
             let want = find_collector(&tables, g, &Sphere, &v, SUN, &SearchOptions::default());
             let Some(c) = want else {
                 if o[0] != 0.0 {
@@ -268,6 +268,7 @@ fn the_search_on_the_gpu_follows_the_runtime() {
                 .sqrt();
             d_centre.push((dc / c.sigma) as f64);
             d_factor.push((o[18] - kept.factor).abs() as f64);
+            d_weight.push(rel(o[21], at.view_weight(0.5)));
         }
     }
     for v in [
@@ -277,6 +278,7 @@ fn the_search_on_the_gpu_follows_the_runtime() {
         &mut d_factor,
         &mut d_t_same,
         &mut d_slab,
+        &mut d_weight,
     ] {
         v.sort_by(f64::total_cmp);
     }
@@ -288,14 +290,16 @@ fn the_search_on_the_gpu_follows_the_runtime() {
          the runtime's ({:.1} %), {found_mismatch} found on one side only, {steps_mismatch} with \
          other reads, convergence or clamps; {cut} with the slab cut to p's depth to the sun\n  slab point (relative, or absolute below 1): {}\n  \
          T (relative): {}\n  T against the runtime's at the GPU's slab point: {}\n  \
-         σ (m, relative): {}\n  centre (in σ): {}\n  kept factor (absolute): {}",
+         σ (m, relative): {}\n  centre (in σ): {}\n  kept factor (absolute): {}\n  \
+         view weight at the GPU's slab point (relative): {}",
         100.0 * identical as f64 / total as f64,
         row(&d_slab),
         row(&d_t),
         row(&d_t_same),
         row(&d_sigma),
         row(&d_centre),
-        row(&d_factor)
+        row(&d_factor),
+        row(&d_weight)
     );
     println!(
         "a record: {:.2e} searches/s on {} (one dispatch, with the finite-cloud factor) beside \
@@ -326,6 +330,7 @@ fn the_search_on_the_gpu_follows_the_runtime() {
         ("σ", &d_sigma),
         ("centre", &d_centre),
         ("kept factor", &d_factor),
+        ("view weight", &d_weight),
     ] {
         assert!(q(v, 0.99) <= bound, "{name}: {:.1e}", q(v, 0.99));
     }

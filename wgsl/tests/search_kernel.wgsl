@@ -80,4 +80,5 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     out[o + 18u] = kept.factor;
     out[o + 19u] = kept.radius;
     out[o + 20u] = kept.coverage;
+    out[o + 21u] = nephele_view_weight(c.at, 0.5);
 }

@@ -47,6 +47,31 @@ impl SlabPoint<f64> {
 }
 
 impl SlabPoint<f32> {
+    /// The slab's optical path beyond the viewpoint, away from the eye (mfp): (t − d)/μ_V
+    /// going up, d/|μ_V| going down, +∞ for a horizontal view. The slab's radiance at the
+    /// viewpoint gathers its sources over this path, with opacity 1 − e^{−path}; a view ray
+    /// of opacity α gathers them over its own, so a renderer weighs T by
+    /// [`view_weight`](Self::view_weight) (docs/collector.md, "Thin matter").
+    pub fn path_behind(&self) -> f32 {
+        if self.mu_v > 0.0 {
+            (self.thickness - self.depth) / self.mu_v
+        } else if self.mu_v < 0.0 {
+            self.depth / -self.mu_v
+        } else {
+            f32::INFINITY
+        }
+    }
+
+    /// The weight of T at this point in a pixel whose view ray has opacity `alpha`:
+    /// α / (1 − e^{−path}), the path's opacity held ≥ 10⁻³. T is the radiance at p of the
+    /// slab's sources over its own path beyond p; the pixel holds them over the whole ray, so
+    /// α alone would count a thin ray's thinness twice (a silhouette's orders ≥ 2 came out at
+    /// 0.3–0.4 of the truth at opacities 0.05–0.5). α where the slab's path is opaque.
+    pub fn view_weight(&self, alpha: f32) -> f32 {
+        let opacity = -crate::real::exp_m1(-self.path_behind());
+        alpha / opacity.max(1e-3)
+    }
+
     /// The point in f64 (exactly), for an f64 reference evaluation.
     pub fn to_f64(&self) -> SlabPoint<f64> {
         SlabPoint {
@@ -72,5 +97,36 @@ impl SlabPoint<f32> {
             && self.mu_l.is_finite()
             && self.mu_v.is_finite()
             && self.psi_v.is_finite()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::SlabPoint;
+
+    fn at(depth: f32, mu_v: f32) -> SlabPoint<f32> {
+        SlabPoint {
+            depth,
+            thickness: 10.0,
+            mu_v,
+            psi_v: 0.0,
+            mu_l: 0.8,
+        }
+    }
+
+    /// The slab's path beyond p: to the far face going up, to the lit face going down,
+    /// unbounded along the faces; a thin path raises the weight above α, an opaque one keeps α.
+    #[test]
+    fn the_path_behind_and_the_view_weight() {
+        assert_eq!(at(6.0, 0.5).path_behind(), 8.0);
+        assert_eq!(at(6.0, -0.5).path_behind(), 12.0);
+        assert_eq!(at(6.0, 0.0).path_behind(), f32::INFINITY);
+        let thin = at(9.9, 0.5);
+        let want = 0.3 / (1.0 - (-0.2f64).exp());
+        assert!((thin.view_weight(0.3) as f64 - want).abs() < 1e-5 * want);
+        assert!((at(6.0, 0.0).view_weight(0.3) - 0.3).abs() < 1e-7);
+        assert!((at(0.0, 0.5).view_weight(0.3) - 0.3).abs() < 1e-6);
+        // At the far face seen going up the path is 0: the weight is held finite.
+        assert!((at(10.0, 0.5).view_weight(0.3) - 300.0).abs() < 1e-3);
     }
 }

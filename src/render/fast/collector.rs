@@ -1,7 +1,8 @@
 //! The collector branch of the fast renderers (docs/collector.md, "The collector search"):
 //! orders ≥ 2 of a view ray from its surface point p, per order group g of the tables, by
-//! nephele-runtime's collector search on the sun side's lit surface — L_g = α T_g E_sun, α the
-//! ray's opacity — and the sky term S_g in the slab the search found; where the search finds
+//! nephele-runtime's collector search on the sun side's lit surface — L_g = w T_g E_sun, with
+//! w = α / (1 − e^{−τ_b}), α the ray's opacity and τ_b the found slab's own path beyond p
+//! (`SlabPoint::view_weight`) — and the sky term S_g in the slab the search found; where the search finds
 //! no light, T and S are read in the slab of the surface filtered at the cloud's size. How the
 //! searches went is counted per group ([`GroupStats`], render.json).
 //!
@@ -197,7 +198,7 @@ impl Frame<'_> {
                 st.empty += 1;
                 match self.coarse_slab(vp, sun32) {
                     Some(at) => {
-                        let weight = alpha * self.absorbed(g, &at);
+                        let weight = at.view_weight(alpha as f32) as f64 * self.absorbed(g, &at);
                         let t = self.tables.evaluate(g, &at).t as f64;
                         px.sun[g + 1] = [weight * t; 3];
                         st.dark += (t == 0.0) as u64;
@@ -215,7 +216,10 @@ impl Frame<'_> {
             st.held_by_sun += f.clamps.sun as u64;
             let kept = finite_cloud(self.tables, g, &self.side, &f, &self.finite).factor as f64;
             st.kept += kept;
-            px.sun[g + 1] = [alpha * kept * f.transport.t as f64; 3];
+            // α over the slab's own opacity beyond p: T already holds the slab's sources over
+            // its path beyond p (docs/collector.md, "Thin matter").
+            let w = f.at.view_weight(alpha as f32) as f64;
+            px.sun[g + 1] = [w * kept * f.transport.t as f64; 3];
         }
     }
 
