@@ -2,9 +2,9 @@
 //! orders ≥ 2 of a view ray from its surface point p, per order group g of the tables, by
 //! nephele-runtime's collector search on the sun side's lit surface — L_g = w T_g E_sun, with
 //! w = α / (1 − e^{−τ_b}), α the ray's opacity and τ_b the found slab's own path beyond p
-//! (`SlabPoint::view_weight`) — and the sky term S_g in the slab the search found; where the search finds
-//! no light, T and S are read in the slab of the surface filtered at the cloud's size. How the
-//! searches went is counted per group ([`GroupStats`], render.json).
+//! (`SlabPoint::view_weight`) — and the sky term S_g in the slab the search found; where the
+//! search finds no light, T and S are read in the slab of the surface filtered at the cloud's
+//! size. How the searches went is counted per group ([`GroupStats`], render.json).
 //!
 //! The finite-cloud correction (docs/collector.md, "Finite clouds"): each group's T and S are
 //! multiplied by the share a finite, possibly absorbing cloud keeps of the infinite slab's
