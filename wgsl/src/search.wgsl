@@ -132,6 +132,12 @@ fn ns_angle(c: f32, s: f32) -> f32 {
     return 0.5 * PI - nephele_asin(c / r);
 }
 
+// t held within the tables' thicknesses.
+fn ns_hold_thickness(t: f32) -> f32 {
+    let x = nephele_ntt_index;
+    return ns_clamp(t, ntt_f32(x.thickness), ntt_f32(x.thickness + x.n_t - 1u));
+}
+
 // The slab tangent to `s` that holds the viewpoint, the sun toward `sun`: μ_L = n̄·ω_L,
 // t = max(τ_chord μ_L, d + μ_V⁺ behind_min), d = κ̄ (entry − p)·n̄ held within the view ray's own
 // medium, μ_V = ω_V·n̄, ψ_V between the horizontal parts of the beam's travel and of ω_V; t and
@@ -158,7 +164,7 @@ fn local_slab(s: LitSample, v: Viewpoint, sun: vec3<f32>) -> LocalSlab {
         held = d_raw + mu_v * v.behind_min;
     }
     let t_raw = max(s.optical_length * mu_l, held);
-    let thickness = ns_clamp(t_raw, ntt_f32(x.thickness), ntt_f32(x.thickness + x.n_t - 1u));
+    let thickness = ns_hold_thickness(t_raw);
     clamps |= select(0u, 1u, thickness != t_raw);
     let depth = ns_clamp(d_raw, 0.0, thickness);
     clamps |= select(0u, 4u, depth != d_raw);
@@ -180,8 +186,9 @@ fn local_slab(s: LitSample, v: Viewpoint, sun: vec3<f32>) -> LocalSlab {
     let d_sun = mu_l * v.sun_depth;
     if mu_v > 0.0 && depth_v > d_sun {
         clamps |= 16u;
-        thickness_v = ns_clamp(d_sun + (thickness - depth_v), ntt_f32(x.thickness),
-            ntt_f32(x.thickness + x.n_t - 1u));
+        let t_cut = d_sun + (thickness - depth_v);
+        thickness_v = ns_hold_thickness(t_cut);
+        clamps |= select(0u, 1u, thickness_v != t_cut);
         depth_v = min(d_sun, thickness_v);
     }
     let beam_h = ns_add(-sun, n, mu_l_raw);

@@ -269,9 +269,13 @@ pub fn local_slab(
     } else {
         d_raw
     };
-    let t_raw = (s.optical_length * mu_l).max(held);
-    let thickness = t_raw.clamp_to(domain.thickness.0, domain.thickness.1);
-    clamps.thickness = thickness != t_raw;
+    // t held within the tables' thicknesses, flagged.
+    let hold_thickness = |t: f32, clamps: &mut Clamps| {
+        let h = t.clamp_to(domain.thickness.0, domain.thickness.1);
+        clamps.thickness |= h != t;
+        h
+    };
+    let thickness = hold_thickness((s.optical_length * mu_l).max(held), &mut clamps);
     let depth = d_raw.clamp_to(0.0, thickness);
     clamps.depth = depth != d_raw;
     let (lo, hi) = if mu_v > 0.0 {
@@ -294,7 +298,7 @@ pub fn local_slab(
     let d_sun = mu_l * v.sun_depth;
     let (depth, thickness) = if mu_v > 0.0 && depth_v > d_sun {
         clamps.sun = true;
-        let t = (d_sun + (thickness - depth_v)).clamp_to(domain.thickness.0, domain.thickness.1);
+        let t = hold_thickness(d_sun + (thickness - depth_v), &mut clamps);
         (d_sun.min(t), t)
     } else {
         (depth_v, thickness)
