@@ -403,7 +403,8 @@ impl Frame<'_> {
         self.tables.groups().min(GROUP_FIRST.len() - 1)
     }
 
-    /// Every pixel, rows in parallel (deterministic: no randomness, sums in a fixed order).
+    /// Every pixel, rows in parallel (deterministic: no randomness, sums in a fixed order),
+    /// each row written straight into the images (no frame-sized buffer of pixels between).
     /// Also the sky term's share of the scattered light.
     fn pixels(
         &self,
@@ -413,44 +414,76 @@ impl Frame<'_> {
         let (w, h) = (cam.width, cam.height);
         let ng = GROUP_FIRST.len();
         let done = AtomicUsize::new(0);
-        let rows: Vec<(Vec<Pixel>, Vec<GroupStats>)> = (0..h)
-            .into_par_iter()
-            .map(|j| {
-                let mut stats = self.empty_stats();
-                let row = (0..w).map(|i| self.pixel(cam, i, j, &mut stats)).collect();
-                progress((done.fetch_add(1, Ordering::Relaxed) + 1) as f64 / h as f64);
-                (row, stats)
-            })
-            .collect();
         let mut out = Rendered::empty(w, h);
         out.method = format!("{:?}", self.opts.method).to_lowercase();
         out.regions = vec![0; w * h];
-        let mut stats = self.empty_stats();
-        let (sun, sky) = (self.scene.sun.irradiance, self.scene.sky);
-        let (mut sky_sum, mut all) = (0.0f64, 0.0f64);
-        for (j, (row, row_stats)) in rows.into_iter().enumerate() {
-            for (a, b) in stats.iter_mut().zip(row_stats) {
-                a.add(&b);
-            }
-            for (i, px) in row.into_iter().enumerate() {
-                let at = j * w + i;
-                out.transmittance[at] = px.transmittance as f32;
-                out.regions[at] = px.region;
-                for c in 0..3 {
-                    let mut total = px.transmittance * sky[c];
-                    out.unscattered[at * 3 + c] = total as f32;
-                    for g in 0..ng {
-                        let v = px.sun[g][c] * sun[c] + px.sky[g] * sky[c];
-                        sky_sum += px.sky[g] * sky[c];
-                        all += v;
-                        out.groups[(g * h * w + at) * 3 + c] = v as f32;
-                        total += v;
-                    }
-                    out.beauty[at * 3 + c] = total as f32;
-                }
+        // Row j of every group's plane, side by side.
+        let mut group_rows: Vec<Vec<&mut [f32]>> = (0..h).map(|_| Vec::with_capacity(ng)).collect();
+        for plane in out.groups.chunks_mut(h * w * 3) {
+            for (rows, row) in group_rows.iter_mut().zip(plane.chunks_mut(w * 3)) {
+                rows.push(row);
             }
         }
+        let rows: Vec<RowSums> = out
+            .transmittance
+            .par_chunks_mut(w)
+            .zip(out.regions.par_chunks_mut(w))
+            .zip(out.unscattered.par_chunks_mut(w * 3))
+            .zip(out.beauty.par_chunks_mut(w * 3))
+            .zip(group_rows.into_par_iter())
+            .enumerate()
+            .map(
+                |(j, ((((transmittance, regions), unscattered), beauty), mut groups))| {
+                    let mut row = RowSums {
+                        stats: self.empty_stats(),
+                        sky: 0.0,
+                        all: 0.0,
+                    };
+                    let images = RowImages {
+                        transmittance,
+                        regions,
+                        unscattered,
+                        beauty,
+                        groups: &mut groups,
+                    };
+                    self.row(cam, j, images, &mut row);
+                    progress((done.fetch_add(1, Ordering::Relaxed) + 1) as f64 / h as f64);
+                    row
+                },
+            )
+            .collect();
+        let mut stats = self.empty_stats();
+        let (mut sky_sum, mut all) = (0.0f64, 0.0f64);
+        for row in rows {
+            for (a, b) in stats.iter_mut().zip(&row.stats) {
+                a.add(b);
+            }
+            sky_sum += row.sky;
+            all += row.all;
+        }
         (out, stats, sky_sum / all.max(1e-300))
+    }
+
+    /// Row `j`'s pixels into its rows of the images, its searches and light into `sums`.
+    fn row(&self, cam: &Pinhole, j: usize, images: RowImages, sums: &mut RowSums) {
+        let (sun, sky) = (self.scene.sun.irradiance, self.scene.sky);
+        for i in 0..cam.width {
+            let px = self.pixel(cam, i, j, &mut sums.stats);
+            images.transmittance[i] = px.transmittance as f32;
+            images.regions[i] = px.region;
+            for c in 0..3 {
+                let mut total = px.transmittance * sky[c];
+                images.unscattered[i * 3 + c] = total as f32;
+                for (g, plane) in images.groups.iter_mut().enumerate() {
+                    let v = px.sun[g][c] * sun[c] + px.sky[g] * sky[c];
+                    sums.sky += px.sky[g] * sky[c];
+                    sums.all += v;
+                    plane[i * 3 + c] = v as f32;
+                    total += v;
+                }
+                images.beauty[i * 3 + c] = total as f32;
+            }
+        }
     }
 
     /// One pixel: the mean over its n × n rays. The march (opacity, order 1, the sky term, the
@@ -520,6 +553,24 @@ impl Frame<'_> {
         let o = &self.opts.octaves;
         [o.scattered(self.g, self.scene.albedo, cos, integrals); 3]
     }
+}
+
+/// One row of a frame's images, written by [`Frame::row`].
+struct RowImages<'a, 'b> {
+    transmittance: &'a mut [f32],
+    regions: &'a mut [u8],
+    unscattered: &'a mut [f32],
+    beauty: &'a mut [f32],
+    /// The row in each group's plane.
+    groups: &'a mut [&'b mut [f32]],
+}
+
+/// What a row adds up: its searches, and its sky term's and all its scattered light (the
+/// rows' sums are added in row order).
+struct RowSums {
+    stats: Vec<GroupStats>,
+    sky: f64,
+    all: f64,
 }
 
 /// What one pixel (or ray) gathers, per unit sun irradiance and sky radiance.
