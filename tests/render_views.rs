@@ -5,12 +5,7 @@
 
 mod common;
 use common::cli::{refuses, succeeds};
-
-fn npy_f32(path: &std::path::Path) -> Vec<f32> {
-    let bytes = std::fs::read(path).unwrap();
-    let npy = npyz::NpyFile::new(&bytes[..]).unwrap();
-    npy.into_vec().unwrap()
-}
+use common::npy_f32;
 
 #[test]
 fn orbit_views_are_the_single_renders_of_their_cameras() {

@@ -85,6 +85,11 @@ pub struct FastArgs {
     /// at its most opaque ray's surface point).
     #[arg(long, default_value_t = 2, value_name = "N")]
     pub rays: u32,
+    /// Collector: search once per block of N × N pixels, at the block's most opaque ray, each
+    /// pixel weighing the light found by its own opacity (1: once per pixel; fewer searches,
+    /// docs/collector.md, "Frame cost").
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    pub search_block: u32,
     /// Collector: search on every ray of a pixel, not once per pixel (an ablation: n² times the
     /// searches).
     #[arg(long)]
@@ -198,6 +203,7 @@ impl FastArgs {
             step: self.march_step,
             surface_density: self.surface_density,
             rays: self.rays,
+            search_block: self.search_block,
             search_every_ray: self.search_every_ray,
             no_sun_depth: self.no_sun_depth,
             search: SearchOptions {
@@ -273,7 +279,8 @@ const FAST_ONLY: [&str; 8] = [
     "surface_density",
     "rays",
 ];
-const COLLECTOR_ONLY: [&str; 13] = [
+const COLLECTOR_ONLY: [&str; 14] = [
+    "search_block",
     "search_every_ray",
     "no_sun_depth",
     "iterations",

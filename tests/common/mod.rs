@@ -15,6 +15,13 @@ pub fn reference(name: &str) -> serde_json::Value {
     serde_json::from_str(&text).expect("reference JSON")
 }
 
+/// An f32 `.npy` file's values, in order.
+pub fn npy_f32(path: &std::path::Path) -> Vec<f32> {
+    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let npy = npyz::NpyFile::new(&bytes[..]).expect("an .npy file");
+    npy.into_vec().expect("f32 values")
+}
+
 /// Half a unit in the last decimal place printed for `v` (the digits a table gives).
 pub fn half_ulp_of_print(v: f64) -> f64 {
     let s = format!("{v}");

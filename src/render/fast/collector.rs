@@ -20,6 +20,18 @@ use nephele_runtime::transport::{
 };
 use serde::Serialize;
 
+/// One group's light from a collector search, per unit E_sun before the view weight: the slab
+/// it was read in (whose path beyond p sets the weight), the share the cloud keeps, T.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct GroupLight {
+    at: SlabPoint<f32>,
+    kept: f64,
+    t: f64,
+}
+
+/// Every group's light from one search (index g: the g-th group of orders ≥ 2).
+pub(super) type Searched = [Option<GroupLight>; GROUP_FIRST.len() - 1];
+
 /// The collector's finite-cloud correction (docs/collector.md, "Finite clouds").
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Finite {
@@ -175,6 +187,19 @@ impl Frame<'_> {
         sun32: [f32; 3],
         stats: &mut [GroupStats],
     ) {
+        let found = self.search(vp, sun32, stats);
+        self.apply(px, alpha, &found);
+    }
+
+    /// Every group's collector search from the viewpoint `vp`, counted in `stats`: the slab
+    /// each read its light in and what the cloud keeps of it; where the search finds no
+    /// collector, the slab of the surface filtered at the cloud's size.
+    pub(super) fn search(
+        &self,
+        vp: &Viewpoint,
+        sun32: [f32; 3],
+        stats: &mut [GroupStats],
+    ) -> Searched {
         let mut found = [None; GROUP_FIRST.len()];
         let vp = &Viewpoint {
             sun_depth: if self.opts.no_sun_depth {
@@ -192,15 +217,19 @@ impl Frame<'_> {
             &self.opts.search,
             &mut found,
         );
-        for ((g, st), found) in stats.iter_mut().enumerate().zip(found) {
+        let mut light = [None; GROUP_FIRST.len() - 1];
+        for (((g, st), found), light) in stats.iter_mut().enumerate().zip(found).zip(&mut light) {
             st.searches += 1;
             let Some(f) = found else {
                 st.empty += 1;
                 match self.coarse_slab(vp, sun32) {
                     Some(at) => {
-                        let weight = at.view_weight(alpha as f32) as f64 * self.absorbed(g, &at);
                         let t = self.tables.evaluate(g, &at).t as f64;
-                        px.sun[g + 1] = [weight * t; 3];
+                        *light = Some(GroupLight {
+                            at,
+                            kept: self.absorbed(g, &at),
+                            t,
+                        });
                         st.dark += (t == 0.0) as u64;
                     }
                     None => st.dark += 1,
@@ -216,10 +245,24 @@ impl Frame<'_> {
             st.held_by_sun += f.clamps.sun as u64;
             let kept = finite_cloud(self.tables, g, &self.side, &f, &self.finite).factor as f64;
             st.kept += kept;
-            // α over the slab's own opacity beyond p: T already holds the slab's sources over
-            // its path beyond p (docs/collector.md, "Thin matter").
-            let w = f.at.view_weight(alpha as f32) as f64;
-            px.sun[g + 1] = [w * kept * f.transport.t as f64; 3];
+            *light = Some(GroupLight {
+                at: f.at,
+                kept,
+                t: f.transport.t as f64,
+            });
+        }
+        light
+    }
+
+    /// Orders ≥ 2 of a ray or pixel of opacity `alpha` from the searches' `found` into `px`:
+    /// L_g = w kept T with w = α over the slab's own opacity beyond p — T already holds the
+    /// slab's sources over its path beyond p (docs/collector.md, "Thin matter").
+    pub(super) fn apply(&self, px: &mut Pixel, alpha: f64, found: &Searched) {
+        for (g, f) in found.iter().enumerate() {
+            if let Some(f) = f {
+                let w = f.at.view_weight(alpha as f32) as f64;
+                px.sun[g + 1] = [w * f.kept * f.t; 3];
+            }
         }
     }
 

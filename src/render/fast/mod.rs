@@ -91,6 +91,10 @@ pub struct FastOptions {
     /// Rays per pixel: an n × n grid (the collector searches once per pixel unless
     /// `search_every_ray`).
     pub rays: u32,
+    /// The collector searches once per block of this many × this many pixels, at the most
+    /// opaque ray of the block, each pixel weighing the found light by its own opacity (1:
+    /// once per pixel).
+    pub search_block: u32,
     /// The collector searches on every ray of a pixel, not once per pixel (an ablation).
     pub search_every_ray: bool,
     /// The collector search is not told p's depth to the sun (an ablation: the local slab
@@ -118,6 +122,7 @@ impl Default for FastOptions {
             step: None,
             surface_density: 0.5,
             rays: 2,
+            search_block: 1,
             search_every_ray: false,
             no_sun_depth: false,
             search: SearchOptions::default(),
@@ -172,6 +177,15 @@ impl FastOptions {
         ensure!(
             (1..=8).contains(&self.rays),
             "rays per pixel side must be 1…8"
+        );
+        ensure!(
+            (1..=16).contains(&self.search_block),
+            "search blocks must be 1…16 pixels a side"
+        );
+        ensure!(
+            self.search_block == 1 || !self.search_every_ray,
+            "--search-block shares one search among a block's pixels; --search-every-ray \
+             searches on every ray: choose one"
         );
         ensure!(
             (1..=64).contains(&self.search.max_reads),
@@ -418,27 +432,32 @@ impl Frame<'_> {
         out.method = format!("{:?}", self.opts.method).to_lowercase();
         out.regions = vec![0; w * h];
         // Row j of every group's plane, side by side.
-        let mut group_rows: Vec<Vec<&mut [f32]>> = (0..h).map(|_| Vec::with_capacity(ng)).collect();
+        // Bands of `search_block` rows: a search may serve pixels of several rows.
+        let band = self.opts.search_block as usize;
+        let mut group_bands: Vec<Vec<&mut [f32]>> = (0..h.div_ceil(band))
+            .map(|_| Vec::with_capacity(ng))
+            .collect();
         for plane in out.groups.chunks_mut(h * w * 3) {
-            for (rows, row) in group_rows.iter_mut().zip(plane.chunks_mut(w * 3)) {
-                rows.push(row);
+            for (bands, rows) in group_bands.iter_mut().zip(plane.chunks_mut(band * w * 3)) {
+                bands.push(rows);
             }
         }
         let rows: Vec<RowSums> = out
             .transmittance
-            .par_chunks_mut(w)
-            .zip(out.regions.par_chunks_mut(w))
-            .zip(out.unscattered.par_chunks_mut(w * 3))
-            .zip(out.beauty.par_chunks_mut(w * 3))
-            .zip(group_rows.into_par_iter())
+            .par_chunks_mut(band * w)
+            .zip(out.regions.par_chunks_mut(band * w))
+            .zip(out.unscattered.par_chunks_mut(band * w * 3))
+            .zip(out.beauty.par_chunks_mut(band * w * 3))
+            .zip(group_bands.into_par_iter())
             .enumerate()
             .map(
-                |(j, ((((transmittance, regions), unscattered), beauty), mut groups))| {
+                |(b, ((((transmittance, regions), unscattered), beauty), mut groups))| {
                     let mut row = RowSums {
                         stats: self.empty_stats(),
                         sky: 0.0,
                         all: 0.0,
                     };
+                    let rows = transmittance.len() / w;
                     let images = RowImages {
                         transmittance,
                         regions,
@@ -446,8 +465,9 @@ impl Frame<'_> {
                         beauty,
                         groups: &mut groups,
                     };
-                    self.row(cam, j, images, &mut row);
-                    progress((done.fetch_add(1, Ordering::Relaxed) + 1) as f64 / h as f64);
+                    self.band(cam, b * band, images, &mut row);
+                    let finished = done.fetch_add(rows, Ordering::Relaxed) + rows;
+                    progress(finished as f64 / h as f64);
                     row
                 },
             )
@@ -464,35 +484,76 @@ impl Frame<'_> {
         (out, stats, sky_sum / all.max(1e-300))
     }
 
-    /// Row `j`'s pixels into its rows of the images, its searches and light into `sums`.
-    fn row(&self, cam: &Pinhole, j: usize, images: RowImages, sums: &mut RowSums) {
+    /// The rows from `j0` on that `images` hold (a band of `search_block` rows at most): every
+    /// pixel's rays marched, then one collector search per block of pixels, at the block's
+    /// most opaque ray, each pixel weighing what it found by its own opacity; the searches and
+    /// the light added into `sums`.
+    fn band(&self, cam: &Pinhole, j0: usize, images: RowImages, sums: &mut RowSums) {
+        let w = cam.width;
+        let rows = images.transmittance.len() / w;
+        let mut pixels: Vec<(Pixel, Option<(f64, Viewpoint)>)> = (0..rows * w)
+            .map(|k| self.marched_pixel(cam, k % w, j0 + k / w, &mut sums.stats))
+            .collect();
+        let b = self.opts.search_block as usize;
+        let sun32 = self.scene.sun.direction.map(|x| x as f32);
+        for bi in (0..w).step_by(b) {
+            // The block's pixels, row by row.
+            let block: Vec<usize> = (0..rows)
+                .flat_map(|j| (bi..(bi + b).min(w)).map(move |i| j * w + i))
+                .collect();
+            let mut densest: Option<(f64, Viewpoint)> = None;
+            for &k in &block {
+                if let Some(d) = pixels[k].1 {
+                    if densest.as_ref().is_none_or(|best| d.0 > best.0) {
+                        densest = Some(d);
+                    }
+                }
+            }
+            let Some((_, vp)) = densest else {
+                continue;
+            };
+            let found = self.search(&vp, sun32, &mut sums.stats);
+            for &k in &block {
+                let (px, own) = &mut pixels[k];
+                if own.is_some() {
+                    let alpha = 1.0 - px.transmittance;
+                    self.apply(px, alpha, &found);
+                }
+            }
+        }
         let (sun, sky) = (self.scene.sun.irradiance, self.scene.sky);
-        for i in 0..cam.width {
-            let px = self.pixel(cam, i, j, &mut sums.stats);
-            images.transmittance[i] = px.transmittance as f32;
-            images.regions[i] = px.region;
+        for (k, (px, _)) in pixels.iter_mut().enumerate() {
+            px.region = region_of(1.0 - px.transmittance, px.sun_tau);
+            images.transmittance[k] = px.transmittance as f32;
+            images.regions[k] = px.region;
             for c in 0..3 {
                 let mut total = px.transmittance * sky[c];
-                images.unscattered[i * 3 + c] = total as f32;
+                images.unscattered[k * 3 + c] = total as f32;
                 for (g, plane) in images.groups.iter_mut().enumerate() {
                     let v = px.sun[g][c] * sun[c] + px.sky[g] * sky[c];
                     sums.sky += px.sky[g] * sky[c];
                     sums.all += v;
-                    plane[i * 3 + c] = v as f32;
+                    plane[k * 3 + c] = v as f32;
                     total += v;
                 }
-                images.beauty[i * 3 + c] = total as f32;
+                images.beauty[k * 3 + c] = total as f32;
             }
         }
     }
 
-    /// One pixel: the mean over its n × n rays. The march (opacity, order 1, the sky term, the
-    /// octaves) runs on every ray; the collector searches once per pixel, at the surface point
-    /// of its most opaque ray, its orders ≥ 2 weighed by the pixel's mean opacity — unless
-    /// `search_every_ray` (each ray its own searches, n² times the cost).
-    fn pixel(&self, cam: &Pinhole, i: usize, j: usize, stats: &mut [GroupStats]) -> Pixel {
+    /// One pixel's rays marched: the mean over its n × n rays (opacity, order 1, the sky term,
+    /// the octaves), and, for the collector, the most opaque ray's opacity and viewpoint, where
+    /// [`Self::band`] searches once for the pixel or its block — unless `search_every_ray` (each
+    /// ray its own searches here, n² times the cost).
+    fn marched_pixel(
+        &self,
+        cam: &Pinhole,
+        i: usize,
+        j: usize,
+        stats: &mut [GroupStats],
+    ) -> (Pixel, Option<(f64, Viewpoint)>) {
         let n = self.opts.rays as usize;
-        let once = self.opts.method == Method::Collector && !self.opts.search_every_ray && n > 1;
+        let once = self.opts.method == Method::Collector && !self.opts.search_every_ray;
         let mut px = Pixel::default();
         let inv = 1.0 / (n * n) as f64;
         let mut densest: Option<(f64, Viewpoint)> = None;
@@ -509,13 +570,7 @@ impl Frame<'_> {
                 _ => {}
             }
         }
-        if let Some((_, vp)) = densest {
-            let sun32 = self.scene.sun.direction.map(|x| x as f32);
-            let alpha = 1.0 - px.transmittance;
-            self.collector(&mut px, alpha, &vp, sun32, stats);
-        }
-        px.region = region_of(1.0 - px.transmittance, px.sun_tau);
-        px
+        (px, densest)
     }
 
     /// One view ray: its transmittance, order 1, and the scattered orders of the method (the
@@ -555,13 +610,13 @@ impl Frame<'_> {
     }
 }
 
-/// One row of a frame's images, written by [`Frame::row`].
+/// A band of rows of a frame's images, written by [`Frame::band`].
 struct RowImages<'a, 'b> {
     transmittance: &'a mut [f32],
     regions: &'a mut [u8],
     unscattered: &'a mut [f32],
     beauty: &'a mut [f32],
-    /// The row in each group's plane.
+    /// The band's rows in each group's plane.
     groups: &'a mut [&'b mut [f32]],
 }
 
