@@ -2,7 +2,9 @@
 
 use anyhow::Result;
 use clap::{ArgMatches, Args};
-use nephele::render::fast::{prepare, render_fast, FastOptions, Finite, Method, Octaves};
+use nephele::render::fast::{
+    prepare, render_fast, FastOptions, Finite, Method, Octaves, RayPattern,
+};
 use nephele::render::image::Rendered;
 use nephele::render::output::{exposure as output_exposure, write_outputs_with};
 use nephele::render::path::{render_reporting, Progress};
@@ -85,6 +87,10 @@ pub struct FastArgs {
     /// at its most opaque ray's surface point).
     #[arg(long, default_value_t = 2, value_name = "N")]
     pub rays: u32,
+    /// Where a pixel's rays go: `grid`, n × n of them at the sub-pixels' centres; `rooks`, n
+    /// of them, one in each row and column of that grid (n = 2: the diagonal, half the march).
+    #[arg(long, value_enum, default_value = "grid", value_name = "PATTERN")]
+    pub ray_pattern: RayPattern,
     /// Collector: search once per block of N × N pixels, at the block's most opaque ray, each
     /// pixel weighing the light found by its own opacity (1: once per pixel; fewer searches,
     /// docs/collector.md, "Frame cost").
@@ -203,6 +209,7 @@ impl FastArgs {
             step: self.march_step,
             surface_density: self.surface_density,
             rays: self.rays,
+            pattern: self.ray_pattern,
             search_block: self.search_block,
             search_every_ray: self.search_every_ray,
             no_sun_depth: self.no_sun_depth,
@@ -269,7 +276,7 @@ pub fn render_with(scene: &Scene, method: Method, fast: &FastArgs) -> Result<Ren
 
 /// The flags of one method only, by clap id.
 const PATH_TRACER_ONLY: [&str; 3] = ["spp", "time_budget", "sun_lobe_steps"];
-const FAST_ONLY: [&str; 8] = [
+const FAST_ONLY: [&str; 9] = [
     "orbit",
     "tables",
     "allow_table_mismatch",
@@ -278,6 +285,7 @@ const FAST_ONLY: [&str; 8] = [
     "march_step",
     "surface_density",
     "rays",
+    "ray_pattern",
 ];
 const COLLECTOR_ONLY: [&str; 14] = [
     "search_block",

@@ -75,6 +75,41 @@ pub enum Method {
     Octaves,
 }
 
+/// Where a pixel's rays go, with n = `rays`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RayPattern {
+    /// n² rays, at the centres of an n × n grid of sub-pixels.
+    Grid,
+    /// n rays, one in each row and each column of that grid (n-rooks): ray k in column k and
+    /// row k·s mod n, s the largest step below n/2 + 1 coprime with n (n = 2: the diagonal).
+    /// Half the march of the 2 × 2 grid.
+    Rooks,
+}
+
+impl RayPattern {
+    /// The sub-pixel offsets (u, v) ∈ (0, 1)² of the rays of a pixel, for n = `n`.
+    fn offsets(self, n: usize) -> Vec<(f64, f64)> {
+        let at =
+            |col: usize, row: usize| ((col as f64 + 0.5) / n as f64, (row as f64 + 0.5) / n as f64);
+        match self {
+            RayPattern::Grid => (0..n * n).map(|k| at(k % n, k / n)).collect(),
+            RayPattern::Rooks => {
+                let step = (1..=n / 2 + 1).rev().find(|&s| gcd(s, n) == 1).unwrap_or(1);
+                (0..n).map(|k| at(k, k * step % n)).collect()
+            }
+        }
+    }
+}
+
+fn gcd(a: usize, b: usize) -> usize {
+    if b == 0 {
+        a
+    } else {
+        gcd(b, a % b)
+    }
+}
+
 /// Settings of the fast renderers.
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct FastOptions {
@@ -89,8 +124,10 @@ pub struct FastOptions {
     /// ρ₀: the lit surface is where σ_t = ρ₀ σ_t,scene.
     pub surface_density: f64,
     /// Rays per pixel: an n × n grid (the collector searches once per pixel unless
-    /// `search_every_ray`).
+    /// `search_every_ray`), or n of its cells with `pattern` [`RayPattern::Rooks`].
     pub rays: u32,
+    /// Where a pixel's rays go.
+    pub pattern: RayPattern,
     /// The collector searches once per block of this many × this many pixels, at the most
     /// opaque ray of the block, each pixel weighing the found light by its own opacity (1:
     /// once per pixel).
@@ -122,6 +159,7 @@ impl Default for FastOptions {
             step: None,
             surface_density: 0.5,
             rays: 2,
+            pattern: RayPattern::Grid,
             search_block: 1,
             search_every_ray: false,
             no_sun_depth: false,
@@ -229,6 +267,8 @@ struct Frame<'a> {
     /// The collector's finite-cloud correction, with the tables' mean cosine and the scene's
     /// absorption.
     finite: FiniteCloud,
+    /// The sub-pixel offsets of a pixel's rays ([`RayPattern::offsets`]).
+    offsets: Vec<(f64, f64)>,
 }
 
 /// A scene prepared for the fast renderers: the medium, the phase functions, the light-space
@@ -297,6 +337,7 @@ pub fn prepare<'a>(
         phases,
         g,
         finite: opts.finite.runtime(tables, scene.albedo),
+        offsets: opts.pattern.offsets(opts.rays as usize),
     };
     Ok(Prepared {
         frame,
@@ -402,6 +443,7 @@ pub fn surface_points(scene: &Scene, stride: usize) -> Result<(SunSide, Vec<View
         phases: Vec::new(),
         g: 0.0,
         finite: FiniteCloud::published(0.0),
+        offsets: Vec::new(),
     };
     let mut points = Vec::new();
     for px in (0..cam.width * cam.height).step_by(stride.max(1)) {
@@ -541,10 +583,10 @@ impl Frame<'_> {
         }
     }
 
-    /// One pixel's rays marched: the mean over its n × n rays (opacity, order 1, the sky term,
-    /// the octaves), and, for the collector, the most opaque ray's opacity and viewpoint, where
+    /// One pixel's rays marched: the mean over its rays (n × n, or n with the rooks; opacity,
+    /// order 1, the sky term, the octaves), and, for the collector, the most opaque ray's opacity and viewpoint, where
     /// [`Self::band`] searches once for the pixel or its block — unless `search_every_ray` (each
-    /// ray its own searches here, n² times the cost).
+    /// ray its own searches here, once per ray).
     fn marched_pixel(
         &self,
         cam: &Pinhole,
@@ -552,14 +594,12 @@ impl Frame<'_> {
         j: usize,
         stats: &mut [GroupStats],
     ) -> (Pixel, Option<(f64, Viewpoint)>) {
-        let n = self.opts.rays as usize;
         let once = self.opts.method == Method::Collector && !self.opts.search_every_ray;
         let mut px = Pixel::default();
-        let inv = 1.0 / (n * n) as f64;
+        let inv = 1.0 / self.offsets.len() as f64;
         let mut densest: Option<(f64, Viewpoint)> = None;
-        for k in 0..n * n {
-            let (u, v) = ((k % n) as f64 + 0.5, (k / n) as f64 + 0.5);
-            let dir = cam.direction(i, j, u / n as f64, v / n as f64);
+        for &(u, v) in &self.offsets {
+            let dir = cam.direction(i, j, u, v);
             let (one, ray) = self.ray(cam.position, dir, (!once).then_some(&mut *stats));
             px.add(&one, inv);
             let alpha = 1.0 - ray.transmittance;
@@ -652,5 +692,38 @@ impl Pixel {
             self.sky[g] += w * o.sky[g];
         }
         self.sun_tau += w * o.sun_tau;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::RayPattern;
+
+    /// The rooks put one ray in each row and each column of the n × n grid (n = 2: the
+    /// diagonal), at the grid's cell centres; the grid takes every cell once.
+    #[test]
+    fn the_rooks_take_each_row_and_column_once() {
+        assert_eq!(
+            RayPattern::Rooks.offsets(2),
+            vec![(0.25, 0.25), (0.75, 0.75)]
+        );
+        for n in 1..=8 {
+            let cell = |x: f64| (x * n as f64 - 0.5).round() as usize;
+            let rooks = RayPattern::Rooks.offsets(n);
+            assert_eq!(rooks.len(), n);
+            let mut rows: Vec<usize> = rooks.iter().map(|&(_, v)| cell(v)).collect();
+            let cols: Vec<usize> = rooks.iter().map(|&(u, _)| cell(u)).collect();
+            rows.sort_unstable();
+            assert_eq!(rows, (0..n).collect::<Vec<_>>(), "n = {n}: rows");
+            assert_eq!(cols, (0..n).collect::<Vec<_>>(), "n = {n}: columns");
+            let mut grid: Vec<(usize, usize)> = RayPattern::Grid
+                .offsets(n)
+                .iter()
+                .map(|&(u, v)| (cell(u), cell(v)))
+                .collect();
+            grid.sort_unstable();
+            grid.dedup();
+            assert_eq!(grid.len(), n * n, "n = {n}: grid");
+        }
     }
 }
