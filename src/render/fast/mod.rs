@@ -473,8 +473,8 @@ impl Frame<'_> {
         let mut out = Rendered::empty(w, h);
         out.method = format!("{:?}", self.opts.method).to_lowercase();
         out.regions = vec![0; w * h];
-        // Row j of every group's plane, side by side.
-        // Bands of `search_block` rows: a search may serve pixels of several rows.
+        // Bands of `search_block` rows (a search may serve pixels of several rows), and each
+        // band's rows in every group's plane, side by side.
         let band = self.opts.search_block as usize;
         let mut group_bands: Vec<Vec<&mut [f32]>> = (0..h.div_ceil(band))
             .map(|_| Vec::with_capacity(ng))
@@ -484,7 +484,7 @@ impl Frame<'_> {
                 bands.push(rows);
             }
         }
-        let rows: Vec<RowSums> = out
+        let bands: Vec<BandSums> = out
             .transmittance
             .par_chunks_mut(band * w)
             .zip(out.regions.par_chunks_mut(band * w))
@@ -494,34 +494,34 @@ impl Frame<'_> {
             .enumerate()
             .map(
                 |(b, ((((transmittance, regions), unscattered), beauty), mut groups))| {
-                    let mut row = RowSums {
+                    let mut sums = BandSums {
                         stats: self.empty_stats(),
                         sky: 0.0,
                         all: 0.0,
                     };
                     let rows = transmittance.len() / w;
-                    let images = RowImages {
+                    let images = BandImages {
                         transmittance,
                         regions,
                         unscattered,
                         beauty,
                         groups: &mut groups,
                     };
-                    self.band(cam, b * band, images, &mut row);
+                    self.band(cam, b * band, images, &mut sums);
                     let finished = done.fetch_add(rows, Ordering::Relaxed) + rows;
                     progress(finished as f64 / h as f64);
-                    row
+                    sums
                 },
             )
             .collect();
         let mut stats = self.empty_stats();
         let (mut sky_sum, mut all) = (0.0f64, 0.0f64);
-        for row in rows {
-            for (a, b) in stats.iter_mut().zip(&row.stats) {
+        for sums in bands {
+            for (a, b) in stats.iter_mut().zip(&sums.stats) {
                 a.add(b);
             }
-            sky_sum += row.sky;
-            all += row.all;
+            sky_sum += sums.sky;
+            all += sums.all;
         }
         (out, stats, sky_sum / all.max(1e-300))
     }
@@ -530,7 +530,7 @@ impl Frame<'_> {
     /// pixel's rays marched, then one collector search per block of pixels, at the block's
     /// most opaque ray, each pixel weighing what it found by its own opacity; the searches and
     /// the light added into `sums`.
-    fn band(&self, cam: &Pinhole, j0: usize, images: RowImages, sums: &mut RowSums) {
+    fn band(&self, cam: &Pinhole, j0: usize, images: BandImages, sums: &mut BandSums) {
         let w = cam.width;
         let rows = images.transmittance.len() / w;
         let mut pixels: Vec<(Pixel, Option<(f64, Viewpoint)>)> = (0..rows * w)
@@ -540,11 +540,10 @@ impl Frame<'_> {
         let sun32 = self.scene.sun.direction.map(|x| x as f32);
         for bi in (0..w).step_by(b) {
             // The block's pixels, row by row.
-            let block: Vec<usize> = (0..rows)
-                .flat_map(|j| (bi..(bi + b).min(w)).map(move |i| j * w + i))
-                .collect();
+            let block =
+                || (0..rows).flat_map(move |j| (bi..(bi + b).min(w)).map(move |i| j * w + i));
             let mut densest: Option<(f64, Viewpoint)> = None;
-            for &k in &block {
+            for k in block() {
                 if let Some(d) = pixels[k].1 {
                     if densest.as_ref().is_none_or(|best| d.0 > best.0) {
                         densest = Some(d);
@@ -555,7 +554,7 @@ impl Frame<'_> {
                 continue;
             };
             let found = self.search(&vp, sun32, &mut sums.stats);
-            for &k in &block {
+            for k in block() {
                 let (px, own) = &mut pixels[k];
                 if own.is_some() {
                     let alpha = 1.0 - px.transmittance;
@@ -584,9 +583,9 @@ impl Frame<'_> {
     }
 
     /// One pixel's rays marched: the mean over its rays (n × n, or n with the rooks; opacity,
-    /// order 1, the sky term, the octaves), and, for the collector, the most opaque ray's opacity and viewpoint, where
-    /// [`Self::band`] searches once for the pixel or its block — unless `search_every_ray` (each
-    /// ray its own searches here, once per ray).
+    /// order 1, the sky term, the octaves), and, for the collector, the most opaque ray's
+    /// opacity and viewpoint, where [`Self::band`] searches once for the pixel or its block —
+    /// unless `search_every_ray` (each ray its own searches here).
     fn marched_pixel(
         &self,
         cam: &Pinhole,
@@ -651,7 +650,7 @@ impl Frame<'_> {
 }
 
 /// A band of rows of a frame's images, written by [`Frame::band`].
-struct RowImages<'a, 'b> {
+struct BandImages<'a, 'b> {
     transmittance: &'a mut [f32],
     regions: &'a mut [u8],
     unscattered: &'a mut [f32],
@@ -660,9 +659,9 @@ struct RowImages<'a, 'b> {
     groups: &'a mut [&'b mut [f32]],
 }
 
-/// What a row adds up: its searches, and its sky term's and all its scattered light (the
-/// rows' sums are added in row order).
-struct RowSums {
+/// What a band adds up: its searches, and its sky term's and all its scattered light (the
+/// bands' sums are added in order).
+struct BandSums {
     stats: Vec<GroupStats>,
     sky: f64,
     all: f64,
