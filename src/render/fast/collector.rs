@@ -184,22 +184,17 @@ impl Frame<'_> {
         px: &mut Pixel,
         alpha: f64,
         vp: &Viewpoint,
-        sun32: [f32; 3],
         stats: &mut [GroupStats],
     ) {
-        let found = self.search(vp, sun32, stats);
+        let found = self.search(vp, stats);
         self.apply(px, alpha, &found);
     }
 
     /// Every group's collector search from the viewpoint `vp`, counted in `stats`: the slab
     /// each read its light in and what the cloud keeps of it; where the search finds no
     /// collector, the slab of the surface filtered at the cloud's size.
-    pub(super) fn search(
-        &self,
-        vp: &Viewpoint,
-        sun32: [f32; 3],
-        stats: &mut [GroupStats],
-    ) -> Searched {
+    pub(super) fn search(&self, vp: &Viewpoint, stats: &mut [GroupStats]) -> Searched {
+        let sun32 = self.scene.sun.direction.map(|x| x as f32);
         let mut found = [None; GROUP_FIRST.len()];
         let vp = &Viewpoint {
             sun_depth: if self.opts.no_sun_depth {

@@ -537,7 +537,6 @@ impl Frame<'_> {
             .map(|k| self.marched_pixel(cam, k % w, j0 + k / w, &mut sums.stats))
             .collect();
         let b = self.opts.search_block as usize;
-        let sun32 = self.scene.sun.direction.map(|x| x as f32);
         for bi in (0..w).step_by(b) {
             // The block's pixels, row by row.
             let block =
@@ -553,7 +552,7 @@ impl Frame<'_> {
             let Some((_, vp)) = densest else {
                 continue;
             };
-            let found = self.search(&vp, sun32, &mut sums.stats);
+            let found = self.search(&vp, &mut sums.stats);
             for k in block() {
                 let (px, own) = &mut pixels[k];
                 if own.is_some() {
@@ -633,9 +632,8 @@ impl Frame<'_> {
             return (px, v);
         };
         px.sun_tau = v.sun_depth;
-        let sun32 = sun.map(|x| x as f32);
         match (self.opts.method, stats) {
-            (Method::Collector, Some(stats)) => self.collector(&mut px, alpha, &vp, sun32, stats),
+            (Method::Collector, Some(stats)) => self.collector(&mut px, alpha, &vp, stats),
             (Method::Octaves, _) => px.sun[1] = self.octaves(cos, &v.integrals),
             _ => {}
         }
