@@ -237,18 +237,18 @@ impl<'a> TransportTables<'a> {
         if !self.add_t_features(&pt, &mut sums) {
             return;
         }
-        let collector = self.collector.as_ref().map(|cp| {
-            let mut c = [Sums::<C_SUMS>::EMPTY; 4];
+        // Filled in place: the sums are kilobytes, and moving them cost 6 % of a read.
+        let mut c = [Sums::<C_SUMS>::EMPTY; 4];
+        if let Some(cp) = &self.collector {
             self.add_collector_features(cp, &pt, (first, count), &mut c);
-            (cp, c)
-        });
+        }
         for (lanes, out) in (first..first + count)
             .step_by(LANES)
             .zip(out.chunks_mut(LANES))
         {
             let (t, ranges) = self.t_lanes(&pt, (lanes, out.len()), &sums);
-            match &collector {
-                Some((cp, c)) => self.collector_lanes(cp, &pt, (&t, &ranges), (lanes, c), out),
+            match &self.collector {
+                Some(cp) => self.collector_lanes(cp, &pt, (&t, &ranges), (lanes, &c), out),
                 None => out.iter_mut().zip(t).for_each(|(slot, t)| slot.t = t),
             }
         }
@@ -375,7 +375,7 @@ impl<'a> TransportTables<'a> {
         let n = cp.form.depth_terms();
         let reach = cp.form.cz_reach_start(nm, nl);
         for (part, s) in [0, 1, 1, 2].into_iter().enumerate() {
-            out[part] = Sums::new(cp.strides[s], run, cp.q, n);
+            out[part].reset(cp.strides[s], run, cp.q, n);
         }
         let mut row = [(0u32, 0.0f32); MAX_C_FEATURES];
         for (s, stat) in Statistic::ALL.iter().enumerate() {
@@ -656,6 +656,17 @@ impl<const N: usize> Sums<N> {
         }
     }
 
+    /// [`Self::new`] in place: only the accumulators the run uses are zeroed.
+    fn reset(&mut self, strides: Strides, (first, groups): (usize, usize), q: usize, depth: usize) {
+        self.strides = strides;
+        self.first = first;
+        self.groups = groups.min(Self::capacity(q, depth));
+        self.q = q;
+        self.depth = depth.min(MAX_LEGENDRE);
+        let used = (self.groups * q * self.depth).min(N);
+        self.acc[..used].iter_mut().for_each(|a| *a = 0.0);
+    }
+
     /// Adds feature `v` of column `col` and depth degree `j`, its parameters in `beta`.
     #[inline(always)]
     fn add(&mut self, beta: &[u8], col: usize, v: f32, j: usize) {
@@ -703,11 +714,12 @@ impl<const N: usize> Sums<N> {
     fn add_row_any(&mut self, beta: &[u8], row: &[(u32, f32)]) {
         if self.strides.feature_major {
             // The shipped forms' widths: 8 groups × Q = 5 (T) and 8 × 4 (the collector), and
-            // one group of each.
+            // one group of each (what a search's later reads take).
             match self.groups * self.q {
                 40 => return self.add_runs::<40>(beta, row),
                 32 => return self.add_runs::<32>(beta, row),
                 5 => return self.add_runs::<5>(beta, row),
+                4 => return self.add_runs::<4>(beta, row),
                 _ => {}
             }
         }
