@@ -429,16 +429,7 @@ pub const STRETCH_EXPONENT: f64 = 0.65;
 /// The stretched depth u ∈ [0, 1] of depth d in a slab of thickness t (both in mfp): the
 /// inverse of [`depth_fraction`].
 pub fn stretched_u(d: f32, t: f32) -> f32 {
-    stretched_u_at(d, t, Real::ln(t))
-}
-
-/// [`stretched_u`] given `ln_t` = ln t, which a caller often has already.
-pub(crate) fn stretched_u_at(d: f32, t: f32, ln_t: f32) -> f32 {
-    let beta = STRETCH_SCALE as f32 * Real::exp(STRETCH_EXPONENT as f32 * ln_t);
-    if beta < 1e-6 {
-        return d / t;
-    }
-    (Real::ln(1.0 + (Real::exp(beta) - 1.0) * d / t) / beta).clamp(0.0, 1.0)
+    Stretch::of(t).u_of(d)
 }
 
 /// d/t at stretched depth u in a slab of thickness t (mfp): (e^{βu} − 1)/(e^β − 1).
@@ -462,6 +453,57 @@ pub fn far_fraction<F: Real>(u: F, t: F) -> F {
     (beta * u).exp() * exp_m1(beta * (one - u)) / exp_m1(beta)
 }
 
+/// The stretched-depth map of one slab: its thickness t (mfp) and β = `STRETCH_SCALE` ·
+/// t^`STRETCH_EXPONENT`, computed once for every depth a caller maps (a point's own, and the
+/// depths at which its groups continue their polynomials toward a face).
+#[derive(Clone, Copy, Debug)]
+pub struct Stretch<F> {
+    t: F,
+    beta: F,
+}
+
+impl<F: Real> Stretch<F> {
+    /// The map of a slab `t` mfp thick.
+    pub fn of(t: F) -> Self {
+        Self::with_ln_t(t, t.ln())
+    }
+
+    /// [`Self::of`] given `ln_t` = ln t, which a caller often has already.
+    pub fn with_ln_t(t: F, ln_t: F) -> Self {
+        Self {
+            t,
+            beta: F::of(STRETCH_SCALE) * (F::of(STRETCH_EXPONENT) * ln_t).exp(),
+        }
+    }
+
+    /// The stretched depth u ∈ [0, 1] of depth `d` (mfp; [`stretched_u`], the same steps).
+    pub fn u_of(&self, d: F) -> F {
+        if self.beta < F::of(1e-6) {
+            return d / self.t;
+        }
+        let one = F::of(1.0);
+        ((one + (self.beta.exp() - one) * d / self.t).ln() / self.beta).clamp_to(F::of(0.0), one)
+    }
+
+    /// The distance (mfp) from stretched depth u to the far face (`far`) or to the lit face,
+    /// for each u of `us`: t × [`far_fraction`] or t × [`depth_fraction`], e^β − 1 computed once.
+    pub fn to_face<const N: usize>(&self, far: bool, us: [F; N]) -> [F; N] {
+        let one = F::of(1.0);
+        if self.beta < F::of(1e-6) {
+            return us.map(|u| self.t * if far { one - u } else { u });
+        }
+        let em1 = exp_m1(self.beta);
+        us.map(|u| {
+            self.t
+                * if far {
+                    (self.beta * u).exp() * exp_m1(self.beta * (one - u)) / em1
+                } else {
+                    exp_m1(self.beta * u) / em1
+                }
+        })
+    }
+}
+
 /// The stretch of depth (in u) over which [`depth_polynomial`] measures the slope at the end of
 /// the fitted depths: one plane spacing of the default grid (16 planes).
 pub const EDGE_STEP: f64 = 1.0 / 15.0;
@@ -478,6 +520,17 @@ pub fn depth_polynomial<F: Real>(
     n: usize,
     u: F,
     thickness: F,
+    range: &FittedDepths<F>,
+) -> F {
+    depth_polynomial_in(d, n, u, &Stretch::of(thickness), range)
+}
+
+/// [`depth_polynomial`] in the slab whose stretched-depth map is `slab`.
+pub(crate) fn depth_polynomial_in<F: Real>(
+    d: &[F; MAX_LEGENDRE],
+    n: usize,
+    u: F,
+    slab: &Stretch<F>,
     range: &FittedDepths<F>,
 ) -> F {
     let at = |u: F| {
@@ -506,15 +559,8 @@ pub fn depth_polynomial<F: Real>(
     }
     // Distances (mfp) to the face ahead: the far face d = t beyond `hi`, the lit face d = 0
     // below `lo`.
-    let to_face = |u: F| {
-        thickness
-            * if far {
-                far_fraction(u, thickness)
-            } else {
-                depth_fraction(u, thickness)
-            }
-    };
-    value + continued_toward_face(inner - value, (to_face(inside), to_face(edge), to_face(u)))
+    let [h_inside, h_edge, h] = slab.to_face(far, [inside, edge, u]);
+    value + continued_toward_face(inner - value, (h_inside, h_edge, h))
 }
 
 /// ln of T/B at distance `h` from a face relative to its value at the fitted edge (distance

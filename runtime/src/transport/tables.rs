@@ -12,8 +12,8 @@ use super::format::{unpack_u_range, CollectorPart, Strides, EMPTY_RANGE, MAX_Q};
 use super::geometry::SlabPoint;
 use super::halo::{Halo, HaloAt};
 use super::log_additive::{
-    depth_polynomial, legendre, ln_boundary, ln_t_position, stretched_u_at, Cell, FittedDepths,
-    Lerp, LogAdditive, MAX_CROSS, MAX_HARMONICS, MAX_LEGENDRE,
+    depth_polynomial_in, legendre, ln_boundary, ln_t_position, Cell, FittedDepths,
+    Lerp, LogAdditive, Stretch, MAX_CROSS, MAX_HARMONICS, MAX_LEGENDRE,
 };
 use super::single::{single_scattering, PhaseValue};
 use crate::container::ArrayView;
@@ -295,12 +295,13 @@ impl<'a> TransportTables<'a> {
             return None;
         }
         let ln_t = Real::ln(t);
+        let stretch = Stretch::with_ln_t(t, ln_t);
         let (nt, nl, nm) = (self.thickness.len(), self.mu_l.len(), self.mu_v.len());
         let cell = Cell::new(
             *at,
             lerp(&self.mu_l, at.mu_l),
             lerp(&self.mu_v, at.mu_v),
-            stretched_u_at(d, t, ln_t),
+            stretch.u_of(d),
         );
         let offset = ln_boundary(at)?;
         let near_t = lerp(&self.thickness, t);
@@ -331,6 +332,7 @@ impl<'a> TransportTables<'a> {
             n_ceiling: nceil,
             per_group: (nt * nl * nm, nt * nl),
             p_u: legendre(2.0 * cell.u - 1.0, self.depth_terms()),
+            stretch,
         })
     }
 
@@ -434,7 +436,7 @@ impl<'a> TransportTables<'a> {
                     .zip(&pt.p_u)
                     .fold(0.0, |s, (a, b)| s + *a * *b)
             } else {
-                depth_polynomial(&d_i, depth_terms, u, pt.cell.at.thickness, range)
+                depth_polynomial_in(&d_i, depth_terms, u, &pt.stretch, range)
             };
             let v = range.share * Real::exp(pt.offset + depth);
             t[i] = match top[i] {
@@ -478,9 +480,19 @@ impl<'a> TransportTables<'a> {
             [0.0f32; LANES],
         );
         for &(at, wk) in &pt.corners[..pt.n_corners] {
-            for i in 0..n {
-                let packed = self.u_range.get((g0 + i) * pt.per_group.0 + at);
-                let (a, b) = unpack_u_range(packed.unwrap_or(EMPTY_RANGE));
+            // Gathered first (lanes past the run read as empty), then the same arithmetic on
+            // every lane, which the compiler puts in one register.
+            let mut packed = [EMPTY_RANGE; LANES];
+            for (i, p) in packed.iter_mut().enumerate().take(n) {
+                *p = self
+                    .u_range
+                    .get((g0 + i) * pt.per_group.0 + at)
+                    .unwrap_or(EMPTY_RANGE);
+            }
+            // A whole lane set in one register; a shorter run (one group) lane by lane.
+            let lanes = if n == LANES { LANES } else { n };
+            for i in 0..lanes {
+                let (a, b) = unpack_u_range(packed[i]);
                 all[i] += wk;
                 // 1 where the node has fitted cells, else 0: adding 0 leaves each sum as it
                 // was, with no branch to mispredict (empty nodes are common and irregular).
@@ -491,7 +503,7 @@ impl<'a> TransportTables<'a> {
             }
         }
         core::array::from_fn(|i| {
-            (w[i] > 0.0).then(|| FittedDepths {
+            (i < n && w[i] > 0.0).then(|| FittedDepths {
                 lo: lo[i] / w[i],
                 hi: hi[i] / w[i],
                 share: w[i] / all[i],
@@ -597,6 +609,8 @@ struct Point {
     /// P_j(2u − 1) at the point's own depth: every group's depth polynomial where the point
     /// lies within the group's fitted depths (most points), computed once.
     p_u: [f32; MAX_LEGENDRE],
+    /// The slab's stretched-depth map (for the depths continued toward a face).
+    stretch: Stretch<f32>,
 }
 
 /// Floats of the sums of T's features: 8 groups × Q ≤ 6 × J ≤ 8 at once (more groups are
