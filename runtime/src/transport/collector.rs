@@ -71,6 +71,10 @@ impl Statistic {
 }
 
 /// One block of features: a multiplier times the Θ table or the depth polynomials on nodes.
+/// (sin kψ, cos kψ) for k = 0 … [`MAX_COLLECTOR_HARMONICS`] (past the form's K and 1: (0, 1)).
+#[derive(Clone, Copy, Debug)]
+pub struct Azimuth<F>([(F, F); MAX_COLLECTOR_HARMONICS + 1]);
+
 #[derive(Clone, Copy)]
 enum Block<F> {
     Theta(F),
@@ -97,7 +101,7 @@ impl CollectorForm {
     /// Parameters of `stat` for `nm` view-cosine and `nl` sun-cosine nodes.
     pub fn n_params(&self, stat: Statistic, nm: usize, nl: usize) -> usize {
         let mut blocks = [Block::Theta(0.0f64); MAX_BLOCKS];
-        let n = self.blocks(stat, &Cell::<f64>::zero(), 0.0, &mut blocks);
+        let n = self.blocks(stat, &Cell::<f64>::zero(), &self.azimuth(0.0), 0.0, &mut blocks);
         blocks[..n]
             .iter()
             .map(|b| match b {
@@ -121,16 +125,13 @@ impl CollectorForm {
         &self,
         stat: Statistic,
         c: &Cell<F>,
+        Azimuth(trig): &Azimuth<F>,
         inv_sigma: F,
         out: &mut [Block<F>; MAX_BLOCKS],
     ) -> usize {
         let one = F::of(1.0);
         let SlabPoint {
-            depth,
-            mu_v,
-            psi_v,
-            mu_l,
-            ..
+            depth, mu_v, mu_l, ..
         } = c.at;
         let s_l = (one - mu_l * mu_l).clamp_to(F::of(0.0), one).sqrt();
         let s_v = (one - mu_v * mu_v).clamp_to(F::of(0.0), one).sqrt();
@@ -144,8 +145,7 @@ impl CollectorForm {
             Statistic::LnSigma => {
                 push(Block::Theta(one));
                 let mut s_k = one;
-                for k in 0..=k_max {
-                    let (_, cos_k) = (F::of(k as f64) * psi_v).sin_cos();
+                for &(_, cos_k) in &trig[..=k_max] {
                     push(Block::Depth(s_k * cos_k));
                     s_k = s_k * s_v * s_l;
                 }
@@ -160,16 +160,17 @@ impl CollectorForm {
                 let reach = s_l * lam * -crate::real::exp_m1(-depth / (mu_l * lam)) * inv_sigma;
                 push(Block::Theta(one));
                 push(Block::Depth(s_l));
-                for k in 1..=k_max {
-                    push(Block::Depth((F::of(k as f64) * psi_v).sin_cos().1));
+                for &(_, cos_k) in &trig[1..=k_max] {
+                    push(Block::Depth(cos_k));
                 }
                 push(Block::Theta(reach));
                 push(Block::Depth(reach * s_l));
             }
             Statistic::Cx => {
-                push(Block::Theta(psi_v.sin_cos().0));
-                for k in 1..=k_max {
-                    push(Block::Depth((F::of(k as f64) * psi_v).sin_cos().0));
+                // sin ψ, as sin(1 · ψ): 1 · ψ is ψ exactly.
+                push(Block::Theta(trig[1].0));
+                for &(sin_k, _) in &trig[1..=k_max] {
+                    push(Block::Depth(sin_k));
                 }
             }
         }
@@ -205,6 +206,37 @@ impl CollectorForm {
         sigma: F,
         nm: usize,
         nl: usize,
+        f: impl FnMut(usize, F, usize),
+    ) {
+        let azimuth = self.azimuth(c.at.psi_v);
+        self.for_each_feature_at(stat, c, &azimuth, sigma, (nm, nl), f);
+    }
+
+    /// sin kψ and cos kψ for the harmonics k ≤ K the statistics use: a caller that takes
+    /// several statistics at one point computes them once (8 sines and cosines per read, 3
+    /// distinct).
+    pub fn azimuth<F: Real>(&self, psi: F) -> Azimuth<F> {
+        // k = 1 always: c_x's Θ block takes sin ψ whatever K.
+        let k_max = self.harmonics.clamp(1, MAX_COLLECTOR_HARMONICS);
+        Azimuth(core::array::from_fn(|k| {
+            if k <= k_max {
+                (F::of(k as f64) * psi).sin_cos()
+            } else {
+                (F::of(0.0), F::of(1.0))
+            }
+        }))
+    }
+
+    /// [`Self::for_each_feature_in_depth`] with the point's harmonics `azimuth`
+    /// ([`Self::azimuth`] of its ψ_V).
+    #[inline]
+    pub fn for_each_feature_at<F: Real>(
+        &self,
+        stat: Statistic,
+        c: &Cell<F>,
+        azimuth: &Azimuth<F>,
+        sigma: F,
+        (nm, nl): (usize, usize),
         mut f: impl FnMut(usize, F, usize),
     ) {
         let inv_sigma = if sigma > F::of(0.0) {
@@ -213,7 +245,7 @@ impl CollectorForm {
             F::of(0.0)
         };
         let mut blocks = [Block::Theta(F::of(0.0)); MAX_BLOCKS];
-        let n = self.blocks(stat, c, inv_sigma, &mut blocks);
+        let n = self.blocks(stat, c, azimuth, inv_sigma, &mut blocks);
         let mut col = 0;
         for b in &blocks[..n] {
             match *b {

@@ -375,10 +375,11 @@ impl<'a> TransportTables<'a> {
         for (part, s) in [0, 1, 1, 2].into_iter().enumerate() {
             out[part].reset(cp.strides[s], run, cp.q, n);
         }
+        let azimuth = cp.form.azimuth(pt.cell.at.psi_v);
         for (s, stat) in Statistic::ALL.iter().enumerate() {
             let mut row = Row::<MAX_C_FEATURES>::new();
             cp.form
-                .for_each_feature_in_depth(*stat, &pt.cell, 1.0, nm, nl, |col, v, j| {
+                .for_each_feature_at(*stat, &pt.cell, &azimuth, 1.0, (nm, nl), |col, v, j| {
                     row.push(col, v, j)
                 });
             let beta = cp.beta[s].bytes();
