@@ -166,11 +166,17 @@ impl<'a> TransportTables<'a> {
         if !self.add_t_features(&pt, &mut sums) {
             return;
         }
+        // One group (a search's read) in a lane of its own: no work for seven empty ones.
+        if count == 1 {
+            let (t, _) = self.t_lanes::<1>(&pt, (first, 1), &sums);
+            out[0] = t[0];
+            return;
+        }
         for (lanes, out) in (first..first + count)
             .step_by(LANES)
             .zip(out.chunks_mut(LANES))
         {
-            let (t, _) = self.t_lanes(&pt, (lanes, out.len()), &sums);
+            let (t, _) = self.t_lanes::<LANES>(&pt, (lanes, out.len()), &sums);
             out.copy_from_slice(&t[..out.len()]);
         }
     }
@@ -243,15 +249,31 @@ impl<'a> TransportTables<'a> {
         if let Some(cp) = &self.collector {
             self.add_collector_features(cp, &pt, (first, count), &mut c);
         }
+        if count == 1 {
+            self.evaluate_lanes::<1>(&pt, (first, out), (&sums, &c));
+            return;
+        }
         for (lanes, out) in (first..first + count)
             .step_by(LANES)
             .zip(out.chunks_mut(LANES))
         {
-            let (t, ranges) = self.t_lanes(&pt, (lanes, out.len()), &sums);
-            match &self.collector {
-                Some(cp) => self.collector_lanes(cp, &pt, (&t, &ranges), (lanes, &c), out),
-                None => out.iter_mut().zip(t).for_each(|(slot, t)| slot.t = t),
-            }
+            self.evaluate_lanes::<LANES>(&pt, (lanes, out), (&sums, &c));
+        }
+    }
+
+    /// T, c and σ of the groups `g0 .. g0 + out.len()` (at most `L`) at `pt` from the
+    /// features' sums, side by side in `L` lanes.
+    #[inline(always)]
+    fn evaluate_lanes<const L: usize>(
+        &self,
+        pt: &Point,
+        (g0, out): (usize, &mut [Transport]),
+        (sums, c): (&Sums<T_SUMS>, &[Sums<C_SUMS>; 4]),
+    ) {
+        let (t, ranges) = self.t_lanes::<L>(pt, (g0, out.len()), sums);
+        match &self.collector {
+            Some(cp) => self.collector_lanes::<L>(cp, pt, (&t, &ranges), (g0, c), out),
+            None => out.iter_mut().zip(t).for_each(|(slot, t)| slot.t = t),
         }
     }
 
@@ -397,26 +419,26 @@ impl<'a> TransportTables<'a> {
         }
     }
 
-    /// T of the groups `g0 .. g0 + n` (n ≤ [`LANES`]) at `pt` from the features' `sums`, and
+    /// T of the groups `g0 .. g0 + n` (n ≤ `L`: [`LANES`] for a run, 1 for one group) at `pt` from the features' `sums`, and
     /// each group's fitted depths there (None where no node the point draws on has fitted
     /// cells: T is 0). The groups are taken side by side, lane i for group g0 + i, with the
     /// arithmetic of one group (the same operations in the same order), so that the compiler
     /// can put the lanes in one vector register.
     #[inline(always)]
-    fn t_lanes(
+    fn t_lanes<const L: usize>(
         &self,
         pt: &Point,
         (g0, n): (usize, usize),
         sums: &Sums<T_SUMS>,
-    ) -> ([f32; LANES], [Option<FittedDepths<f32>>; LANES]) {
-        let n = n.min(LANES);
+    ) -> ([f32; L], [Option<FittedDepths<f32>>; L]) {
+        let n = n.min(L);
         let ranges = self.fitted_lanes(pt, (g0, n));
-        let mut d = [[0.0; LANES]; MAX_LEGENDRE];
+        let mut d = [[0.0; L]; MAX_LEGENDRE];
         sums.depth_lanes(g0, &self.ln_t_lanes(pt.ln_t, (g0, n), self.q), &mut d);
-        let top = self.ceiling_lanes(pt, (g0, n));
+        let top = self.ceiling_lanes::<L>(pt, (g0, n));
         let depth_terms = self.form.depth_terms();
         let u = pt.cell.u;
-        let mut t = [0.0f32; LANES];
+        let mut t = [0.0f32; L];
         for i in 0..n {
             let Some(range) = &ranges[i] else {
                 continue;
@@ -446,9 +468,9 @@ impl<'a> TransportTables<'a> {
     /// L_k(s_g), s_g the place of ln t in group g's span, for k < `q` and the groups `g0 .. g0
     /// + n`: [k][lane].
     #[inline(always)]
-    fn ln_t_lanes(&self, ln_t: f32, (g0, n): (usize, usize), q: usize) -> [[f32; LANES]; MAX_Q] {
+    fn ln_t_lanes<const L: usize>(&self, ln_t: f32, (g0, n): (usize, usize), q: usize) -> [[f32; L]; MAX_Q] {
         let span = |i: usize, e: usize| self.ln_t_range.get(2 * (g0 + i) + e).unwrap_or(0.0);
-        let s: [f32; LANES] = core::array::from_fn(|i| {
+        let s: [f32; L] = core::array::from_fn(|i| {
             if i < n {
                 ln_t_position((span(i, 0), span(i, 1)), ln_t)
             } else {
@@ -461,21 +483,21 @@ impl<'a> TransportTables<'a> {
     /// The fitted depths of the groups `g0 .. g0 + n` around `pt` ([`FittedDepths::of`] of
     /// the grid corners the point draws on), lane by lane.
     #[inline(always)]
-    fn fitted_lanes(
+    fn fitted_lanes<const L: usize>(
         &self,
         pt: &Point,
         (g0, n): (usize, usize),
-    ) -> [Option<FittedDepths<f32>>; LANES] {
+    ) -> [Option<FittedDepths<f32>>; L] {
         let (mut all, mut w, mut lo, mut hi) = (
-            [0.0f32; LANES],
-            [0.0f32; LANES],
-            [0.0f32; LANES],
-            [0.0f32; LANES],
+            [0.0f32; L],
+            [0.0f32; L],
+            [0.0f32; L],
+            [0.0f32; L],
         );
         for &(at, wk) in &pt.corners[..pt.n_corners] {
             // Gathered first (lanes past the run read as empty), then the same arithmetic on
             // every lane, which the compiler puts in one register.
-            let mut packed = [EMPTY_RANGE; LANES];
+            let mut packed = [EMPTY_RANGE; L];
             for (i, p) in packed.iter_mut().enumerate().take(n) {
                 *p = self
                     .u_range
@@ -483,7 +505,7 @@ impl<'a> TransportTables<'a> {
                     .unwrap_or(EMPTY_RANGE);
             }
             // A whole lane set in one register; a shorter run (one group) lane by lane.
-            let lanes = if n == LANES { LANES } else { n };
+            let lanes = if n == L { L } else { n };
             for i in 0..lanes {
                 let (a, b) = unpack_u_range(packed[i]);
                 all[i] += wk;
@@ -508,9 +530,9 @@ impl<'a> TransportTables<'a> {
     /// fitted cells at the thickness and sun-cosine nodes `pt` draws on; None for files
     /// without the ceiling.
     #[inline(always)]
-    fn ceiling_lanes(&self, pt: &Point, (g0, n): (usize, usize)) -> [Option<f32>; LANES] {
+    fn ceiling_lanes<const L: usize>(&self, pt: &Point, (g0, n): (usize, usize)) -> [Option<f32>; L] {
         let Some(top) = self.t_ceiling.as_ref() else {
-            return [None; LANES];
+            return [None; L];
         };
         core::array::from_fn(|i| {
             let base = (g0 + i) * pt.per_group.1;
@@ -524,20 +546,20 @@ impl<'a> TransportTables<'a> {
         })
     }
 
-    /// T, c and σ of the groups `g0 .. g0 + out.len()` (at most [`LANES`]) at `pt` into
+    /// T, c and σ of the groups `g0 .. g0 + out.len()` (at most [`L`]) at `pt` into
     /// `out`, given their T and fitted depths there, from the collector's `sums`; c and σ are 0
     /// where T is. Lanes as in [`Self::t_lanes`].
     #[inline(always)]
-    fn collector_lanes(
+    fn collector_lanes<const L: usize>(
         &self,
         cp: &CollectorPart,
         pt: &Point,
-        (t, ranges): (&[f32; LANES], &[Option<FittedDepths<f32>>; LANES]),
+        (t, ranges): (&[f32; L], &[Option<FittedDepths<f32>>; L]),
         (g0, sums): (usize, &[Sums<C_SUMS>; 4]),
         out: &mut [Transport],
     ) {
         let lq = self.ln_t_lanes(pt.ln_t, (g0, out.len()), cp.q);
-        let mut parts = [[[0.0; LANES]; MAX_COLLECTOR_LEGENDRE]; 4];
+        let mut parts = [[[0.0; L]; MAX_COLLECTOR_LEGENDRE]; 4];
         for (d, sums) in parts.iter_mut().zip(sums) {
             sums.depth_lanes(g0, &lq, d);
         }
@@ -777,9 +799,9 @@ impl<const N: usize> Sums<N> {
     /// polynomial at this point ([`depth_polynomial`]); into `d` [j][lane] (the first `depth`
     /// rows; lanes past the run untouched).
     #[inline(always)]
-    fn depth_lanes(&self, g0: usize, lq: &[[f32; LANES]; MAX_Q], d: &mut [[f32; LANES]]) {
+    fn depth_lanes<const L: usize>(&self, g0: usize, lq: &[[f32; L]; MAX_Q], d: &mut [[f32; L]]) {
         let width = self.groups * self.q;
-        let lanes = (self.first + self.groups).saturating_sub(g0).min(LANES);
+        let lanes = (self.first + self.groups).saturating_sub(g0).min(L);
         let base = (g0 - self.first) * self.q;
         for (j, d) in d.iter_mut().enumerate().take(self.depth) {
             for (i, slot) in d.iter_mut().enumerate().take(lanes) {
@@ -852,9 +874,9 @@ const LANES: usize = 8;
 
 /// P_0 … P_{n−1} of each lane of `x` ([k][lane]), by the same steps as [`legendre`].
 #[inline(always)]
-fn legendre_lanes(x: &[f32; LANES], n: usize) -> [[f32; LANES]; MAX_Q] {
-    let mut p = [[0.0; LANES]; MAX_Q];
-    let mut steps = [Legendre::new(0.0); LANES];
+fn legendre_lanes<const L: usize>(x: &[f32; L], n: usize) -> [[f32; L]; MAX_Q] {
+    let mut p = [[0.0; L]; MAX_Q];
+    let mut steps = [Legendre::new(0.0); L];
     for (step, &x) in steps.iter_mut().zip(x) {
         *step = Legendre::new(x);
     }
