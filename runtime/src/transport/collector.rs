@@ -70,11 +70,11 @@ impl Statistic {
     pub const ALL: [Statistic; 3] = [Statistic::LnSigma, Statistic::Cz, Statistic::Cx];
 }
 
-/// One block of features: a multiplier times the Θ table or the depth polynomials on nodes.
 /// (sin kψ, cos kψ) for k = 0 … [`MAX_COLLECTOR_HARMONICS`] (past the form's K and 1: (0, 1)).
 #[derive(Clone, Copy, Debug)]
 pub struct Azimuth<F>([(F, F); MAX_COLLECTOR_HARMONICS + 1]);
 
+/// One block of features: a multiplier times the Θ table or the depth polynomials on nodes.
 #[derive(Clone, Copy)]
 enum Block<F> {
     Theta(F),

@@ -546,7 +546,7 @@ impl<'a> TransportTables<'a> {
         })
     }
 
-    /// T, c and σ of the groups `g0 .. g0 + out.len()` (at most [`L`]) at `pt` into
+    /// T, c and σ of the groups `g0 .. g0 + out.len()` (at most `L`) at `pt` into
     /// `out`, given their T and fitted depths there, from the collector's `sums`; c and σ are 0
     /// where T is. Lanes as in [`Self::t_lanes`].
     #[inline(always)]
