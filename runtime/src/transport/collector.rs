@@ -101,7 +101,13 @@ impl CollectorForm {
     /// Parameters of `stat` for `nm` view-cosine and `nl` sun-cosine nodes.
     pub fn n_params(&self, stat: Statistic, nm: usize, nl: usize) -> usize {
         let mut blocks = [Block::Theta(0.0f64); MAX_BLOCKS];
-        let n = self.blocks(stat, &Cell::<f64>::zero(), &self.azimuth(0.0), 0.0, &mut blocks);
+        let n = self.blocks(
+            stat,
+            &Cell::<f64>::zero(),
+            &self.azimuth(0.0),
+            0.0,
+            &mut blocks,
+        );
         blocks[..n]
             .iter()
             .map(|b| match b {
@@ -213,8 +219,8 @@ impl CollectorForm {
     }
 
     /// sin kψ and cos kψ for the harmonics k ≤ K the statistics use: a caller that takes
-    /// several statistics at one point computes them once (8 sines and cosines per read, 3
-    /// distinct).
+    /// several statistics at one point computes them once (with the shipped K = 2, 8 calls of
+    /// sin_cos per read, of which 3 distinct).
     pub fn azimuth<F: Real>(&self, psi: F) -> Azimuth<F> {
         // k = 1 always: c_x's Θ block takes sin ψ whatever K.
         let k_max = self.harmonics.clamp(1, MAX_COLLECTOR_HARMONICS);

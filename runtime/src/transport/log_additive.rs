@@ -486,7 +486,8 @@ impl<F: Real> Stretch<F> {
     }
 
     /// The distance (mfp) from stretched depth u to the far face (`far`) or to the lit face,
-    /// for each u of `us`: t × [`far_fraction`] or t × [`depth_fraction`], e^β − 1 computed once.
+    /// for each u of `us`: t × [`far_fraction`] or t × [`depth_fraction`], e^β − 1 computed
+    /// once.
     pub fn to_face<const N: usize>(&self, far: bool, us: [F; N]) -> [F; N] {
         let one = F::of(1.0);
         if self.beta < F::of(1e-6) {
@@ -522,15 +523,16 @@ pub fn depth_polynomial<F: Real>(
     thickness: F,
     range: &FittedDepths<F>,
 ) -> F {
-    depth_polynomial_in(d, n, u, &Stretch::of(thickness), range)
+    depth_polynomial_in(d, n, u, || Stretch::of(thickness), range)
 }
 
-/// [`depth_polynomial`] in the slab whose stretched-depth map is `slab`.
+/// [`depth_polynomial`] in the slab whose stretched-depth map `slab` gives (asked for only
+/// where the polynomial is continued toward a face).
 pub(crate) fn depth_polynomial_in<F: Real>(
     d: &[F; MAX_LEGENDRE],
     n: usize,
     u: F,
-    slab: &Stretch<F>,
+    slab: impl FnOnce() -> Stretch<F>,
     range: &FittedDepths<F>,
 ) -> F {
     let at = |u: F| {
@@ -559,7 +561,7 @@ pub(crate) fn depth_polynomial_in<F: Real>(
     }
     // Distances (mfp) to the face ahead: the far face d = t beyond `hi`, the lit face d = 0
     // below `lo`.
-    let [h_inside, h_edge, h] = slab.to_face(far, [inside, edge, u]);
+    let [h_inside, h_edge, h] = slab().to_face(far, [inside, edge, u]);
     value + continued_toward_face(inner - value, (h_inside, h_edge, h))
 }
 

@@ -12,8 +12,8 @@ use super::format::{unpack_u_range, CollectorPart, Strides, EMPTY_RANGE, MAX_Q};
 use super::geometry::SlabPoint;
 use super::halo::{Halo, HaloAt};
 use super::log_additive::{
-    depth_polynomial_in, legendre, ln_boundary, ln_t_position, Cell, FittedDepths,
-    Lerp, LogAdditive, Stretch, MAX_CROSS, MAX_HARMONICS, MAX_LEGENDRE,
+    depth_polynomial_in, legendre, ln_boundary, ln_t_position, Cell, FittedDepths, Lerp,
+    LogAdditive, Stretch, MAX_CROSS, MAX_HARMONICS, MAX_LEGENDRE,
 };
 use super::single::{single_scattering, PhaseValue};
 use crate::container::ArrayView;
@@ -419,11 +419,11 @@ impl<'a> TransportTables<'a> {
         }
     }
 
-    /// T of the groups `g0 .. g0 + n` (n ≤ `L`: [`LANES`] for a run, 1 for one group) at `pt` from the features' `sums`, and
-    /// each group's fitted depths there (None where no node the point draws on has fitted
-    /// cells: T is 0). The groups are taken side by side, lane i for group g0 + i, with the
-    /// arithmetic of one group (the same operations in the same order), so that the compiler
-    /// can put the lanes in one vector register.
+    /// T of the groups `g0 .. g0 + n` (n ≤ `L`: [`LANES`] for a run, 1 for one group) at `pt`
+    /// from the features' `sums`, and each group's fitted depths there (None where no node the
+    /// point draws on has fitted cells: T is 0). The groups are taken side by side, lane i for
+    /// group g0 + i, with the arithmetic of one group (the same operations in the same order),
+    /// so that the compiler can put the lanes in one vector register.
     #[inline(always)]
     fn t_lanes<const L: usize>(
         &self,
@@ -451,7 +451,7 @@ impl<'a> TransportTables<'a> {
                     .zip(&pt.p_u)
                     .fold(0.0, |s, (a, b)| s + *a * *b)
             } else {
-                depth_polynomial_in(&d_i, depth_terms, u, &pt.stretch, range)
+                depth_polynomial_in(&d_i, depth_terms, u, || pt.stretch, range)
             };
             let v = range.share * Real::exp(pt.offset + depth);
             t[i] = match top[i] {
@@ -468,7 +468,12 @@ impl<'a> TransportTables<'a> {
     /// L_k(s_g), s_g the place of ln t in group g's span, for k < `q` and the groups `g0 .. g0
     /// + n`: [k][lane].
     #[inline(always)]
-    fn ln_t_lanes<const L: usize>(&self, ln_t: f32, (g0, n): (usize, usize), q: usize) -> [[f32; L]; MAX_Q] {
+    fn ln_t_lanes<const L: usize>(
+        &self,
+        ln_t: f32,
+        (g0, n): (usize, usize),
+        q: usize,
+    ) -> [[f32; L]; MAX_Q] {
         let span = |i: usize, e: usize| self.ln_t_range.get(2 * (g0 + i) + e).unwrap_or(0.0);
         let s: [f32; L] = core::array::from_fn(|i| {
             if i < n {
@@ -488,15 +493,10 @@ impl<'a> TransportTables<'a> {
         pt: &Point,
         (g0, n): (usize, usize),
     ) -> [Option<FittedDepths<f32>>; L] {
-        let (mut all, mut w, mut lo, mut hi) = (
-            [0.0f32; L],
-            [0.0f32; L],
-            [0.0f32; L],
-            [0.0f32; L],
-        );
+        let (mut all, mut w, mut lo, mut hi) = ([0.0f32; L], [0.0f32; L], [0.0f32; L], [0.0f32; L]);
         for &(at, wk) in &pt.corners[..pt.n_corners] {
-            // Gathered first (lanes past the run read as empty), then the same arithmetic on
-            // every lane, which the compiler puts in one register.
+            // Gathered first, then the same arithmetic on every lane of the run: with a full
+            // run (n = L) a loop of constant length, which the compiler puts in one register.
             let mut packed = [EMPTY_RANGE; L];
             for (i, p) in packed.iter_mut().enumerate().take(n) {
                 *p = self
@@ -504,7 +504,6 @@ impl<'a> TransportTables<'a> {
                     .get((g0 + i) * pt.per_group.0 + at)
                     .unwrap_or(EMPTY_RANGE);
             }
-            // A whole lane set in one register; a shorter run (one group) lane by lane.
             let lanes = if n == L { L } else { n };
             for i in 0..lanes {
                 let (a, b) = unpack_u_range(packed[i]);
@@ -518,7 +517,7 @@ impl<'a> TransportTables<'a> {
             }
         }
         core::array::from_fn(|i| {
-            (i < n && w[i] > 0.0).then(|| FittedDepths {
+            (w[i] > 0.0).then(|| FittedDepths {
                 lo: lo[i] / w[i],
                 hi: hi[i] / w[i],
                 share: w[i] / all[i],
@@ -530,7 +529,11 @@ impl<'a> TransportTables<'a> {
     /// fitted cells at the thickness and sun-cosine nodes `pt` draws on; None for files
     /// without the ceiling.
     #[inline(always)]
-    fn ceiling_lanes<const L: usize>(&self, pt: &Point, (g0, n): (usize, usize)) -> [Option<f32>; L] {
+    fn ceiling_lanes<const L: usize>(
+        &self,
+        pt: &Point,
+        (g0, n): (usize, usize),
+    ) -> [Option<f32>; L] {
         let Some(top) = self.t_ceiling.as_ref() else {
             return [None; L];
         };
@@ -796,8 +799,8 @@ impl<const N: usize> Sums<N> {
 
     /// The depth sums of the groups `g0 ..` of the run side by side: per depth degree j,
     /// Σ_k acc[j][g, k] L_k(ln t), `lq` [k][lane] — the coefficients of each group's depth
-    /// polynomial at this point ([`depth_polynomial`]); into `d` [j][lane] (the first `depth`
-    /// rows; lanes past the run untouched).
+    /// polynomial at this point ([`depth_polynomial`](super::log_additive::depth_polynomial));
+    /// into `d` [j][lane] (the first `depth` rows; lanes past the run untouched).
     #[inline(always)]
     fn depth_lanes<const L: usize>(&self, g0: usize, lq: &[[f32; L]; MAX_Q], d: &mut [[f32; L]]) {
         let width = self.groups * self.q;
