@@ -434,23 +434,16 @@ pub fn stretched_u(d: f32, t: f32) -> f32 {
 
 /// d/t at stretched depth u in a slab of thickness t (mfp): (e^{βu} − 1)/(e^β − 1).
 pub fn depth_fraction<F: Real>(u: F, t: F) -> F {
-    let beta = F::of(STRETCH_SCALE) * (F::of(STRETCH_EXPONENT) * t.ln()).exp();
-    if beta < F::of(1e-6) {
-        return u;
-    }
-    exp_m1(beta * u) / exp_m1(beta)
+    let [f] = Stretch::of(t).fractions(false, [u]);
+    f
 }
 
 /// 1 − d/t at stretched depth u in a slab of thickness t (mfp), the distance to the far face
 /// over t: e^{βu} (e^{β(1−u)} − 1)/(e^β − 1), without the cancellation of 1 − [`depth_fraction`]
 /// near the far face (in f32 a depth 1 mfp from the face of a 100 mfp slab would carry 1e-5).
 pub fn far_fraction<F: Real>(u: F, t: F) -> F {
-    let beta = F::of(STRETCH_SCALE) * (F::of(STRETCH_EXPONENT) * t.ln()).exp();
-    let one = F::of(1.0);
-    if beta < F::of(1e-6) {
-        return one - u;
-    }
-    (beta * u).exp() * exp_m1(beta * (one - u)) / exp_m1(beta)
+    let [f] = Stretch::of(t).fractions(true, [u]);
+    f
 }
 
 /// The stretched-depth map of one slab: its thickness t (mfp) and β = `STRETCH_SCALE` ·
@@ -485,23 +478,27 @@ impl<F: Real> Stretch<F> {
         ((one + (self.beta.exp() - one) * d / self.t).ln() / self.beta).clamp_to(F::of(0.0), one)
     }
 
-    /// The distance (mfp) from stretched depth u to the far face (`far`) or to the lit face,
-    /// for each u of `us`: t × [`far_fraction`] or t × [`depth_fraction`], e^β − 1 computed
-    /// once.
-    pub fn to_face<const N: usize>(&self, far: bool, us: [F; N]) -> [F; N] {
+    /// The distance to the far face over t ([`far_fraction`], with `far`) or d/t
+    /// ([`depth_fraction`]) at each stretched depth of `us`, e^β − 1 computed once.
+    pub fn fractions<const N: usize>(&self, far: bool, us: [F; N]) -> [F; N] {
         let one = F::of(1.0);
         if self.beta < F::of(1e-6) {
-            return us.map(|u| self.t * if far { one - u } else { u });
+            return us.map(|u| if far { one - u } else { u });
         }
         let em1 = exp_m1(self.beta);
         us.map(|u| {
-            self.t
-                * if far {
-                    (self.beta * u).exp() * exp_m1(self.beta * (one - u)) / em1
-                } else {
-                    exp_m1(self.beta * u) / em1
-                }
+            if far {
+                (self.beta * u).exp() * exp_m1(self.beta * (one - u)) / em1
+            } else {
+                exp_m1(self.beta * u) / em1
+            }
         })
+    }
+
+    /// The distance (mfp) to the far face (`far`) or to the lit face from each stretched
+    /// depth of `us`: t × [`Self::fractions`].
+    pub fn to_face<const N: usize>(&self, far: bool, us: [F; N]) -> [F; N] {
+        self.fractions(far, us).map(|f| self.t * f)
     }
 }
 
