@@ -5,7 +5,7 @@
 //! reference's noise right (two independent renders differ by √2 times it).
 
 use nephele::render::compare::compare;
-use nephele::render::fast::{render_fast, FastOptions, Method};
+use nephele::render::fast::{render_fast, FastOptions, Method, RayPattern};
 use nephele::render::image::{Rendered, GROUP_FIRST};
 use nephele::render::output::write_outputs;
 use nephele::render::path::render;
@@ -112,7 +112,8 @@ fn on_a_slab_the_collector_renderer_matches_the_path_tracer_per_group() {
     }
 }
 
-/// The same frame, bit for bit, on one thread and on two, for every fast method.
+/// The same frame, bit for bit, on one thread and on two, for every fast method (and the
+/// patterns whose pixels share corner rays and their searches).
 #[test]
 fn fast_frames_are_the_same_bits_for_any_thread_count() {
     let tables = nephele_runtime::embedded::mie_10um();
@@ -123,11 +124,17 @@ fn fast_frames_are_the_same_bits_for_any_thread_count() {
     .unwrap();
     scene.camera.width = 40;
     scene.camera.height = 30;
-    for method in [Method::Collector, Method::Single, Method::Octaves] {
+    for (method, pattern) in [
+        (Method::Collector, RayPattern::Grid),
+        (Method::Collector, RayPattern::Quincunx),
+        (Method::Single, RayPattern::Quincunx),
+        (Method::Octaves, RayPattern::Grid),
+    ] {
         let opts = FastOptions {
             method,
             map_resolution: 64,
             planes: 64,
+            pattern,
             ..FastOptions::default()
         };
         let run = |threads: usize| {

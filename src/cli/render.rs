@@ -88,7 +88,11 @@ pub struct FastArgs {
     #[arg(long, default_value_t = 2, value_name = "N")]
     pub rays: u32,
     /// Where a pixel's rays go: `grid`, n × n of them at the sub-pixels' centres; `rooks`, n
-    /// of them, one in each row and column of that grid (n = 2: the diagonal, half the march).
+    /// of them, one in each row and column of that grid (n = 2: the diagonal, half the march);
+    /// `quincunx`, one through each pixel corner, shared by the four pixels there (⅛ each),
+    /// and one through the centre (½): about two marches a pixel, order 1 closer to the 2 × 2
+    /// grid than the rooks' two, and a search a corner ray starts serves every pixel that
+    /// chooses it (docs/collector.md, "Frame cost").
     #[arg(long, value_enum, default_value = "grid", value_name = "PATTERN")]
     pub ray_pattern: RayPattern,
     /// Collector: search once per block of N × N pixels, at the block's most opaque ray, each

@@ -34,6 +34,7 @@ pub mod collector;
 pub mod light_map;
 pub mod march;
 pub mod octaves;
+pub mod rays;
 pub mod sky;
 pub mod sun_side;
 pub mod table_check;
@@ -47,13 +48,16 @@ use super::regions::region_of;
 use super::scene::{Camera, Scene};
 use crate::phase::Phase;
 use anyhow::{ensure, Result};
+use collector::Searched;
 pub use collector::{Finite, GroupStats};
 use light_map::MapOptions;
 use nephele_runtime::transport::{FiniteCloud, SearchOptions, TransportTables, Viewpoint};
 pub use octaves::{Octaves, MAX_OCTAVES};
 use rayon::prelude::*;
+pub use rays::RayPattern;
 use serde::Serialize;
 use sky::SkyTable;
+use std::collections::HashMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 use sun_side::sun_side;
@@ -73,41 +77,6 @@ pub enum Method {
     Single,
     /// The multi-octave approximation of real-time engines.
     Octaves,
-}
-
-/// Where a pixel's rays go, with n = `rays`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum RayPattern {
-    /// n² rays, at the centres of an n × n grid of sub-pixels.
-    Grid,
-    /// n rays, one in each row and each column of that grid (n-rooks): ray k in column k and
-    /// row k·s mod n, s the largest step below n/2 + 1 coprime with n (n = 2: the diagonal).
-    /// Half the march of the 2 × 2 grid.
-    Rooks,
-}
-
-impl RayPattern {
-    /// The sub-pixel offsets (u, v) ∈ (0, 1)² of the rays of a pixel, for n = `n`.
-    fn offsets(self, n: usize) -> Vec<(f64, f64)> {
-        let at =
-            |col: usize, row: usize| ((col as f64 + 0.5) / n as f64, (row as f64 + 0.5) / n as f64);
-        match self {
-            RayPattern::Grid => (0..n * n).map(|k| at(k % n, k / n)).collect(),
-            RayPattern::Rooks => {
-                let step = (1..=n / 2 + 1).rev().find(|&s| gcd(s, n) == 1).unwrap_or(1);
-                (0..n).map(|k| at(k, k * step % n)).collect()
-            }
-        }
-    }
-}
-
-fn gcd(a: usize, b: usize) -> usize {
-    if b == 0 {
-        a
-    } else {
-        gcd(b, a % b)
-    }
 }
 
 /// Settings of the fast renderers.
@@ -219,6 +188,11 @@ impl FastOptions {
         ensure!(
             (1..=16).contains(&self.search_block),
             "search blocks must be 1…16 pixels a side"
+        );
+        ensure!(
+            !(self.search_every_ray && self.pattern.corners()),
+            "--search-every-ray searches on a pixel's own rays; the quincunx shares its corner \
+             rays among pixels: use the grid or the rooks"
         );
         ensure!(
             self.search_block == 1 || !self.search_every_ray,
@@ -473,9 +447,16 @@ impl Frame<'_> {
         let mut out = Rendered::empty(w, h);
         out.method = format!("{:?}", self.opts.method).to_lowercase();
         out.regions = vec![0; w * h];
-        // Bands of `search_block` rows (a search may serve pixels of several rows), and each
-        // band's rows in every group's plane, side by side.
-        let band = self.opts.search_block as usize;
+        // Bands of whole blocks of `search_block` rows (a search may serve pixels of several
+        // rows), at least 8 rows where pixels share their corner rays (a band marches the row
+        // of corners below its last row again), and each band's rows in every group's plane,
+        // side by side.
+        let block = self.opts.search_block as usize;
+        let band = if self.opts.pattern.corners() {
+            block * 8usize.div_ceil(block)
+        } else {
+            block
+        };
         let mut group_bands: Vec<Vec<&mut [f32]>> = (0..h.div_ceil(band))
             .map(|_| Vec::with_capacity(ng))
             .collect();
@@ -526,33 +507,46 @@ impl Frame<'_> {
         (out, stats, sky_sum / all.max(1e-300))
     }
 
-    /// The rows from `j0` on that `images` hold (a band of `search_block` rows at most): every
+    /// The rows from `j0` on that `images` hold (whole blocks of `search_block` rows): every
     /// pixel's rays marched, then one collector search per block of pixels, at the block's
-    /// most opaque ray, each pixel weighing what it found by its own opacity; the searches and
-    /// the light added into `sums`.
+    /// most opaque ray, each pixel weighing what it found by its own opacity (a corner ray's
+    /// search is shared by the blocks that choose it); the searches and the light added into
+    /// `sums`.
     fn band(&self, cam: &Pinhole, j0: usize, images: BandImages, sums: &mut BandSums) {
         let w = cam.width;
         let rows = images.transmittance.len() / w;
-        let mut pixels: Vec<(Pixel, Option<(f64, Viewpoint)>)> = (0..rows * w)
-            .map(|k| self.marched_pixel(cam, k % w, j0 + k / w, &mut sums.stats))
+        let corners = self.corner_rays(cam, j0, rows);
+        let mut pixels: Vec<(Pixel, Option<Densest>)> = (0..rows * w)
+            .map(|k| self.marched_pixel(cam, k % w, j0 + k / w, &corners, &mut sums.stats))
             .collect();
         let b = self.opts.search_block as usize;
-        for bi in (0..w).step_by(b) {
+        let mut shared: HashMap<usize, Searched> = HashMap::new();
+        for (bj, bi) in (0..rows)
+            .step_by(b)
+            .flat_map(|j| (0..w).step_by(b).map(move |i| (j, i)))
+        {
             // The block's pixels, row by row.
-            let block =
-                || (0..rows).flat_map(move |j| (bi..(bi + b).min(w)).map(move |i| j * w + i));
-            let mut densest: Option<(f64, Viewpoint)> = None;
+            let block = || {
+                (bj..(bj + b).min(rows))
+                    .flat_map(move |j| (bi..(bi + b).min(w)).map(move |i| j * w + i))
+            };
+            let mut densest: Option<Densest> = None;
             for k in block() {
                 if let Some(d) = pixels[k].1 {
-                    if densest.as_ref().is_none_or(|best| d.0 > best.0) {
+                    if densest.as_ref().is_none_or(|best| d.alpha > best.alpha) {
                         densest = Some(d);
                     }
                 }
             }
-            let Some((_, vp)) = densest else {
+            let Some(d) = densest else {
                 continue;
             };
-            let found = self.search(&vp, &mut sums.stats);
+            let found = match d.corner {
+                Some(c) => *shared
+                    .entry(c)
+                    .or_insert_with(|| self.search(&d.viewpoint, &mut sums.stats)),
+                None => self.search(&d.viewpoint, &mut sums.stats),
+            };
             for k in block() {
                 let (px, own) = &mut pixels[k];
                 if own.is_some() {
@@ -581,32 +575,71 @@ impl Frame<'_> {
         }
     }
 
-    /// One pixel's rays marched: the mean over its rays (n × n, or n with the rooks; opacity,
-    /// order 1, the sky term, the octaves), and, for the collector, the most opaque ray's
-    /// opacity and viewpoint, where [`Self::band`] searches once for the pixel or its block —
-    /// unless `search_every_ray` (each ray its own searches here).
+    /// The rays through the corners of the `rows` rows of pixels from `j0` on, for the
+    /// patterns that share them (none otherwise).
+    fn corner_rays(&self, cam: &Pinhole, j0: usize, rows: usize) -> Corners {
+        let w = cam.width + 1;
+        let rays = if self.opts.pattern.corners() {
+            (0..(rows + 1) * w)
+                .map(|k| {
+                    let dir = cam.direction(k % w, j0 + k / w, 0.0, 0.0);
+                    let (one, ray) = self.ray(cam.position, dir, None);
+                    let densest = ray.viewpoint(dir).map(|viewpoint| Densest {
+                        alpha: 1.0 - ray.transmittance,
+                        viewpoint,
+                        corner: Some(j0 * w + k),
+                    });
+                    (one, densest)
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        Corners { j0, width: w, rays }
+    }
+
+    /// One pixel's rays marched: the weighted mean over its own rays and its corner rays
+    /// (opacity, order 1, the sky term, the octaves), and, for the collector, the most opaque
+    /// ray's opacity and viewpoint, where [`Self::band`] searches once for the pixel or its
+    /// block — unless `search_every_ray` (each own ray its own searches here). `corners` are
+    /// the band's corner rays ([`Self::corner_rays`]), pixel (i, j) of the band's row j − j0.
     fn marched_pixel(
         &self,
         cam: &Pinhole,
         i: usize,
         j: usize,
+        corners: &Corners,
         stats: &mut [GroupStats],
-    ) -> (Pixel, Option<(f64, Viewpoint)>) {
+    ) -> (Pixel, Option<Densest>) {
         let once = self.opts.method == Method::Collector && !self.opts.search_every_ray;
         let mut px = Pixel::default();
-        let inv = 1.0 / self.offsets.len() as f64;
-        let mut densest: Option<(f64, Viewpoint)> = None;
+        let (w_own, w_corner) = self.opts.pattern.weights(self.offsets.len());
+        let mut densest: Option<Densest> = None;
+        let consider = |densest: &mut Option<Densest>, d: Option<Densest>| match d {
+            Some(d) if once && densest.as_ref().is_none_or(|best| d.alpha > best.alpha) => {
+                *densest = Some(d)
+            }
+            _ => {}
+        };
         for &(u, v) in &self.offsets {
             let dir = cam.direction(i, j, u, v);
             let (one, ray) = self.ray(cam.position, dir, (!once).then_some(&mut *stats));
-            px.add(&one, inv);
-            let alpha = 1.0 - ray.transmittance;
-            match ray.viewpoint(dir) {
-                Some(vp) if once && densest.as_ref().is_none_or(|d| alpha > d.0) => {
-                    densest = Some((alpha, vp))
-                }
-                _ => {}
-            }
+            px.add(&one, w_own);
+            consider(
+                &mut densest,
+                ray.viewpoint(dir).map(|viewpoint| Densest {
+                    alpha: 1.0 - ray.transmittance,
+                    viewpoint,
+                    corner: None,
+                }),
+            );
+        }
+        for (di, dj) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+            let Some((one, d)) = corners.at(i + di, j + dj) else {
+                continue;
+            };
+            px.add(one, w_corner);
+            consider(&mut densest, *d);
         }
         (px, densest)
     }
@@ -644,6 +677,32 @@ impl Frame<'_> {
     fn octaves(&self, cos: f64, integrals: &[f64; MAX_OCTAVES]) -> [f64; 3] {
         let o = &self.opts.octaves;
         [o.scattered(self.g, self.scene.albedo, cos, integrals); 3]
+    }
+}
+
+/// A ray a collector search may start from: its opacity, its viewpoint, and which corner ray
+/// it is (a corner's search serves every block that chooses it).
+#[derive(Clone, Copy, Debug)]
+struct Densest {
+    alpha: f64,
+    viewpoint: Viewpoint,
+    /// The corner's index in the frame, (width + 1) per row.
+    corner: Option<usize>,
+}
+
+/// A band's corner rays ((rows + 1) × (width + 1), row by row, from pixel row `j0`): what
+/// each ray gathers and the search it may start.
+struct Corners {
+    j0: usize,
+    width: usize,
+    rays: Vec<(Pixel, Option<Densest>)>,
+}
+
+impl Corners {
+    /// The ray through corner (i, j) (the top-left corner of pixel (i, j)); None without
+    /// corner rays.
+    fn at(&self, i: usize, j: usize) -> Option<&(Pixel, Option<Densest>)> {
+        self.rays.get((j - self.j0) * self.width + i)
     }
 }
 
@@ -694,33 +753,60 @@ impl Pixel {
 
 #[cfg(test)]
 mod tests {
-    use super::RayPattern;
+    use super::{prepare, FastOptions, Method, RayPattern};
+    use crate::render::camera::Pinhole;
+    use crate::render::scene::Scene;
 
-    /// The rooks put one ray in each row and each column of the n × n grid (n = 2: the
-    /// diagonal), at the grid's cell centres; the grid takes every cell once.
+    /// With the quincunx, each pixel's opacity is the weighted mean of the transmittances of
+    /// the rays through its own corners (⅛ each) and centre (½), marched on their own: the
+    /// bands' shared corner rows are indexed right, each band's last row of corners included.
     #[test]
-    fn the_rooks_take_each_row_and_column_once() {
-        assert_eq!(
-            RayPattern::Rooks.offsets(2),
-            vec![(0.25, 0.25), (0.75, 0.75)]
-        );
-        for n in 1..=8 {
-            let cell = |x: f64| (x * n as f64 - 0.5).round() as usize;
-            let rooks = RayPattern::Rooks.offsets(n);
-            assert_eq!(rooks.len(), n);
-            let mut rows: Vec<usize> = rooks.iter().map(|&(_, v)| cell(v)).collect();
-            let cols: Vec<usize> = rooks.iter().map(|&(u, _)| cell(u)).collect();
-            rows.sort_unstable();
-            assert_eq!(rows, (0..n).collect::<Vec<_>>(), "n = {n}: rows");
-            assert_eq!(cols, (0..n).collect::<Vec<_>>(), "n = {n}: columns");
-            let mut grid: Vec<(usize, usize)> = RayPattern::Grid
-                .offsets(n)
-                .iter()
-                .map(|&(u, v)| (cell(u), cell(v)))
-                .collect();
-            grid.sort_unstable();
-            grid.dedup();
-            assert_eq!(grid.len(), n * n, "n = {n}: grid");
+    fn pixels_take_the_rays_through_their_own_corners() {
+        let tables = nephele_runtime::embedded::mie_10um();
+        let mut scene = Scene::load(std::path::Path::new(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/fit-configs/scenes/cloud.json"
+        )))
+        .unwrap();
+        (scene.camera.width, scene.camera.height) = (24, 18);
+        let (pattern, w_centre) = (RayPattern::Quincunx, 0.5);
+        let opts = FastOptions {
+            method: Method::Single,
+            map_resolution: 64,
+            planes: 64,
+            pattern,
+            ..FastOptions::default()
+        };
+        let prepared = prepare(&scene, &tables, &opts).unwrap();
+        let frame = &prepared.frame;
+        let cam = Pinhole::new(&scene.camera);
+        let (image, _, _) = frame.pixels(&cam, &|_| {});
+        let w_corner = (1.0 - w_centre) / 4.0;
+        let (mut checked, mut cloudy) = (0, 0);
+        for j in 0..cam.height {
+            for i in 0..cam.width {
+                let t = |i: usize, j: usize, u: f64, v: f64| {
+                    frame
+                        .march(cam.position, cam.direction(i, j, u, v))
+                        .transmittance
+                };
+                let corners = t(i, j, 0.0, 0.0)
+                    + t(i + 1, j, 0.0, 0.0)
+                    + t(i, j + 1, 0.0, 0.0)
+                    + t(i + 1, j + 1, 0.0, 0.0);
+                let expected = w_corner * corners + w_centre * t(i, j, 0.5, 0.5);
+                let got = image.transmittance[j * cam.width + i] as f64;
+                assert!(
+                    (got - expected).abs() <= 1e-6,
+                    "{pattern:?}, pixel ({i}, {j}): {got} vs {expected}"
+                );
+                checked += 1;
+                cloudy += usize::from(expected < 0.99);
+            }
         }
+        assert!(
+            cloudy > checked / 8,
+            "{pattern:?}: {cloudy} of {checked} pixels see the cloud"
+        );
     }
 }
