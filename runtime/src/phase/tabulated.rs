@@ -22,6 +22,9 @@ pub struct Tabulated<'a, F> {
     /// Optional guide table: guide[k] is the interval holding ξ = k/len (so sampling scans
     /// one or two intervals instead of bisecting); empty means bisection.
     guide: &'a [u32],
+    /// Optional guide in angle: angle_guide[k] is the interval holding θ = kπ/len (so
+    /// evaluation scans a few intervals instead of bisecting); empty means bisection.
+    angle_guide: &'a [u32],
 }
 
 /// Why a table was refused.
@@ -60,6 +63,7 @@ impl<'a, F: Real> Tabulated<'a, F> {
             f,
             cdf,
             guide: &[],
+            angle_guide: &[],
         })
     }
 
@@ -69,10 +73,24 @@ impl<'a, F: Real> Tabulated<'a, F> {
         (self.theta, self.f, self.cdf, self.guide)
     }
 
-    /// Interval containing θ.
+    /// Interval containing θ: the last node i ≤ n − 2 with θ_i ≤ θ (0 if none).
     fn interval(&self, theta: F) -> usize {
         let n = self.theta.len();
-        self.theta.partition_point(|t| *t <= theta).clamp(1, n - 1) - 1
+        let m = self.angle_guide.len();
+        if m == 0 {
+            return self.theta.partition_point(|t| *t <= theta).clamp(1, n - 1) - 1;
+        }
+        // The guide's bucket, then a scan to the node: back where θ rounds into the next
+        // bucket, on where the bucket holds several nodes — the same node as bisection.
+        let k = ((theta.f64() / core::f64::consts::PI * m as f64) as usize).min(m - 1);
+        let mut i = self.angle_guide[k] as usize;
+        while i > 0 && self.theta[i] > theta {
+            i -= 1;
+        }
+        while i + 2 < n && self.theta[i + 1] <= theta {
+            i += 1;
+        }
+        i
     }
 }
 
@@ -161,6 +179,7 @@ pub struct TabulatedTable<F> {
     f: Vec<F>,
     cdf: Vec<F>,
     guide: Vec<u32>,
+    angle_guide: Vec<u32>,
 }
 
 #[cfg(feature = "std")]
@@ -210,11 +229,13 @@ impl<F: Real> TabulatedTable<F> {
                 (cdf.partition_point(|c| *c <= xi).clamp(1, n - 1) - 1) as u32
             })
             .collect();
+        let angle_guide = angle_guide(&theta_f);
         Ok(Self {
             theta: theta_f,
             f: f.iter().map(|&v| F::of(v)).collect(),
             cdf,
             guide,
+            angle_guide,
         })
     }
 
@@ -225,7 +246,28 @@ impl<F: Real> TabulatedTable<F> {
             f: &self.f,
             cdf: &self.cdf,
             guide: &self.guide,
+            angle_guide: &self.angle_guide,
         }
+    }
+}
+
+/// The guide in angle of nodes `theta` (0 … π): entry k the last node at or below kπ/m, with m
+/// doubled from n − 1 until no bucket holds more than 4 nodes (forward peaks crowd their
+/// nodes), at most 64 (n − 1) entries.
+#[cfg(feature = "std")]
+fn angle_guide<F: Real>(theta: &[F]) -> Vec<u32> {
+    let n = theta.len();
+    let last_at_or_below = |x: f64| theta.partition_point(|t| t.f64() <= x).clamp(1, n - 1) - 1;
+    let mut m = n - 1;
+    loop {
+        let guide: Vec<u32> = (0..m)
+            .map(|k| last_at_or_below(k as f64 * core::f64::consts::PI / m as f64) as u32)
+            .collect();
+        let crowded = guide.windows(2).any(|w| w[1] - w[0] > 4);
+        if !crowded || m >= 64 * (n - 1) {
+            return guide;
+        }
+        m *= 2;
     }
 }
 
@@ -247,5 +289,35 @@ impl<F: Real> PhaseFunction<F> for TabulatedTable<F> {
 
     fn mean_cosine(&self) -> Option<F> {
         self.view().mean_cosine()
+    }
+}
+
+#[cfg(all(test, feature = "std"))]
+mod tests {
+    use super::*;
+
+    /// The guide in angle finds the node bisection finds, at every node, between nodes, at
+    /// both poles, beyond them and at NaN, for tables with crowded forward peaks.
+    #[test]
+    fn the_angle_guide_finds_the_bisections_interval() {
+        for (n, crowd) in [(3usize, 1.0f64), (181, 1.0), (2251, 6.0), (500, 12.0)] {
+            // Nodes crowded toward 0 as (k/n)^crowd.
+            let theta_deg: Vec<f64> = (0..n)
+                .map(|k| 180.0 * (k as f64 / (n - 1) as f64).powf(crowd))
+                .collect();
+            let phase: Vec<f64> = theta_deg.iter().map(|t| 1.0 / (1.0 + t)).collect();
+            let table = TabulatedTable::<f32>::from_phase(&theta_deg, &phase).unwrap();
+            let guided = table.view();
+            assert!(!guided.angle_guide.is_empty());
+            let plain = Tabulated::from_parts(&table.theta, &table.f, &table.cdf).unwrap();
+            let mut probes: Vec<f32> = vec![0.0, -0.0, -1.0, core::f32::consts::PI, 4.0, f32::NAN];
+            for &t in &table.theta {
+                probes.extend([t, t.next_up(), t.next_down()]);
+            }
+            probes.extend((0..100_000).map(|k| (k as f32 + 0.5) * core::f32::consts::PI / 1e5));
+            for t in probes {
+                assert_eq!(guided.interval(t), plain.interval(t), "n = {n}, θ = {t}");
+            }
+        }
     }
 }
