@@ -84,7 +84,8 @@ pub struct FastArgs {
     pub surface_density: f64,
     /// Rays per pixel: an n × n grid over the pixel (antialiasing: the march — opacity, order
     /// 1, the sky term, the octaves — runs on every ray; the collector searches once per pixel,
-    /// at its most opaque ray's surface point).
+    /// at its most opaque ray's surface point); n rays with `--ray-pattern rooks`, not used by
+    /// the quincunx.
     #[arg(long, default_value_t = 2, value_name = "N")]
     pub rays: u32,
     /// Where a pixel's rays go: `grid`, n × n of them at the sub-pixels' centres; `rooks`, n
