@@ -10,10 +10,13 @@
 //! multiplied by the share a finite, possibly absorbing cloud keeps of the infinite slab's
 //! light ([`finite_cloud`]: the sides' leakage from the cross-section around the collector,
 //! the medium's absorption; where no collector is found, the absorption alone); the sky term
-//! by what absorption leaves only (under a uniform sky the sides gain what they leak).
+//! in the view ray's chord, its orders moved by what the sides take from a walk from the eye
+//! (under a uniform sky the sides gain what they leak, so the sum stays), absorption after.
 
+use super::view_march::ViewRay;
 use super::{Frame, Pixel};
 use crate::render::image::GROUP_FIRST;
+use nephele_runtime::transport::leakage::lateral_rate;
 use nephele_runtime::transport::{
     absorbed, find_collectors, finite_cloud, local_slab, mean_cosine, FiniteCloud, LitSurface,
     SlabPoint, TransportTables, Viewpoint,
@@ -261,24 +264,46 @@ impl Frame<'_> {
         }
     }
 
-    /// The sky term of every method, group by group into `px` (per unit L_sky), for a view
-    /// ray of transmittance `transmittance`: S_g in the ray's own slab ([`super::sky::SkyTable::view_slab`]).
-    /// A conservative body under a uniform sky glows at the sky's radiance whatever its shape
-    /// (the sky entering its sides replaces what leaks out), so no leakage applies, only what
-    /// absorption takes.
-    pub(super) fn sky_term(&self, px: &mut Pixel, transmittance: f64) {
+    /// The sky term of every method, group by group into `px` (per unit L_sky), for the view
+    /// ray `v`: S_g in the ray's own slab across its chord ([`super::sky::SkyTable::view_slab`]),
+    /// what absorption leaves of it; the pixel's sides come after ([`Self::sky_sides`]).
+    pub(super) fn sky_term(&self, px: &mut Pixel, v: &ViewRay) {
         let Some(sky) = &self.sky else {
             return;
         };
-        if transmittance >= 1.0 {
+        if !(v.chord > 0.0) {
             return;
         }
-        let at = sky.view_slab(transmittance);
-        sky.view_radiances(transmittance, &at, &mut px.sky);
+        let at = sky.view_slab(v.chord);
+        sky.view_radiances(v.chord, &at, &mut px.sky);
         px.sky[0] *= self.scene.albedo;
         for g in 0..self.groups() {
             px.sky[g + 1] *= self.absorbed(g, &at);
         }
+    }
+
+    /// The sky term's sides, once per pixel: the light an adjoint walk from the eye loses
+    /// through the cloud's sides before it leaves by the slab's faces, moved to the orders at
+    /// which it leaves ([`super::sky::sides_escape`]; under a uniform sky a conservative body
+    /// glows at the sky's radiance whatever its shape, so the sum stays). κ⊥ from the section
+    /// the sun-side maps hold at `at` (the pixel's most opaque surface point) at the cloud's own
+    /// scale, R = 3 × its mean distance to the edge in mfp at the scene's σ_t
+    /// ([`finite_cloud`]'s rule). Nothing where the maps know no edge (a slab). Every method
+    /// takes it, the method as published included: the sky term is this project's, not the
+    /// paper's. (With ϖ < 1 it follows the absorption's factors, an approximation.)
+    pub(super) fn sky_sides(&self, px: &mut Pixel, at: [f32; 3]) {
+        let Some(sky) = &self.sky else {
+            return;
+        };
+        let Some(l) = self.side.lateral(at, self.side.initial_scale()) else {
+            return;
+        };
+        if !l.edge_distance.is_finite() {
+            return;
+        }
+        let radius = 3.0 * l.edge_distance * self.scene.sigma_t as f32;
+        let kappa = f64::from(lateral_rate(radius, self.finite.mean_cosine));
+        sky.sides_escape(&mut px.sky, kappa, f64::from(self.finite.mean_cosine));
     }
 
     /// Empty statistics, one entry per order group of the tables the image holds.

@@ -615,11 +615,19 @@ impl Frame<'_> {
         let mut px = Pixel::default();
         let (w_own, w_corner) = self.opts.pattern.weights(self.offsets.len());
         let mut densest: Option<Densest> = None;
-        let consider = |densest: &mut Option<Densest>, d: Option<Densest>| match d {
-            Some(d) if once && densest.as_ref().is_none_or(|best| d.alpha > best.alpha) => {
+        // The most opaque ray's surface point, whatever the method: where the sky term's sides
+        // are read.
+        let mut sky_at: Option<Densest> = None;
+        let mut consider = |densest: &mut Option<Densest>, d: Option<Densest>| {
+            let Some(d) = d else {
+                return;
+            };
+            if sky_at.as_ref().is_none_or(|best| d.alpha > best.alpha) {
+                sky_at = Some(d);
+            }
+            if once && densest.as_ref().is_none_or(|best| d.alpha > best.alpha) {
                 *densest = Some(d)
             }
-            _ => {}
         };
         for &(u, v) in &self.offsets {
             let dir = cam.direction(i, j, u, v);
@@ -641,6 +649,9 @@ impl Frame<'_> {
             px.add(one, w_corner);
             consider(&mut densest, *d);
         }
+        if let Some(d) = sky_at {
+            self.sky_sides(&mut px, d.viewpoint.position);
+        }
         (px, densest)
     }
 
@@ -660,7 +671,7 @@ impl Frame<'_> {
             let phase = &self.phases[c.min(self.phases.len() - 1)];
             *p = albedo * phase.with(|f| f.eval(cos)) * v.integrals[0];
         }
-        self.sky_term(&mut px, v.transmittance);
+        self.sky_term(&mut px, &v);
         let Some(vp) = v.viewpoint(w) else {
             return (px, v);
         };
