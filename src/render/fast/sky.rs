@@ -20,7 +20,7 @@ use rayon::prelude::*;
 
 /// Thicknesses of the face-on table, evenly spaced in ln t over the tables' range (0.5 … 128,
 /// 0.79 apart). Linear interpolation between them is coarse where S bends fastest, t = 3 … 16:
-/// at t = 9.2 it puts S₀ 48 % above the integral there and orders 3–4's share at 0.086 against
+/// at t = 9.2 it puts S₀ 40 % above the integral there and orders 3–4's share at 0.086 against
 /// 0.048 (32 nodes agree with 16 within 0.01 of the light per group). Measured against the path
 /// tracer on five sky-only scenes, 32 nodes were no closer (mean |bias| per group 17.9 %
 /// against 16.8 %): the face-on slab's own error dominates, so the table stays as it was.
