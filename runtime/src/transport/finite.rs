@@ -85,6 +85,13 @@ pub struct Kept {
     pub coverage: f32,
 }
 
+/// R (mfp) of a section whose mean distance to its edge is `edge` (mfp): a disk of radius R has
+/// a mean distance R/3 (a strip of width W gives R = 3W/4, whose κ⊥ is within 5 % of the
+/// strip's own).
+pub fn section_radius<R: Real>(edge: R) -> R {
+    R::of(3.0) * edge
+}
+
 /// The share of group `g`'s T that the cloud keeps at the collector `c` found on `surface`.
 pub fn finite_cloud<S: LitSurface + ?Sized>(
     tables: &TransportTables,
@@ -112,7 +119,7 @@ pub fn finite_cloud<S: LitSurface + ?Sized>(
         kept.coverage = l.coverage.clamp_to(0.0, 1.0);
         if opts.leakage && l.edge_distance.is_finite() {
             let edge = l.edge_distance * c.extinction;
-            kept.radius = 3.0 * edge;
+            kept.radius = section_radius(edge);
             loss.lateral = opts.rate_scale * lateral_rate(kept.radius, g_mean);
             let reach = edge + extrapolation_length(g_mean);
             loss.delay = opts.delay_scale * reach * reach / diffusion_coefficient(g_mean);

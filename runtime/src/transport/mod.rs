@@ -32,7 +32,7 @@ mod search;
 #[cfg(feature = "std")]
 pub use batch::column_names;
 pub use batch::{evaluate_points, BatchError, Quantities, POINT_COLUMNS};
-pub use finite::{absorbed, finite_cloud, mean_cosine, FiniteCloud, Kept};
+pub use finite::{absorbed, finite_cloud, mean_cosine, section_radius, FiniteCloud, Kept};
 pub use format::MAX_GROUPS;
 pub use geometry::SlabPoint;
 #[cfg(feature = "std")]

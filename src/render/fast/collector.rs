@@ -18,8 +18,8 @@ use super::{Frame, Pixel};
 use crate::render::image::GROUP_FIRST;
 use nephele_runtime::transport::leakage::lateral_rate;
 use nephele_runtime::transport::{
-    absorbed, find_collectors, finite_cloud, local_slab, mean_cosine, FiniteCloud, LitSurface,
-    SlabPoint, TransportTables, Viewpoint,
+    absorbed, find_collectors, finite_cloud, local_slab, mean_cosine, section_radius, FiniteCloud,
+    LitSurface, SlabPoint, TransportTables, Viewpoint,
 };
 use serde::Serialize;
 
@@ -287,8 +287,8 @@ impl Frame<'_> {
     /// which it leaves ([`super::sky::sides_escape`]; under a uniform sky a conservative body
     /// glows at the sky's radiance whatever its shape, so the sum stays). κ⊥ from the section
     /// the sun-side maps hold at `at` (the pixel's most opaque surface point) at the cloud's own
-    /// scale, R = 3 × its mean distance to the edge in mfp at the scene's σ_t
-    /// ([`finite_cloud`]'s rule). Nothing where the maps know no edge (a slab). Every method
+    /// scale, R = [`section_radius`] of its mean distance to the edge in mfp at the scene's σ_t
+    /// (as [`finite_cloud`] takes it). Nothing where the maps know no edge (a slab). Every method
     /// takes it, the method as published included: the sky term is this project's, not the
     /// paper's. (With ϖ < 1 it follows the absorption's factors, an approximation.)
     pub(super) fn sky_sides(&self, px: &mut Pixel, at: [f32; 3]) {
@@ -301,7 +301,8 @@ impl Frame<'_> {
         if !l.edge_distance.is_finite() {
             return;
         }
-        let radius = 3.0 * l.edge_distance * self.scene.sigma_t as f32;
+        // (in m, then in mfp: the rule is linear)
+        let radius = section_radius(l.edge_distance) * self.scene.sigma_t as f32;
         let kappa = f64::from(lateral_rate(radius, self.finite.mean_cosine));
         sky.sides_escape(&mut px.sky, kappa, f64::from(self.finite.mean_cosine));
     }

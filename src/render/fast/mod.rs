@@ -614,45 +614,36 @@ impl Frame<'_> {
         let once = self.opts.method == Method::Collector && !self.opts.search_every_ray;
         let mut px = Pixel::default();
         let (w_own, w_corner) = self.opts.pattern.weights(self.offsets.len());
+        // The most opaque ray: where the sky term's sides are read, whatever the method, and
+        // where the collector searches once for the pixel.
         let mut densest: Option<Densest> = None;
-        // The most opaque ray's surface point, whatever the method: where the sky term's sides
-        // are read.
-        let mut sky_at: Option<Densest> = None;
-        let mut consider = |densest: &mut Option<Densest>, d: Option<Densest>| {
-            let Some(d) = d else {
-                return;
-            };
-            if sky_at.as_ref().is_none_or(|best| d.alpha > best.alpha) {
-                sky_at = Some(d);
+        let mut consider = |d: Option<Densest>| match d {
+            Some(d) if densest.as_ref().is_none_or(|best| d.alpha > best.alpha) => {
+                densest = Some(d)
             }
-            if once && densest.as_ref().is_none_or(|best| d.alpha > best.alpha) {
-                *densest = Some(d)
-            }
+            _ => {}
         };
         for &(u, v) in &self.offsets {
             let dir = cam.direction(i, j, u, v);
             let (one, ray) = self.ray(cam.position, dir, (!once).then_some(&mut *stats));
             px.add(&one, w_own);
-            consider(
-                &mut densest,
-                ray.viewpoint(dir).map(|viewpoint| Densest {
-                    alpha: 1.0 - ray.transmittance,
-                    viewpoint,
-                    corner: None,
-                }),
-            );
+            consider(ray.viewpoint(dir).map(|viewpoint| Densest {
+                alpha: 1.0 - ray.transmittance,
+                viewpoint,
+                corner: None,
+            }));
         }
         for (di, dj) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
             let Some((one, d)) = corners.at(i + di, j + dj) else {
                 continue;
             };
             px.add(one, w_corner);
-            consider(&mut densest, *d);
+            consider(*d);
         }
-        if let Some(d) = sky_at {
+        if let Some(d) = &densest {
             self.sky_sides(&mut px, d.viewpoint.position);
         }
-        (px, densest)
+        (px, densest.filter(|_| once))
     }
 
     /// One view ray: its transmittance, order 1, and the scattered orders of the method (the
