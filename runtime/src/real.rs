@@ -18,6 +18,8 @@ pub trait Real:
 {
     /// π.
     const PI: Self;
+    /// Significand bits, the implicit one included (24 for f32, 53 for f64).
+    const DIGITS: u32;
     /// Converts from f64 (rounding for f32).
     fn of(v: f64) -> Self;
     /// Converts to f64 (exact).
@@ -52,6 +54,7 @@ macro_rules! impl_real {
     ($t:ident, $sqrt:path, $exp:path, $ln:path, $sin_cos:path, $cbrt:path, $asin:path) => {
         impl Real for $t {
             const PI: Self = core::$t::consts::PI;
+            const DIGITS: u32 = $t::MANTISSA_DIGITS;
             #[inline]
             fn of(v: f64) -> Self {
                 v as $t

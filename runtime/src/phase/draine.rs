@@ -8,21 +8,23 @@
 //!   M₂(μ) = −(1 − g²)/(8g³) [H(v) − H(v₀)],  H(v) = −a²/v − 2a v + v³/3,
 //! (v·F = ξ·v is a quartic in v). The renderer-style closed-form root loses up to 0.1 of
 //! CDF in f32 at α = 250; here the CDF is evaluated in f64 in a form free of the 1/g³
-//! cancellation (below) and F(μ) = ξ solved by Newton's method — one step from a tabulated
-//! Hermite guess when that step's own error bound is below 1e-14 (nearly always: the table
-//! refines itself where the guess is poor), else inside a shrinking bracket to |F − ξ| ≤
-//! 1e-14 — whatever the output precision: an f32 sample is the exact root rounded once.
+//! cancellation (below), and its inverse is tabulated once as quintic pieces in ξ, each with the
+//! largest miss measured inside it. An f32 sample takes the piece's value where that miss is
+//! below a sixteenth of an ulp of μ (for nearly every ξ: the result is then within one ulp of the
+//! exact root, and almost always the root rounded once). Elsewhere, and always in f64, F(μ) = ξ
+//! is solved by Newton's method: one step from the table's guess when that step's own error
+//! bound is below 1e-14, else inside a shrinking bracket to |F − ξ| ≤ 1e-14.
 
 use super::{invert_cdf, Cosine, HenyeyGreenstein, PhaseFunction};
 use crate::real::Real;
 
 /// Draine's phase function with asymmetry-like g ∈ (−1, 1) and α ≥ 0.
 ///
-/// Construction tabulates the inverse CDF at up to 257 nodes, refined where a cubic Hermite
-/// guess between them is poor (≈ 0.1–0.5 ms, 8 KB in the struct), so that sampling can start
-/// Newton's method from that guess and nearly always stop after one step. Build it with
-/// [`Draine::new`]; if `g` or `alpha` are changed afterwards sampling stays exact (the guess is
-/// only a starting point) but slower.
+/// Construction tabulates the inverse CDF at up to 257 nodes, refined where a quintic Hermite
+/// piece between them misses (≈ 0.01–0.4 ms, 27 KB in the struct), so that an f32 sample is
+/// nearly always the piece's value and an f64 one nearly always one Newton step from it. Build
+/// it with [`Draine::new`]; if `g` or `alpha` are changed afterwards sampling stays exact (the
+/// table is then only Newton's starting point) but slower.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Draine<F> {
     /// HG parameter g (not the mean cosine unless α = 0).
@@ -36,59 +38,98 @@ pub struct Draine<F> {
 const GUESS_NODES: usize = 257;
 const GUESS_START: usize = 16;
 
-/// Buckets of the guide from ξ to the node interval.
-const GUIDE_N: usize = 64;
+/// How many times an interval of 1/16 may be halved.
+const MAX_HALVINGS: usize = 8;
 
-/// The table's aim: the Hermite guess within this of the inverse at every interval's middle,
-/// in μ and in the CDF (μ's miss times 2πp), so that one Newton step lands within ~C·1e-16
-/// (C = |p′/(2p)|) of the root.
-const GUESS_TOLERANCE: f64 = 2e-8;
+/// Buckets of the guide from ξ to the interval: 16 × 2⁸, the finest the halvings go, so that
+/// every bucket lies inside one interval (each node's ξ is a multiple of 2⁻¹²): no search.
+const GUIDE_N: usize = GUESS_START << MAX_HALVINGS;
 
-/// The inverse CDF μ(ξ) at nodes ξ_k, refined where a cubic Hermite guess between them is
-/// poor (where the density is small, dμ/dξ is large and changes fast: the backward
-/// hemisphere of a forward peak, the middle of a strong μ² term): per node (ξ, μ, dμ/dξ,
-/// 1/(ξ_{k+1} − ξ_k)), and a guide from 64 buckets of ξ to the first interval of each.
+/// The table's aim: the quintic guess within this of the inverse (in μ) inside every
+/// interval, so that an f32 sample can skip Newton's step wherever |μ| ≳ 2⁻¹¹ (see
+/// [`InverseGuess::at`]).
+const GUESS_TOLERANCE: f64 = 2e-12;
+
+/// Where an interval's guess is checked against the inverse: t = 1/8 … 7/8.
+const CHECKS: usize = 7;
+
+/// One interval of the inverse CDF μ(ξ): its start ξ_a, 1/h, the quintic Hermite
+/// μ(ξ_a + t h) = Σ c_i t^i matching μ, dμ/dξ and d²μ/dξ² at both ends, and the largest miss of
+/// the guess measured inside it (at t = k/8, k = 1…7).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Interval {
+    xi: f64,
+    inverse_width: f64,
+    c: [f64; 6],
+    miss: f64,
+}
+
+/// The inverse CDF μ(ξ) as quintic pieces between nodes ξ_k, halved where the guess misses
+/// (where the density is small, dμ/dξ is large and changes fast: the backward hemisphere of a
+/// forward peak, the middle of a strong μ² term), and a guide from ξ to its interval.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct InverseGuess {
-    nodes: [[f64; 4]; GUESS_NODES],
+    /// The (g, α) it was made for.
+    g: f64,
+    alpha: f64,
+    intervals: [Interval; GUESS_NODES - 1],
     count: usize,
-    guide: [u16; GUIDE_N + 1],
+    guide: [u16; GUIDE_N],
 }
+
+/// A node of the inverse CDF: ξ, μ(ξ), dμ/dξ = 1/(2πp), d²μ/dξ² = −(dμ/dξ)² p′/p.
+type Node = [f64; 4];
 
 impl InverseGuess {
     fn new(g: f64, alpha: f64) -> Self {
-        let node = |xi: f64| {
-            let mu = invert_cdf(
+        let exact = |xi: f64, start: f64| {
+            invert_cdf(
                 |m| cdf_f64(g, alpha, m),
                 |m| pdf_f64(g, alpha, m),
                 xi,
-                HenyeyGreenstein::new(g).sample_mu(xi),
-            );
-            [xi, mu, cdf_and_inverse_density(g, alpha, mu).1, 0.0]
+                start,
+            )
+        };
+        let node = |xi: f64| -> Node {
+            let mu = exact(xi, HenyeyGreenstein::new(g).sample_mu(xi));
+            let slope = cdf_and_inverse_density(g, alpha, mu).1;
+            [xi, mu, slope, -slope * slope * log_slope(g, alpha, mu)]
+        };
+        // The largest miss inside [a, b] and the inverse at its middle.
+        let check = |a: &Node, b: &Node| -> (f64, Node) {
+            let piece = Interval::new(a, b, 0.0);
+            let mut miss = 0.0f64;
+            for k in 1..=CHECKS {
+                let xi = a[0] + (b[0] - a[0]) * k as f64 / (CHECKS + 1) as f64;
+                let guess = piece.eval(xi);
+                miss = miss.max((guess - exact(xi, guess)).abs());
+            }
+            (miss, node(0.5 * (a[0] + b[0])))
         };
         let mut nodes = [[0.0; 4]; GUESS_NODES];
+        let mut misses = [0.0f64; GUESS_NODES];
         let mut count = GUESS_START + 1;
         for (k, n) in nodes[..count].iter_mut().enumerate() {
             *n = node(k as f64 / GUESS_START as f64);
         }
-        // Halve the intervals whose guess misses the inverse at their middle, pass by pass
-        // (from the start each pass, so the table does not depend on any order but ξ's); an
-        // interval that passed keeps its ends, so it is not checked again.
+        // Halve the intervals whose guess misses the inverse, pass by pass (from the start
+        // each pass, so the table does not depend on any order but ξ's); an interval that
+        // passed, or cannot be halved, keeps its ends and its measured miss.
         let mut settled = [false; GUESS_NODES];
         loop {
             let mut split = false;
             let mut k = 0;
-            while k + 1 < count && count < GUESS_NODES {
+            while k + 1 < count {
                 if settled[k] {
                     k += 1;
                     continue;
                 }
-                let (a, b) = (nodes[k], nodes[k + 1]);
-                let middle = node(0.5 * (a[0] + b[0]));
-                let miss = (hermite(&a, &b, middle[0]) - middle[1]).abs();
-                if miss > GUESS_TOLERANCE * middle[2].min(1.0) {
+                let (miss, middle) = check(&nodes[k], &nodes[k + 1]);
+                let narrowest = nodes[k + 1][0] - nodes[k][0] <= 1.0 / GUIDE_N as f64;
+                if miss > GUESS_TOLERANCE && !narrowest && count < GUESS_NODES {
                     nodes.copy_within(k + 1..count, k + 2);
                     settled.copy_within(k + 1..count, k + 2);
+                    misses.copy_within(k + 1..count, k + 2);
                     nodes[k + 1] = middle;
                     settled[k + 1] = false;
                     count += 1;
@@ -96,17 +137,19 @@ impl InverseGuess {
                     k += 2;
                 } else {
                     settled[k] = true;
+                    misses[k] = miss;
                     k += 1;
                 }
             }
-            if !split || count >= GUESS_NODES {
+            if !split {
                 break;
             }
         }
+        let mut intervals = [Interval::new(&nodes[0], &nodes[1], 0.0); GUESS_NODES - 1];
         for k in 0..count - 1 {
-            nodes[k][3] = 1.0 / (nodes[k + 1][0] - nodes[k][0]);
+            intervals[k] = Interval::new(&nodes[k], &nodes[k + 1], misses[k]);
         }
-        let mut guide = [0u16; GUIDE_N + 1];
+        let mut guide = [0u16; GUIDE_N];
         let mut k = 0;
         for (j, entry) in guide.iter_mut().enumerate() {
             let xi = j as f64 / GUIDE_N as f64;
@@ -116,39 +159,62 @@ impl InverseGuess {
             *entry = k as u16;
         }
         Self {
-            nodes,
-            count,
+            g,
+            alpha,
+            intervals,
+            count: count - 1,
             guide,
         }
     }
 
-    /// The cubic Hermite guess of μ(ξ) in its interval.
+    /// The guess of μ(ξ) and the largest miss measured in its interval.
     #[inline]
-    fn at(&self, xi: f64) -> f64 {
-        let xi = xi.clamp(0.0, 1.0);
-        let mut k = self.guide[((xi * GUIDE_N as f64) as usize).min(GUIDE_N)] as usize;
-        while k + 2 < self.count && self.nodes[k + 1][0] <= xi {
-            k += 1;
-        }
-        hermite(&self.nodes[k], &self.nodes[k + 1], xi)
+    fn at(&self, xi: f64) -> (f64, f64) {
+        let bucket = (xi * GUIDE_N as f64) as usize;
+        let piece = &self.intervals[self.guide[bucket.min(GUIDE_N - 1)] as usize];
+        (piece.eval(xi), piece.miss)
     }
 }
 
-/// The cubic Hermite interpolation between nodes a and b (ξ, μ, dμ/dξ, 1/(ξ_b − ξ_a)) at ξ;
-/// `a[3]` = 0 (not yet known) is taken from the two ξ.
-#[inline]
-fn hermite(a: &[f64; 4], b: &[f64; 4], xi: f64) -> f64 {
-    let h = b[0] - a[0];
-    let inv = if a[3] > 0.0 { a[3] } else { 1.0 / h };
-    let t = (xi - a[0]) * inv;
-    let (t2, t3) = (t * t, t * t * t);
-    let (h00, h10, h01, h11) = (
-        2.0 * t3 - 3.0 * t2 + 1.0,
-        t3 - 2.0 * t2 + t,
-        -2.0 * t3 + 3.0 * t2,
-        t3 - t2,
-    );
-    (h00 * a[1] + h10 * h * a[2] + h01 * b[1] + h11 * h * b[2]).clamp(-1.0, 1.0)
+impl Interval {
+    /// The quintic Hermite piece between nodes a and b (ξ, μ, μ′, μ″), in t = (ξ − ξ_a)/h.
+    fn new(a: &Node, b: &Node, miss: f64) -> Self {
+        let h = b[0] - a[0];
+        let (y0, d0, s0) = (a[1], h * a[2], h * h * a[3]);
+        let (y1, d1, s1) = (b[1], h * b[2], h * h * b[3]);
+        let dy = y1 - y0;
+        let c = [
+            y0,
+            d0,
+            0.5 * s0,
+            10.0 * dy - 6.0 * d0 - 4.0 * d1 - 1.5 * s0 + 0.5 * s1,
+            -15.0 * dy + 8.0 * d0 + 7.0 * d1 + 1.5 * s0 - s1,
+            6.0 * dy - 3.0 * d0 - 3.0 * d1 - 0.5 * s0 + 0.5 * s1,
+        ];
+        Self {
+            xi: a[0],
+            inverse_width: 1.0 / h,
+            c,
+            miss,
+        }
+    }
+
+    /// Σ c_i t^i at ξ (Estrin's scheme: a short chain), held in [−1, 1].
+    #[inline]
+    fn eval(&self, xi: f64) -> f64 {
+        let c = &self.c;
+        let t = (xi - self.xi) * self.inverse_width;
+        let t2 = t * t;
+        let low = c[0] + c[1] * t;
+        let mid = c[2] + c[3] * t;
+        let high = c[4] + c[5] * t;
+        (low + t2 * (mid + t2 * high)).clamp(-1.0, 1.0)
+    }
+}
+
+/// p′/p of Draine(g, α): 3g/d + 2αμ/(1 + αμ²), d = 1 + g² − 2gμ.
+fn log_slope(g: f64, alpha: f64, mu: f64) -> f64 {
+    3.0 * g / (1.0 + g * g - 2.0 * g * mu) + 2.0 * alpha * mu / (1.0 + alpha * mu * mu)
 }
 
 impl<F: Real> Draine<F> {
@@ -221,10 +287,21 @@ fn pdf_f64(g: f64, alpha: f64, mu: f64) -> f64 {
     1.0 / (2.0 * core::f64::consts::PI * cdf_and_inverse_density(g, alpha, mu).1)
 }
 
-/// μ with F(μ) = ξ (see [`invert_cdf`]).
-fn invert_cdf_f64(g: f64, alpha: f64, xi: f64, guess: &InverseGuess) -> f64 {
+/// μ with F(μ) = ξ to the output's precision: the table's guess where its measured miss is
+/// below a sixteenth of an ulp of μ in `digits` bits (for f32, wherever |μ| ≳ 5e-4: the guess
+/// rounded once is then within one ulp of the exact root), else Newton's method (see
+/// [`invert_cdf`]).
+#[inline]
+fn invert_cdf_to(g: f64, alpha: f64, xi: f64, guess: &InverseGuess, digits: u32) -> f64 {
     let xi = xi.clamp(0.0, 1.0);
-    match one_step(g, alpha, xi, guess) {
+    let (mu0, miss) = guess.at(xi);
+    // ulp(μ) > |μ| 2^−digits; the miss may be at most 1/16 of that (a factor 4 of safety on
+    // the measured miss, which is sampled at seven points of the interval).
+    let own = g == guess.g && alpha == guess.alpha;
+    if own && miss * pow2(digits + 4) <= mu0.abs() {
+        return mu0;
+    }
+    match one_step(g, alpha, xi, mu0) {
         Ok(mu) => mu,
         Err(mu0) => invert_cdf(
             |mu| cdf_f64(g, alpha, mu),
@@ -235,14 +312,19 @@ fn invert_cdf_f64(g: f64, alpha: f64, xi: f64, guess: &InverseGuess) -> f64 {
     }
 }
 
-/// One Newton step from the Hermite guess: Ok(μ) when it is the root, else Err(the guess).
+/// 2ⁿ as f64 (n < 64).
+#[inline]
+fn pow2(n: u32) -> f64 {
+    (1u64 << n) as f64
+}
+
+/// One Newton step from the guess μ₀: Ok(μ) when it is the root, else Err(μ₀).
 /// It leaves an error of C s² in μ, s the step and C = |p′/(2p)| = |3g/(2d) + αμ/(1 + αμ²)|,
 /// and of 2πp C s² in the CDF: when both are below 1e-14 the result stands without another
 /// CDF evaluation. (A bound on s alone does not do: inside a strong peak C and p are both
 /// large.)
 #[inline]
-fn one_step(g: f64, alpha: f64, xi: f64, guess: &InverseGuess) -> Result<f64, f64> {
-    let mu0 = guess.at(xi);
+fn one_step(g: f64, alpha: f64, xi: f64, mu0: f64) -> Result<f64, f64> {
     let (f, inverse_density) = cdf_and_inverse_density(g, alpha, mu0);
     let step = (f - xi) * inverse_density;
     let mu1 = mu0 - step;
@@ -280,7 +362,8 @@ impl<F: Real> PhaseFunction<F> for Draine<F> {
     }
 
     fn sample_cosine(&self, xi: F) -> Cosine<F> {
-        let mu = invert_cdf_f64(self.g.f64(), self.alpha.f64(), xi.f64(), &self.guess);
+        let (g, alpha) = (self.g.f64(), self.alpha.f64());
+        let mu = invert_cdf_to(g, alpha, xi.f64(), &self.guess, F::DIGITS);
         Cosine {
             mu: F::of(mu),
             one_minus_mu: F::of(1.0 - mu),
@@ -298,29 +381,92 @@ impl<F: Real> PhaseFunction<F> for Draine<F> {
 mod tests {
     use super::*;
 
+    /// (g, α) across the fits' range and beyond: a strong μ² term, peaks of both signs.
+    const PARAMETERS: [(f64, f64); 9] = [
+        (0.594, 27.1),
+        (0.65, 131.0),
+        (1e-6, 250.0),
+        (-0.99, 250.0),
+        (0.99, 0.0),
+        (0.999, 5.0),
+        (0.9, 10.0),
+        (0.3, 0.5),
+        (0.0, 0.0),
+    ];
+
+    /// Whether an f32 μ is within one of its ulps of the exact root.
+    fn within_one_ulp(mu: f32, exact: f64) -> bool {
+        let ulp = (f32::from_bits(mu.abs().to_bits() + 1) - mu.abs()) as f64;
+        (mu as f64 - exact).abs() <= ulp
+    }
+
     /// The guess table does its job: over 10⁵ ξ, one Newton step from it is the root for at
-    /// least 99 % of them, across the fits' range (a strong μ² term, peaks of both signs).
+    /// least 99 % of them in the fits' range, |g| ≤ 0.99 (at g = 0.999, 95 %: the peak is
+    /// narrower than eight halvings of 1/16 in ξ can follow).
     #[test]
     fn one_newton_step_from_the_guess_nearly_always_suffices() {
-        for (g, alpha) in [
-            (0.594, 27.1),
-            (0.65, 131.0),
-            (1e-6, 250.0),
-            (-0.99, 250.0),
-            (0.99, 0.0),
-            (0.9, 10.0),
-            (0.3, 0.5),
-        ] {
+        for (g, alpha) in PARAMETERS.into_iter().filter(|(g, _)| g.abs() <= 0.99) {
             let guess = InverseGuess::new(g, alpha);
             let n = 100_000;
             let stopped = (0..n)
-                .filter(|&i| one_step(g, alpha, (i as f64 + 0.5) / n as f64, &guess).is_ok())
+                .filter(|&i| {
+                    let xi = (i as f64 + 0.5) / n as f64;
+                    one_step(g, alpha, xi, guess.at(xi).0).is_ok()
+                })
                 .count();
             assert!(
                 stopped as f64 >= 0.99 * n as f64,
                 "g = {g}, α = {alpha}: {stopped} of {n} after one step ({} nodes)",
                 guess.count
             );
+        }
+    }
+
+    /// An f32 sample is the exact root to within one ulp wherever the guess is taken as it is
+    /// (nearly everywhere), over 10⁵ random ξ and ξ = 0, 1; the ξ where
+    /// the guess is too poor for that (a hundredth or less) go through Newton's method.
+    #[test]
+    fn f32_samples_from_the_guess_are_within_one_ulp_of_the_root() {
+        for (g, alpha) in PARAMETERS {
+            let d32 = Draine::<f32>::new(g as f32, alpha as f32);
+            let d64 = Draine::<f64>::new((g as f32) as f64, (alpha as f32) as f64);
+            let n = 100_000;
+            let (mut from_guess, mut state) = (0, 0x9e37_79b9_7f4a_7c15u64);
+            for i in 0..n + 2 {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                let xi = match i {
+                    0 => 0.0,
+                    1 => 1.0,
+                    _ => (state >> 40) as f32 / 16_777_216.0,
+                };
+                let (guess, miss) = d32.guess.at(xi as f64);
+                from_guess += usize::from(miss * pow2(f32::DIGITS + 4) <= guess.abs());
+                let (mu, exact) = (d32.sample_mu(xi), d64.sample_mu(xi as f64));
+                assert!(
+                    within_one_ulp(mu, exact),
+                    "g = {g}, α = {alpha}, ξ = {xi}: {mu} vs {exact}"
+                );
+            }
+            assert!(
+                from_guess as f64 >= 0.98 * n as f64,
+                "g = {g}, α = {alpha}: {from_guess} of {n} from the guess"
+            );
+        }
+    }
+
+    /// A sampler whose g or α was changed after it was built samples its new parameters.
+    #[test]
+    fn changed_parameters_are_sampled_exactly() {
+        let mut d = Draine::<f32>::new(0.594, 27.1);
+        d.g = 0.8;
+        d.alpha = 3.0;
+        let fresh = Draine::<f64>::new(0.8f32 as f64, 3.0f32 as f64);
+        for i in 0..=1000 {
+            let xi = i as f32 / 1000.0;
+            let (mu, exact) = (d.sample_mu(xi), fresh.sample_mu(xi as f64));
+            assert!(within_one_ulp(mu, exact), "ξ = {xi}: {mu} vs {exact}");
         }
     }
 }
