@@ -44,12 +44,12 @@ fn simd_level() -> &'static str {
     "not x86-64"
 }
 
-/// C (64 × 2251) = A (64 × k) B (k × 2251), the block product of `mie::batch` (32 spheres, re
-/// and im rows, k Mie orders: 40 ≈ d = 5 µm at 700 nm, 170 ≈ 20 µm at 400 nm, 500 the size
-/// tail); throughput in flops (2 m k n per product).
+/// C (m × 2251) = A (m × k) B (k × 2251), the block product of `mie::batch` (m = 2 × its
+/// `BLOCK` spheres, re and im rows; k Mie orders: 40 ≈ d = 5 µm at 700 nm, 170 ≈ 20 µm at
+/// 400 nm, 500 the size tail); throughput in flops (2 m k n per product).
 fn gemm_shapes(c: &mut Criterion) {
     eprintln!("CPU SIMD level: {}", simd_level());
-    let (m, n) = (64usize, 2251usize);
+    let (m, n) = (2 * nephele::mie::batch::BLOCK, 2251usize);
     for k in [40usize, 170, 500] {
         let a: Vec<f64> = (0..m * k)
             .map(|i| ((i * 7919) % 1000) as f64 / 1e3)
@@ -58,7 +58,7 @@ fn gemm_shapes(c: &mut Criterion) {
             .map(|i| ((i * 104729) % 1000) as f64 / 1e3)
             .collect();
         let mut out = vec![0.0; m * n];
-        let mut group = c.benchmark_group(format!("gemm 64x{k}x2251"));
+        let mut group = c.benchmark_group(format!("gemm {m}x{k}x2251"));
         group.throughput(Throughput::Elements(2 * (m * k * n) as u64));
         group.bench_function("matrixmultiply", |bench| {
             bench.iter(|| nephele::mie::batch::gemm_strided(m, k, n, &a, &b, n, &mut out))
