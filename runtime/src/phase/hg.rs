@@ -72,15 +72,16 @@ impl<F: Real> PhaseFunction<F> for HenyeyGreenstein<F> {
         let m0 = two * xi - one;
         let s = one + g * m0;
         if g.abs() > half {
-            // One division on the common path (g > 0, forward): 1/s serves t and 1 − μ.
-            let inv_s = one / s;
-            let t = (one - g) * (one + g) * inv_s;
-            if g > F::of(0.0) && t * t < one + g * g {
-                // μ > 0: 1 − μ = (1 − g)(1 − ξ)(t + 1 − g)/s, exact where μ is not.
-                let omm = (one - g) * (one - xi) * (t + one - g) * inv_s;
+            // μ > 0 ⟺ t² < 1 + g² with t = (1 − g²)/s, tested without dividing; then
+            // 1 − μ = (1 − g)(1 − ξ)(t + 1 − g)/s = (1 − g)²(1 − ξ)(1 + g + s)/s², exact where μ
+            // is not, in one division.
+            let (a, b, s2) = ((one - g) * (one + g), one + g * g, s * s);
+            if g > F::of(0.0) && a * a < b * s2 {
+                let omm = (one - g) * (one - g) * (one - xi) * (one + g + s) / s2;
                 return Cosine::from_one_minus_mu(omm.clamp_to(F::of(0.0), one));
             }
-            return Cosine::from_mu(((one + g * g - t * t) / (two * g)).clamp_to(-one, one));
+            let t = a / s;
+            return Cosine::from_mu(((b - t * t) / (two * g)).clamp_to(-one, one));
         }
         let num = m0
             + half * g * (F::of(3.0) + m0 * m0)
