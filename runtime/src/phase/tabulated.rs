@@ -25,6 +25,9 @@ pub struct Tabulated<'a, F> {
     /// Optional guide in angle: angle_guide[k] is the interval holding θ = kπ/len (so
     /// evaluation scans a few intervals instead of bisecting); empty means bisection.
     angle_guide: &'a [u32],
+    /// Optional (sin, cos) of θ_i/2 at every node (f64), for sampling without a library
+    /// sine; empty means `sin_cos`.
+    half: &'a [[f64; 2]],
 }
 
 /// Why a table was refused.
@@ -64,6 +67,7 @@ impl<'a, F: Real> Tabulated<'a, F> {
             cdf,
             guide: &[],
             angle_guide: &[],
+            half: &[],
         })
     }
 
@@ -157,7 +161,13 @@ impl<F: Real> PhaseFunction<F> for Tabulated<'_, F> {
         } else {
             F::of(0.0)
         };
-        let theta = self.theta[i] + delta.clamp_to(F::of(0.0), h);
+        let delta = delta.clamp_to(F::of(0.0), h);
+        let theta = self.theta[i] + delta;
+        // In f64 the library's sine costs more than the series (15 % of the slab walk's time
+        // with a Mie table); in f32 it does not.
+        if let Some(&half) = self.half.get(i).filter(|_| F::DIGITS > 24) {
+            return half_angle_turn(half, delta.f64(), theta < F::of(0.5) * F::PI);
+        }
         let (sh, _) = (F::of(0.5) * theta).sin_cos();
         if theta < F::of(0.5) * F::PI {
             Cosine::from_one_minus_mu(F::of(2.0) * sh * sh)
@@ -171,6 +181,31 @@ impl<F: Real> PhaseFunction<F> for Tabulated<'_, F> {
     }
 }
 
+/// The cosine of θ = θ_i + δ from (sin, cos) of θ_i/2 and the series of ε = δ/2 (to ε⁷ and ε⁸:
+/// below 1e-19 for the tables that keep `half`, whose intervals are at most [`HALF_MAX_STEP`]):
+///   sin(θ/2) = s₀ cos ε + c₀ sin ε,  cos(θ/2) = c₀ cos ε − s₀ sin ε,
+///   1 − μ = 2 sin²(θ/2) forward (precise at the peak), μ = (c − s)(c + s) backward.
+fn half_angle_turn<F: Real>([s0, c0]: [f64; 2], delta: f64, forward: bool) -> Cosine<F> {
+    let e = 0.5 * delta;
+    let e2 = e * e;
+    // Products with the reciprocals, not divisions (a division by a constant stays one).
+    let sin_e =
+        e * (1.0 - e2 * (1.0 / 6.0) * (1.0 - e2 * (1.0 / 20.0) * (1.0 - e2 * (1.0 / 42.0))));
+    let cos_e = 1.0
+        - e2 * 0.5
+            * (1.0 - e2 * (1.0 / 12.0) * (1.0 - e2 * (1.0 / 30.0) * (1.0 - e2 * (1.0 / 56.0))));
+    let (sh, ch) = (s0 * cos_e + c0 * sin_e, c0 * cos_e - s0 * sin_e);
+    if forward {
+        Cosine::from_one_minus_mu(F::of(2.0 * sh * sh))
+    } else {
+        Cosine::from_mu(F::of((ch - sh) * (ch + sh)))
+    }
+}
+
+/// The widest interval (radians) for which a table keeps the half-angle sines of its nodes.
+#[cfg(feature = "std")]
+const HALF_MAX_STEP: f64 = 0.05;
+
 /// An owned table built from a phase function sampled at angles (std only).
 #[cfg(feature = "std")]
 #[derive(Clone, Debug)]
@@ -180,6 +215,7 @@ pub struct TabulatedTable<F> {
     cdf: Vec<F>,
     guide: Vec<u32>,
     angle_guide: Vec<u32>,
+    half: Vec<[f64; 2]>,
 }
 
 #[cfg(feature = "std")]
@@ -222,20 +258,39 @@ impl<F: Real> TabulatedTable<F> {
         let mut theta_f: Vec<F> = theta.iter().map(|&t| F::of(t)).collect();
         theta_f[n - 1] = F::PI;
         let cdf: Vec<F> = cdf.iter().map(|&v| F::of(v)).collect();
-        // guide[k]: the last interval whose CDF start is ≤ k/n (one entry per interval).
-        let guide = (0..n - 1)
+        // guide[k]: the last interval whose CDF start is ≤ k/m, four entries per interval (the
+        // scan from it to ξ's interval then takes a quarter step on average, not one: 5 % of
+        // the slab walk's time with a Mie table).
+        let m = 4 * (n - 1);
+        let guide = (0..m)
             .map(|k| {
-                let xi = F::of(k as f64 / (n - 1) as f64);
+                let xi = F::of(k as f64 / m as f64);
                 (cdf.partition_point(|c| *c <= xi).clamp(1, n - 1) - 1) as u32
             })
             .collect();
         let angle_guide = angle_guide(&theta_f);
+        // The nodes' half-angle sines, where every interval is short enough for the series.
+        let fine = theta_f
+            .windows(2)
+            .all(|w| (w[1] - w[0]).f64() <= HALF_MAX_STEP);
+        let half = if fine {
+            theta_f
+                .iter()
+                .map(|t| {
+                    let (s, c) = (0.5 * t.f64()).sin_cos();
+                    [s, c]
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
         Ok(Self {
             theta: theta_f,
             f: f.iter().map(|&v| F::of(v)).collect(),
             cdf,
             guide,
             angle_guide,
+            half,
         })
     }
 
@@ -247,6 +302,7 @@ impl<F: Real> TabulatedTable<F> {
             cdf: &self.cdf,
             guide: &self.guide,
             angle_guide: &self.angle_guide,
+            half: &self.half,
         }
     }
 }
@@ -318,6 +374,57 @@ mod tests {
             for t in probes {
                 assert_eq!(guided.interval(t), plain.interval(t), "n = {n}, θ = {t}");
             }
+        }
+    }
+
+    /// Sampling through the nodes' half-angle sines gives the library sine's cosines: on the
+    /// reference grid (2251 nodes, 0.01° to 5°, 0.1° after) with a forward peak, over 10⁵ ξ and
+    /// both ends, 1 − μ forward within 10 ulps relative and μ backward within 4 ulps
+    /// (measured: 1.1e-15 and 5.0e-16) in f64; in f32 the same bits.
+    #[test]
+    fn half_angle_sampling_is_the_library_sines() {
+        let theta_deg: Vec<f64> = (0..=500)
+            .map(|k| k as f64 * 0.01)
+            .chain((1..=1750).map(|k| 5.0 + k as f64 * 0.1))
+            .collect();
+        let phase: Vec<f64> = theta_deg
+            .iter()
+            .map(|t| 1e3 / (1.0 + t * t) + 0.1)
+            .collect();
+        let table = TabulatedTable::<f64>::from_phase(&theta_deg, &phase).unwrap();
+        assert!(!table.half.is_empty());
+        let (fast, plain) = (
+            table.view(),
+            Tabulated::from_parts(&table.theta, &table.f, &table.cdf).unwrap(),
+        );
+        let mut worst = (0.0f64, 0.0f64);
+        for k in 0..=100_001 {
+            let xi = (k as f64 / 100_001.0).min(1.0);
+            let (a, b) = (fast.sample_cosine(xi), plain.sample_cosine(xi));
+            if a.mu > 0.0 {
+                let rel = (a.one_minus_mu / b.one_minus_mu - 1.0).abs();
+                worst.0 = worst.0.max(if b.one_minus_mu > 0.0 {
+                    rel
+                } else {
+                    a.one_minus_mu
+                });
+            } else {
+                worst.1 = worst.1.max((a.mu - b.mu).abs());
+            }
+        }
+        let eps = f64::EPSILON;
+        assert!(worst.0 < 10.0 * eps && worst.1 < 4.0 * eps, "{worst:?}");
+        // In f32 the library's sine stays, and the guide (4 entries per interval) finds the
+        // interval bisection finds: the same bits.
+        let t32 = TabulatedTable::<f32>::from_phase(&theta_deg, &phase).unwrap();
+        let plain32 = Tabulated::from_parts(&t32.theta, &t32.f, &t32.cdf).unwrap();
+        for k in 0..=100_001 {
+            let xi = (k as f32 / 100_001.0).min(1.0);
+            assert_eq!(
+                t32.view().sample_cosine(xi),
+                plain32.sample_cosine(xi),
+                "ξ = {xi}"
+            );
         }
     }
 }
