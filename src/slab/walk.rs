@@ -9,7 +9,7 @@
 
 use super::grid::SlabGrid;
 use super::tally::BatchTally;
-use nephele_runtime::frame::orthonormal_basis;
+use nephele_runtime::frame::{orthonormal_basis, sin_cos_small};
 use nephele_runtime::PhaseFunction;
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
@@ -360,10 +360,7 @@ static AZIMUTH_TABLE: LazyLock<[(f64, f64); AZIMUTHS]> = LazyLock::new(|| {
 pub fn unit_circle(xi: f64) -> (f64, f64) {
     let scaled = xi * AZIMUTHS as f64;
     let k = (scaled as usize).min(AZIMUTHS - 1);
-    let d = (scaled - k as f64) * (2.0 * PI / AZIMUTHS as f64);
-    let d2 = d * d;
-    let cos_d = 1.0 - d2 * (0.5 - d2 * (1.0 / 24.0 - d2 * (1.0 / 720.0)));
-    let sin_d = d * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0 - d2 * (1.0 / 5040.0))));
+    let (sin_d, cos_d) = sin_cos_small((scaled - k as f64) * (2.0 * PI / AZIMUTHS as f64));
     let (c, s) = AZIMUTH_TABLE[k];
     (c * cos_d - s * sin_d, s * cos_d + c * sin_d)
 }

@@ -17,6 +17,7 @@
 
 use super::{invert_cdf, Cosine, HenyeyGreenstein, PhaseFunction};
 use crate::real::Real;
+use crate::soft_math::pow2;
 
 /// Draine's phase function with asymmetry-like g ∈ (−1, 1) and α ≥ 0.
 ///
@@ -298,7 +299,7 @@ fn invert_cdf_to(g: f64, alpha: f64, xi: f64, guess: &InverseGuess, digits: u32)
     // ulp(μ) > |μ| 2^−digits; the miss may be at most 1/16 of that (a factor 4 of safety on
     // the measured miss, which is sampled at seven points of the interval).
     let own = g == guess.g && alpha == guess.alpha;
-    if own && miss * pow2(digits + 4) <= mu0.abs() {
+    if own && miss * pow2(i64::from(digits) + 4) <= mu0.abs() {
         return mu0;
     }
     match one_step(g, alpha, xi, mu0) {
@@ -310,12 +311,6 @@ fn invert_cdf_to(g: f64, alpha: f64, xi: f64, guess: &InverseGuess, digits: u32)
             mu0,
         ),
     }
-}
-
-/// 2ⁿ as f64 (n < 64).
-#[inline]
-fn pow2(n: u32) -> f64 {
-    (1u64 << n) as f64
 }
 
 /// One Newton step from the guess μ₀: Ok(μ) when it is the root, else Err(μ₀).
@@ -442,7 +437,7 @@ mod tests {
                     _ => (state >> 40) as f32 / 16_777_216.0,
                 };
                 let (guess, miss) = d32.guess.at(xi as f64);
-                from_guess += usize::from(miss * pow2(f32::DIGITS + 4) <= guess.abs());
+                from_guess += usize::from(miss * pow2(i64::from(f32::DIGITS) + 4) <= guess.abs());
                 let (mu, exact) = (d32.sample_mu(xi), d64.sample_mu(xi as f64));
                 assert!(
                     within_one_ulp(mu, exact),

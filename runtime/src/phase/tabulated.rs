@@ -10,6 +10,7 @@
 //! near 1 (50 µm droplets: 0.01° nodes, 1 − cos 0.01° = 1.5e-8).
 
 use super::{Cosine, PhaseFunction};
+use crate::frame::sin_cos_small;
 use crate::real::Real;
 
 /// A borrowed table: nodes θ (radians, from 0 to π), normalised densities per unit angle f and
@@ -181,19 +182,13 @@ impl<F: Real> PhaseFunction<F> for Tabulated<'_, F> {
     }
 }
 
-/// The cosine of θ = θ_i + δ from (sin, cos) of θ_i/2 and the series of ε = δ/2 (to ε⁷ and ε⁸:
-/// below 1e-19 for the tables that keep `half`, whose intervals are at most [`HALF_MAX_STEP`]):
+/// The cosine of θ = θ_i + δ from (sin, cos) of θ_i/2 and those of ε = δ/2 by their series
+/// ([`sin_cos_small`]; the tables that keep `half` have intervals of at most
+/// [`HALF_MAX_STEP`], so ε ≤ 0.025):
 ///   sin(θ/2) = s₀ cos ε + c₀ sin ε,  cos(θ/2) = c₀ cos ε − s₀ sin ε,
 ///   1 − μ = 2 sin²(θ/2) forward (precise at the peak), μ = (c − s)(c + s) backward.
 fn half_angle_turn<F: Real>([s0, c0]: [f64; 2], delta: f64, forward: bool) -> Cosine<F> {
-    let e = 0.5 * delta;
-    let e2 = e * e;
-    // Products with the reciprocals, not divisions (a division by a constant stays one).
-    let sin_e =
-        e * (1.0 - e2 * (1.0 / 6.0) * (1.0 - e2 * (1.0 / 20.0) * (1.0 - e2 * (1.0 / 42.0))));
-    let cos_e = 1.0
-        - e2 * 0.5
-            * (1.0 - e2 * (1.0 / 12.0) * (1.0 - e2 * (1.0 / 30.0) * (1.0 - e2 * (1.0 / 56.0))));
+    let (sin_e, cos_e) = sin_cos_small(0.5 * delta);
     let (sh, ch) = (s0 * cos_e + c0 * sin_e, c0 * cos_e - s0 * sin_e);
     if forward {
         Cosine::from_one_minus_mu(F::of(2.0 * sh * sh))
