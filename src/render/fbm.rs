@@ -103,6 +103,7 @@ impl Fbm {
     /// asked after each octave but the last, with [lo, hi] holding the final value whatever
     /// the octaves left add. A caller that needs only which side of a threshold the value
     /// falls on skips the octaves that cannot change it.
+    #[inline(always)]
     pub fn get_or_settle<T>(
         &self,
         p: [f64; 3],
@@ -126,28 +127,52 @@ impl Fbm {
     }
 }
 
-/// One octave of Perlin noise with permutation `perm`.
+/// Per hash value h mod 16, the gradient (x, y, z) of [`GRADIENT`] with its zero component.
+/// Its dot product (g_x q_x + g_y q_y) + g_z q_z adds the same two non-zero terms in the same
+/// order as the crate, and a term 0·q changes a sum only in the sign of an exact zero, which the
+/// octave sum (from +0) loses.
+const GRADIENT_XYZ: [[f64; 3]; 16] = {
+    let mut g = [[0.0; 3]; 16];
+    let mut h = 0;
+    while h < 16 {
+        let [(a, sa), (b, sb)] = GRADIENT[h];
+        g[h][a] = sa;
+        g[h][b] = sb;
+        h += 1;
+    }
+    g
+};
+
+/// One octave of Perlin noise with permutation `perm`. The eight corners are taken side by
+/// side (corner index 4 o_z + 2 o_x + o_y), so that their dot products and the blends along z
+/// fill vector registers.
+#[inline(always)]
 fn perlin(perm: &[u8; 256], p: [f64; 3]) -> f64 {
     // The crate's corner: truncation, one lower at p ≤ 0 (so p = 0 lies at d = 1).
     let corner = p.map(|x| if x <= 0.0 { x as isize - 1 } else { x as isize });
     let d: [f64; 3] = std::array::from_fn(|k| p[k] - corner[k] as f64);
-    let hash = |o: [isize; 3]| {
-        let a = perm[((corner[0] + o[0]) & 0xff) as usize] as usize;
-        let b = perm[a ^ ((corner[1] + o[1]) & 0xff) as usize] as usize;
-        perm[b ^ ((corner[2] + o[2]) & 0xff) as usize] as usize
-    };
-    let gradient = |o: [isize; 3]| {
-        let q: [f64; 3] = std::array::from_fn(|k| d[k] - o[k] as f64);
-        let [(a, sa), (b, sb)] = GRADIENT[hash(o) & 0b1111];
-        sa * q[a] + sb * q[b]
-    };
-    let (g000, g100) = (gradient([0, 0, 0]), gradient([1, 0, 0]));
-    let (g010, g110) = (gradient([0, 1, 0]), gradient([1, 1, 0]));
-    let (g001, g101) = (gradient([0, 0, 1]), gradient([1, 0, 1]));
-    let (g011, g111) = (gradient([0, 1, 1]), gradient([1, 1, 1]));
+    let wrap = |k: usize, o: isize| ((corner[k] + o) & 0xff) as usize;
+    // The crate's hash, level by level: x, then y, then z.
+    let hx = [perm[wrap(0, 0)] as usize, perm[wrap(0, 1)] as usize];
+    let hxy = [
+        perm[hx[0] ^ wrap(1, 0)] as usize,
+        perm[hx[0] ^ wrap(1, 1)] as usize,
+        perm[hx[1] ^ wrap(1, 0)] as usize,
+        perm[hx[1] ^ wrap(1, 1)] as usize,
+    ];
+    let mut dot = [0.0f64; 8];
+    for (c, v) in dot.iter_mut().enumerate() {
+        let (oz, ox, oy) = (c >> 2, (c >> 1) & 1, c & 1);
+        let h = perm[hxy[2 * ox + oy] ^ wrap(2, oz as isize)] as usize;
+        let g = GRADIENT_XYZ[h & 0b1111];
+        let q = [d[0] - ox as f64, d[1] - oy as f64, d[2] - oz as f64];
+        *v = (g[0] * q[0] + g[1] * q[1]) + g[2] * q[2];
+    }
     let s = d.map(quintic);
-    let x0 = linear(linear(g000, g001, s[2]), linear(g010, g011, s[2]), s[1]);
-    let x1 = linear(linear(g100, g101, s[2]), linear(g110, g111, s[2]), s[1]);
+    // Along z: the crate's linear(g(x, y, 0), g(x, y, 1), s_z) for (x, y) = 00, 01, 10, 11.
+    let along_z: [f64; 4] = std::array::from_fn(|i| linear(dot[i], dot[4 + i], s[2]));
+    let x0 = linear(along_z[0], along_z[1], s[1]);
+    let x1 = linear(along_z[2], along_z[3], s[1]);
     (linear(x0, x1, s[0]) * SCALE).clamp(-1.0, 1.0)
 }
 

@@ -84,7 +84,10 @@ pub struct Ellipsoid {
 /// fbm's Lipschitz bound `fbm_slope`) and within the clamp ±1.2: the uncertain shell where
 /// the noise has to be evaluated is edge + 2 (L r A + r) thick instead of edge + 2.4 A.
 pub struct Cloud {
-    blobs: Vec<Ellipsoid>,
+    /// The blobs, laid out for [`Cloud::inside`].
+    chunks: Vec<BlobChunk>,
+    /// Whether the CPU has AVX2 ([`Cloud::density`] then takes its AVX2 copy).
+    avx2: bool,
     edge: f64,
     amplitude: f64,
     frequency: f64,
@@ -93,6 +96,39 @@ pub struct Cloud {
     lo: Vec3,
     hi: Vec3,
     grid: MajorantGrid,
+}
+
+/// Blobs side by side in a [`BlobChunk`]: four f64, one AVX2 register.
+const BLOB_LANES: usize = 4;
+
+/// Up to [`BLOB_LANES`] blobs coordinate by coordinate, so that [`Cloud::inside`] takes their
+/// divisions and square roots side by side, in vector registers. The last chunk is filled up
+/// with copies of the first blob: a copy cannot change the largest depth.
+#[derive(Clone, Debug)]
+struct BlobChunk {
+    center: [[f64; BLOB_LANES]; 3],
+    radii: [[f64; BLOB_LANES]; 3],
+    /// The smallest semi-axis r⁻.
+    r_min: [f64; BLOB_LANES],
+}
+
+impl BlobChunk {
+    /// `blobs` in chunks (at least one blob).
+    fn chunks(blobs: &[Ellipsoid]) -> Vec<Self> {
+        blobs
+            .chunks(BLOB_LANES)
+            .map(|part| {
+                let blob = |l: usize| part.get(l).unwrap_or(&blobs[0]);
+                Self {
+                    center: std::array::from_fn(|k| std::array::from_fn(|l| blob(l).center[k])),
+                    radii: std::array::from_fn(|k| std::array::from_fn(|l| blob(l).radii[k])),
+                    r_min: std::array::from_fn(|l| {
+                        blob(l).radii.iter().copied().fold(f64::INFINITY, f64::min)
+                    }),
+                }
+            })
+            .collect()
+    }
 }
 
 /// Majorant cells per axis of the implicit cloud's bounding box.
@@ -162,7 +198,11 @@ impl Cloud {
             }
         });
         Self {
-            blobs,
+            chunks: BlobChunk::chunks(&blobs),
+            #[cfg(target_arch = "x86_64")]
+            avx2: std::is_x86_feature_detected!("avx2"),
+            #[cfg(not(target_arch = "x86_64"))]
+            avx2: false,
             edge,
             amplitude,
             frequency,
@@ -199,13 +239,48 @@ impl Cloud {
         (Self::depth(b, far), Self::depth(b, near))
     }
 
+    /// The largest [`Cloud::depth`] of the blobs at p (m), a chunk of blobs at a time: the
+    /// same operations on each blob in the same order, so the same bits.
+    #[inline(always)]
+    fn inside(&self, p: Vec3) -> f64 {
+        let mut deepest = [f64::NEG_INFINITY; BLOB_LANES];
+        for c in &self.chunks {
+            let mut rho2 = [0.0; BLOB_LANES];
+            for k in 0..3 {
+                for l in 0..BLOB_LANES {
+                    let q = (p[k] - c.center[k][l]) / c.radii[k][l];
+                    rho2[l] += q * q;
+                }
+            }
+            for l in 0..BLOB_LANES {
+                deepest[l] = deepest[l].max((1.0 - rho2[l].sqrt()) * c.r_min[l]);
+            }
+        }
+        deepest.into_iter().fold(f64::NEG_INFINITY, f64::max)
+    }
+
     /// Density in [0, 1] at p.
     pub fn density(&self, p: Vec3) -> f64 {
-        let inside = self
-            .blobs
-            .iter()
-            .map(|b| Self::depth(b, p))
-            .fold(f64::NEG_INFINITY, f64::max);
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: the CPU has AVX2 (checked when the cloud was made).
+            return unsafe { self.density_avx2(p) };
+        }
+        self.density_any(p)
+    }
+
+    /// [`Cloud::density`] compiled for AVX2, the noise inlined: a chunk of blobs in one
+    /// register (−14 % a lookup on the default cloud). No FMA: the same bits.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn density_avx2(&self, p: Vec3) -> f64 {
+        self.density_any(p)
+    }
+
+    /// [`Cloud::density`] for the target's baseline.
+    #[inline(always)]
+    fn density_any(&self, p: Vec3) -> f64 {
+        let inside = self.inside(p);
         // Where the noise cannot change the answer, it is not evaluated (most of the interior).
         if inside < -1.2 * self.amplitude {
             return 0.0;
@@ -514,9 +589,11 @@ mod tests {
     use noise::{MultiFractal, NoiseFn};
     use rand::{Rng, SeedableRng};
 
-    /// The density with its early outs (the shell test, the octaves that cannot change it) is
-    /// bit for bit the definition evaluated in full with the `noise` crate, over the whole
-    /// bounding box of the default cloud's shape and of a thin-edged variant.
+    /// The density with its early outs (the shell test, the octaves that cannot change it) and
+    /// its blobs in chunks is bit for bit the definition evaluated in full with the `noise`
+    /// crate, blob by blob, over the whole bounding box of the default cloud's five blobs (two
+    /// chunks, the second filled up) and of a thin-edged variant; so are its AVX2 copy (when
+    /// the CPU has AVX2) and its baseline one.
     #[test]
     fn density_equals_its_definition() {
         let blob = |c: Vec3, r: Vec3| Ellipsoid {
@@ -526,6 +603,8 @@ mod tests {
         let blobs = vec![
             blob([0.0, 0.0, 600.0], [500.0, 450.0, 380.0]),
             blob([350.0, 120.0, 820.0], [330.0, 300.0, 300.0]),
+            blob([-330.0, -80.0, 780.0], [300.0, 280.0, 280.0]),
+            blob([80.0, -200.0, 1000.0], [260.0, 240.0, 240.0]),
             blob([-60.0, 180.0, 700.0], [320.0, 300.0, 260.0]),
         ];
         let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(3);
@@ -554,11 +633,13 @@ mod tests {
                 let n = fbm.get(p.map(|x| x * frequency)).clamp(-1.2, 1.2);
                 let expected = ((inside + amplitude * n) / edge).clamp(0.0, 1.0);
                 let got = cloud.density(p);
-                assert_eq!(
-                    got.to_bits(),
-                    expected.to_bits(),
-                    "{p:?}: {got} vs {expected}"
-                );
+                for value in [got, cloud.density_any(p)] {
+                    assert_eq!(
+                        value.to_bits(),
+                        expected.to_bits(),
+                        "{p:?}: {value} vs {expected}"
+                    );
+                }
                 match got {
                     0.0 => zeros += 1,
                     1.0 => ones += 1,
