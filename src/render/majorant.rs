@@ -157,22 +157,28 @@ impl MajorantGrid {
         // The entry point may round to just outside the box: cell_of clamps it.
         let entry: Vec3 = std::array::from_fn(|k| o[k] + t0 * w[k]);
         let mut i = self.cell_of(entry);
+        // Per axis, fixed along the ray: the face ahead of cell i is at i + ahead, a step adds
+        // `step`, and the walk ends on leaving through `last` (so no branch on the direction
+        // inside the loop; which axis steps next is the one thing left to chance).
+        let ahead: [usize; 3] = std::array::from_fn(|k| usize::from(w[k] > 0.0));
+        let step: [isize; 3] = std::array::from_fn(|k| if w[k] > 0.0 { 1 } else { -1 });
+        let last: [usize; 3] = std::array::from_fn(|k| if w[k] > 0.0 { self.n[k] - 1 } else { 0 });
         // The t at which the ray leaves the current cell through each axis's next face.
         let next_face = |k: usize, i: usize| -> f64 {
-            if w[k] > 0.0 {
-                (self.lo[k] + (i + 1) as f64 * self.cell[k] - o[k]) / w[k]
-            } else if w[k] < 0.0 {
-                (self.lo[k] + i as f64 * self.cell[k] - o[k]) / w[k]
-            } else {
+            if w[k] == 0.0 {
                 f64::INFINITY
+            } else {
+                (self.lo[k] + (i + ahead[k]) as f64 * self.cell[k] - o[k]) / w[k]
             }
         };
         let mut t_exit: Vec3 = std::array::from_fn(|k| next_face(k, i[k]));
+        // And through the face after that: computed one step ahead, so that a step does not
+        // wait for its division (unused past the last cell).
+        let mut t_after: Vec3 =
+            std::array::from_fn(|k| next_face(k, i[k].wrapping_add_signed(step[k])));
         let mut t = t0;
         loop {
-            let k = (0..3)
-                .min_by(|&a, &b| t_exit[a].total_cmp(&t_exit[b]))
-                .unwrap_or(0);
+            let k = first_exit(&t_exit);
             let end = t_exit[k].min(t1);
             if end > t {
                 if let ControlFlow::Break(b) = f(t, end, self.values[self.index(i)]) {
@@ -180,23 +186,32 @@ impl MajorantGrid {
                 }
                 t = end;
             }
-            if t >= t1 {
+            // Past the segment's end, or about to step out of the grid.
+            if t >= t1 || i[k] == last[k] {
                 return None;
             }
-            // Step across the face of axis k; leaving the grid ends the walk.
-            if w[k] > 0.0 {
-                if i[k] + 1 >= self.n[k] {
-                    return None;
-                }
-                i[k] += 1;
-            } else {
-                if i[k] == 0 {
-                    return None;
-                }
-                i[k] -= 1;
-            }
-            t_exit[k] = next_face(k, i[k]);
+            i[k] = i[k].wrapping_add_signed(step[k]);
+            t_exit[k] = t_after[k];
+            t_after[k] = next_face(k, i[k].wrapping_add_signed(step[k]));
         }
+    }
+}
+
+/// The axis whose face the ray reaches first: the smallest t in f64's total order, the lowest
+/// axis on a tie (as `min_by(total_cmp)`), compared as integers without a branch.
+#[inline(always)]
+fn first_exit(t: &Vec3) -> usize {
+    // total_cmp's key: the bits, the magnitude's flipped for negative numbers.
+    let key = |x: f64| {
+        let b = x.to_bits() as i64;
+        b ^ (((b >> 63) as u64) >> 1) as i64
+    };
+    let [a, b, c] = t.map(key);
+    let (ab, ab_key) = if b < a { (1, b) } else { (0, a) };
+    if c < ab_key {
+        2
+    } else {
+        ab
     }
 }
 
