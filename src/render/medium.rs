@@ -270,7 +270,8 @@ impl Cloud {
     }
 
     /// [`Cloud::density`] compiled for AVX2, the noise inlined: a chunk of blobs in one
-    /// register (−14 % a lookup on the default cloud). No FMA: the same bits.
+    /// register (with the Perlin corners side by side, 95 → 74 ns a lookup at the march's
+    /// points of the default cloud). No FMA: the same bits.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     fn density_avx2(&self, p: Vec3) -> f64 {
