@@ -481,24 +481,75 @@ impl<F: Real> Stretch<F> {
     /// The distance to the far face over t ([`far_fraction`], with `far`) or d/t
     /// ([`depth_fraction`]) at each stretched depth of `us`, e^β − 1 computed once.
     pub fn fractions<const N: usize>(&self, far: bool, us: [F; N]) -> [F; N] {
-        let one = F::of(1.0);
-        if self.beta < F::of(1e-6) {
-            return us.map(|u| if far { one - u } else { u });
-        }
-        let em1 = exp_m1(self.beta);
-        us.map(|u| {
-            if far {
-                (self.beta * u).exp() * exp_m1(self.beta * (one - u)) / em1
-            } else {
-                exp_m1(self.beta * u) / em1
-            }
-        })
+        let em1 = self.exp_m1_beta();
+        us.map(|u| self.fraction(far, u, em1))
     }
 
     /// The distance (mfp) to the far face (`far`) or to the lit face from each stretched
     /// depth of `us`: t × [`Self::fractions`].
     pub fn to_face<const N: usize>(&self, far: bool, us: [F; N]) -> [F; N] {
         self.fractions(far, us).map(|f| self.t * f)
+    }
+
+    /// e^β − 1 (unused below the β at which the map is linear).
+    fn exp_m1_beta(&self) -> F {
+        if self.beta < F::of(1e-6) {
+            F::of(0.0)
+        } else {
+            exp_m1(self.beta)
+        }
+    }
+
+    /// One of [`Self::fractions`], given `em1` = e^β − 1.
+    #[inline]
+    fn fraction(&self, far: bool, u: F, em1: F) -> F {
+        let one = F::of(1.0);
+        if self.beta < F::of(1e-6) {
+            if far {
+                one - u
+            } else {
+                u
+            }
+        } else if far {
+            (self.beta * u).exp() * exp_m1(self.beta * (one - u)) / em1
+        } else {
+            exp_m1(self.beta * u) / em1
+        }
+    }
+}
+
+/// A point's distances (mfp) to the faces of its slab, for the depth continuations of all its
+/// groups ([`depth_polynomial_in`]): e^β − 1 and the point's own distance to each face are
+/// computed at most once, however many groups continue toward that face; each value is the
+/// one [`Stretch::to_face`] gives.
+pub(crate) struct FaceDistances<F> {
+    stretch: Stretch<F>,
+    /// The point's stretched depth.
+    u: F,
+    em1: Option<F>,
+    /// The point's distance to the lit face and to the far face, once asked for.
+    own: [Option<F>; 2],
+}
+
+impl<F: Real> FaceDistances<F> {
+    /// For the point at stretched depth `u` of the slab `stretch` maps.
+    pub(crate) fn new(stretch: Stretch<F>, u: F) -> Self {
+        Self {
+            stretch,
+            u,
+            em1: None,
+            own: [None; 2],
+        }
+    }
+
+    /// The distances to the far face (`far`) or to the lit face from stretched depths `a`, `b`
+    /// and from the point itself.
+    pub(crate) fn to_face(&mut self, far: bool, a: F, b: F) -> [F; 3] {
+        let s = self.stretch;
+        let em1 = *self.em1.get_or_insert_with(|| s.exp_m1_beta());
+        let at = |u: F| s.t * s.fraction(far, u, em1);
+        let own = *self.own[usize::from(far)].get_or_insert_with(|| at(self.u));
+        [at(a), at(b), own]
     }
 }
 
@@ -520,16 +571,16 @@ pub fn depth_polynomial<F: Real>(
     thickness: F,
     range: &FittedDepths<F>,
 ) -> F {
-    depth_polynomial_in(d, n, u, || Stretch::of(thickness), range)
+    depth_polynomial_in(d, n, u, &mut FaceDistances::new(Stretch::of(thickness), u), range)
 }
 
-/// [`depth_polynomial`] in the slab whose stretched-depth map `slab` gives (asked for only
-/// where the polynomial is continued toward a face).
+/// [`depth_polynomial`] at the point whose distances to its slab's faces `faces` gives (asked
+/// for only where the polynomial is continued toward a face).
 pub(crate) fn depth_polynomial_in<F: Real>(
     d: &[F; MAX_LEGENDRE],
     n: usize,
     u: F,
-    slab: impl FnOnce() -> Stretch<F>,
+    faces: &mut FaceDistances<F>,
     range: &FittedDepths<F>,
 ) -> F {
     let at = |u: F| {
@@ -558,7 +609,7 @@ pub(crate) fn depth_polynomial_in<F: Real>(
     }
     // Distances (mfp) to the face ahead: the far face d = t beyond `hi`, the lit face d = 0
     // below `lo`.
-    let [h_inside, h_edge, h] = slab().to_face(far, [inside, edge, u]);
+    let [h_inside, h_edge, h] = faces.to_face(far, inside, edge);
     value + continued_toward_face(inner - value, (h_inside, h_edge, h))
 }
 

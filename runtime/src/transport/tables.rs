@@ -12,7 +12,7 @@ use super::format::{unpack_u_range, CollectorPart, Strides, EMPTY_RANGE, MAX_Q};
 use super::geometry::SlabPoint;
 use super::halo::{Halo, HaloAt};
 use super::log_additive::{
-    depth_polynomial_in, legendre, ln_boundary, ln_t_position, Cell, FittedDepths, Lerp,
+    depth_polynomial_in, legendre, FaceDistances, ln_boundary, ln_t_position, Cell, FittedDepths, Lerp,
     LogAdditive, Stretch, MAX_CROSS, MAX_HARMONICS, MAX_LEGENDRE,
 };
 use super::single::{single_scattering, PhaseValue};
@@ -444,6 +444,7 @@ impl<'a> TransportTables<'a> {
         let top = self.ceiling_lanes::<L>(pt, (g0, n));
         let depth_terms = self.form.depth_terms();
         let u = pt.cell.u;
+        let mut faces = FaceDistances::new(pt.stretch, u);
         let mut t = [0.0f32; L];
         for i in 0..n {
             let Some(range) = &ranges[i] else {
@@ -457,7 +458,7 @@ impl<'a> TransportTables<'a> {
                     .zip(&pt.p_u)
                     .fold(0.0, |s, (a, b)| s + *a * *b)
             } else {
-                depth_polynomial_in(&d_i, depth_terms, u, || pt.stretch, range)
+                depth_polynomial_in(&d_i, depth_terms, u, &mut faces, range)
             };
             let v = range.share * Real::exp(pt.offset + depth);
             t[i] = match top[i] {
