@@ -5,7 +5,7 @@
 
 use nephele::render::majorant::{Bounds, Majorants};
 use nephele::render::medium::Slab;
-use nephele::render::path::integrator::{trace, Volume};
+use nephele::render::path::integrator::{channel_tables, trace, Volume};
 use nephele::render::path::sun_lobe::SunLobe;
 use nephele::render::surface::Surfaces;
 use nephele::slab::{run_slice, SlabGrid, Slice, StopRule};
@@ -100,6 +100,7 @@ fn slab_comparison(
             medium: &slab,
             albedo: 1.0,
             phases: &[phase],
+            channels: None,
             // The sun's light travels along +y and down: (0, s_L, −μ_L).
             sun_dir: [0.0, -s_l, mu_l],
             sun_irradiance: 1.0,
@@ -227,6 +228,7 @@ fn furnace(
         medium,
         albedo: 1.0,
         phases: &[&hg],
+        channels: None,
         sun_dir: [0.0, 0.0, 1.0],
         sun_irradiance: 0.0,
         sky: 1.0,
@@ -439,6 +441,7 @@ fn per_channel_phase_functions_match_monochrome_renders() {
             medium: slab,
             albedo: 0.95,
             phases,
+            channels: channel_tables(phases),
             sun_dir: [0.6, 0.0, 0.8],
             sun_irradiance: 1.0,
             sky: 0.3,
@@ -628,6 +631,7 @@ fn the_sun_lobe_estimator_agrees_with_plain_nee_per_order_group_on_mie() {
                 medium: &slab,
                 albedo,
                 phases,
+                channels: channel_tables(phases),
                 sun_dir: [0.0, -s_l, mu_l],
                 sun_irradiance: 1.0,
                 sky: 0.0,

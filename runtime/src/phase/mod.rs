@@ -24,7 +24,7 @@ pub use schlick::Schlick;
 #[cfg(feature = "std")]
 pub use tabulated::TabulatedTable;
 pub(crate) use tabulated::{angle, phase_between};
-pub use tabulated::{TableError, Tabulated};
+pub use tabulated::{TableError, Tabulated, TabulatedChannels};
 pub use vmf::VonMisesFisher;
 pub use xlf::{Xlf, XLF_G_MAX};
 
@@ -86,6 +86,12 @@ pub trait PhaseFunction<F: Real> {
 
     /// ⟨μ⟩ in closed form, where one exists.
     fn mean_cosine(&self) -> Option<F>;
+
+    /// The table behind this model, for a tabulated one (so that several channels' tables can
+    /// be evaluated together: [`TabulatedChannels`]).
+    fn as_tabulated(&self) -> Option<Tabulated<'_, F>> {
+        None
+    }
 
     /// A scattered propagation direction around the incident one `wi` (unit), from two uniform
     /// numbers, and its pdf per steradian.

@@ -99,6 +99,41 @@ impl<'a, F: Real> Tabulated<'a, F> {
     }
 }
 
+impl<F: Real> Tabulated<'_, F> {
+    /// p at angle θ (sin θ = `sin`) in interval i.
+    #[inline]
+    fn between(&self, i: usize, theta: F, sin: F) -> F {
+        let node = |k: usize| (self.theta[k], self.f[k]);
+        phase_between(node(i), node(i + 1), theta, sin)
+    }
+}
+
+/// Tables on the same nodes θ (a phase function per colour channel) evaluated together: the
+/// angle of a cosine and its interval are found once for all of them, and each table's value
+/// is the one its own [`PhaseFunction::pdf_cosine`] gives.
+#[derive(Clone, Copy, Debug)]
+pub struct TabulatedChannels<'a, F, const N: usize> {
+    tables: [Tabulated<'a, F>; N],
+}
+
+impl<'a, F: Real, const N: usize> TabulatedChannels<'a, F, N> {
+    /// The tables, or None unless every one has the first one's nodes and angle guide.
+    pub fn new(tables: [Tabulated<'a, F>; N]) -> Option<Self> {
+        let first = tables.first()?;
+        tables
+            .iter()
+            .all(|t| t.theta == first.theta && t.angle_guide == first.angle_guide)
+            .then_some(Self { tables })
+    }
+
+    /// p (sr⁻¹) of every table at `c`.
+    pub fn pdf_cosine(&self, c: Cosine<F>) -> [F; N] {
+        let (theta, sin) = angle(c);
+        let i = self.tables[0].interval(theta);
+        core::array::from_fn(|k| self.tables[k].between(i, theta, sin))
+    }
+}
+
 /// p(θ) = f(θ)/(2π sin θ) with f linear between the nodes (θ_a, f_a) and (θ_b, f_b): the
 /// phase function a tabulated model samples, between two of its nodes; at a pole (sin θ = 0),
 /// where f vanishes, its limit |f_b − f_a|/(2π h). `sin` = sin θ. Compressed tables evaluate
@@ -131,9 +166,11 @@ impl<F: Real> PhaseFunction<F> for Tabulated<'_, F> {
 
     fn pdf_cosine(&self, c: Cosine<F>) -> F {
         let (theta, sin) = angle(c);
-        let i = self.interval(theta);
-        let node = |k: usize| (self.theta[k], self.f[k]);
-        phase_between(node(i), node(i + 1), theta, sin)
+        self.between(self.interval(theta), theta, sin)
+    }
+
+    fn as_tabulated(&self) -> Option<Tabulated<'_, F>> {
+        Some(*self)
     }
 
     fn sample_cosine(&self, xi: F) -> Cosine<F> {
@@ -341,11 +378,46 @@ impl<F: Real> PhaseFunction<F> for TabulatedTable<F> {
     fn mean_cosine(&self) -> Option<F> {
         self.view().mean_cosine()
     }
+
+    fn as_tabulated(&self) -> Option<Tabulated<'_, F>> {
+        Some(self.view())
+    }
 }
 
 #[cfg(all(test, feature = "std"))]
 mod tests {
     use super::*;
+
+    /// Channels evaluated together give each table's own value, bit for bit, at every node,
+    /// between nodes and at both poles; tables on other angles are not taken together.
+    #[test]
+    fn channels_are_each_tables_own_value() {
+        let theta_deg: Vec<f64> = (0..721)
+            .map(|k| 180.0 * (k as f64 / 720.0).powi(3))
+            .collect();
+        let table = |a: f64| {
+            let phase: Vec<f64> = theta_deg.iter().map(|t| 1.0 / (a + t)).collect();
+            TabulatedTable::<f64>::from_phase(&theta_deg, &phase).unwrap()
+        };
+        let (r, g, b) = (table(0.5), table(1.0), table(3.0));
+        let views = [r.view(), g.view(), b.view()];
+        let together = TabulatedChannels::new(views).expect("the same angles");
+        let nodes = theta_deg.iter().map(|t| t.to_radians().cos());
+        let between = (0..20_000).map(|k| -1.0 + 2.0 * (k as f64 + 0.31) / 20_000.0);
+        for mu in nodes.chain(between).chain([1.0, -1.0, 0.0, -0.0]) {
+            let c = Cosine::from_mu(mu);
+            let got = together.pdf_cosine(c);
+            for (v, t) in got.iter().zip(&views) {
+                assert_eq!(v.to_bits(), t.pdf_cosine(c).to_bits(), "μ = {mu}");
+            }
+        }
+        let other: Vec<f64> = (0..721)
+            .map(|k| 180.0 * (k as f64 / 720.0).powi(2))
+            .collect();
+        let phase: Vec<f64> = other.iter().map(|t| 1.0 / (1.0 + t)).collect();
+        let moved = TabulatedTable::<f64>::from_phase(&other, &phase).unwrap();
+        assert!(TabulatedChannels::new([r.view(), moved.view()]).is_none());
+    }
 
     /// The guide in angle finds the node bisection finds, at every node, between nodes, at
     /// both poles, beyond them and at NaN, for tables with crowded forward peaks.

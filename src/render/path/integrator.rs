@@ -41,6 +41,7 @@ use crate::render::geometry::{dot, normalize, Vec3};
 use crate::render::light::Light;
 use crate::render::medium::Medium;
 use crate::render::surface::{self, Hit, Material, Surfaces};
+use nephele_runtime::phase::{Cosine, TabulatedChannels};
 use nephele_runtime::PhaseFunction;
 use rand::Rng;
 use std::f64::consts::PI;
@@ -61,6 +62,9 @@ pub struct Volume<'a> {
     pub albedo: f64,
     /// The phase function: one for all channels, or one per RGB channel.
     pub phases: &'a [&'a (dyn PhaseFunction<f64> + Sync)],
+    /// The three channels' tables evaluated together, when they are tables on the same angles
+    /// ([`channel_tables`]; None: each evaluated on its own, with the same values).
+    pub channels: Option<TabulatedChannels<'a, f64, 3>>,
     /// Unit vector toward the sun.
     pub sun_dir: Vec3,
     /// Sun irradiance on a surface facing it (W/m², or 1 for T = L/E⊥).
@@ -79,6 +83,18 @@ pub struct Volume<'a> {
 
 /// RGB.
 pub type Rgb = [f64; 3];
+
+/// The three channels' phase functions as [`TabulatedChannels`] when they are tables on the
+/// same angles (per-channel Mie): a cosine's angle is then found once for the three (the path
+/// tracer evaluates the channels at every collision, and the angle is most of the cost).
+pub fn channel_tables<'a>(
+    phases: &'a [&'a (dyn PhaseFunction<f64> + Sync)],
+) -> Option<TabulatedChannels<'a, f64, 3>> {
+    let [r, g, b] = phases else {
+        return None;
+    };
+    TabulatedChannels::new([r.as_tabulated()?, g.as_tabulated()?, b.as_tabulated()?])
+}
 
 /// One camera path's radiance, split by scattering order, and the camera ray's transmittance.
 #[derive(Clone, Copy, Debug, Default)]
@@ -413,6 +429,9 @@ impl Volume<'_> {
 
     /// p(cos) per channel (1/sr).
     fn eval(&self, cos: f64) -> Rgb {
+        if let Some(tables) = &self.channels {
+            return tables.pdf_cosine(Cosine::from_mu(cos));
+        }
         match self.phases {
             [p] => [p.eval(cos); 3],
             ps => std::array::from_fn(|k| ps[k].eval(cos)),

@@ -14,7 +14,7 @@ use super::scene::Scene;
 use super::surface::Surfaces;
 use crate::phase::Phase;
 use anyhow::Result;
-use integrator::{trace, Volume};
+use integrator::{channel_tables, trace, Volume};
 use nephele_runtime::PhaseFunction;
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
@@ -196,6 +196,7 @@ pub fn volume<'a>(
         medium,
         albedo: scene.albedo,
         phases,
+        channels: channel_tables(phases),
         sun_dir: scene.sun.direction,
         sun_irradiance: 1.0,
         sky: if has_sky { 1.0 } else { 0.0 },
