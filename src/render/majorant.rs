@@ -198,17 +198,11 @@ impl MajorantGrid {
 }
 
 /// The axis whose face the ray reaches first: the smallest t in f64's total order, the lowest
-/// axis on a tie (as `min_by(total_cmp)`), compared as integers without a branch.
+/// axis on a tie (as `min_by(total_cmp)`); total_cmp compares integers, without a branch.
 #[inline(always)]
 fn first_exit(t: &Vec3) -> usize {
-    // total_cmp's key: the bits, the magnitude's flipped for negative numbers.
-    let key = |x: f64| {
-        let b = x.to_bits() as i64;
-        b ^ (((b >> 63) as u64) >> 1) as i64
-    };
-    let [a, b, c] = t.map(key);
-    let (ab, ab_key) = if b < a { (1, b) } else { (0, a) };
-    if c < ab_key {
+    let ab = usize::from(t[1].total_cmp(&t[0]).is_lt());
+    if t[2].total_cmp(&t[ab]).is_lt() {
         2
     } else {
         ab

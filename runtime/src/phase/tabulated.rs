@@ -97,9 +97,7 @@ impl<'a, F: Real> Tabulated<'a, F> {
         }
         i
     }
-}
 
-impl<F: Real> Tabulated<'_, F> {
     /// p at angle θ (sin θ = `sin`) in interval i.
     #[inline]
     fn between(&self, i: usize, theta: F, sin: F) -> F {

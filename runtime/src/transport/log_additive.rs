@@ -434,16 +434,14 @@ pub fn stretched_u(d: f32, t: f32) -> f32 {
 
 /// d/t at stretched depth u in a slab of thickness t (mfp): (e^{βu} − 1)/(e^β − 1).
 pub fn depth_fraction<F: Real>(u: F, t: F) -> F {
-    let [f] = Stretch::of(t).fractions(false, [u]);
-    f
+    Stretch::of(t).fraction(false, u)
 }
 
 /// 1 − d/t at stretched depth u in a slab of thickness t (mfp), the distance to the far face
 /// over t: e^{βu} (e^{β(1−u)} − 1)/(e^β − 1), without the cancellation of 1 − [`depth_fraction`]
 /// near the far face (in f32 a depth 1 mfp from the face of a 100 mfp slab would carry 1e-5).
 pub fn far_fraction<F: Real>(u: F, t: F) -> F {
-    let [f] = Stretch::of(t).fractions(true, [u]);
-    f
+    Stretch::of(t).fraction(true, u)
 }
 
 /// The stretched-depth map of one slab: its thickness t (mfp) and β = `STRETCH_SCALE` ·
@@ -479,16 +477,9 @@ impl<F: Real> Stretch<F> {
     }
 
     /// The distance to the far face over t ([`far_fraction`], with `far`) or d/t
-    /// ([`depth_fraction`]) at each stretched depth of `us`, e^β − 1 computed once.
-    pub fn fractions<const N: usize>(&self, far: bool, us: [F; N]) -> [F; N] {
-        let em1 = self.exp_m1_beta();
-        us.map(|u| self.fraction(far, u, em1))
-    }
-
-    /// The distance (mfp) to the far face (`far`) or to the lit face from each stretched
-    /// depth of `us`: t × [`Self::fractions`].
-    pub fn to_face<const N: usize>(&self, far: bool, us: [F; N]) -> [F; N] {
-        self.fractions(far, us).map(|f| self.t * f)
+    /// ([`depth_fraction`]) at stretched depth `u`.
+    pub fn fraction(&self, far: bool, u: F) -> F {
+        self.fraction_with(far, u, self.exp_m1_beta())
     }
 
     /// e^β − 1 (unused below the β at which the map is linear).
@@ -500,9 +491,10 @@ impl<F: Real> Stretch<F> {
         }
     }
 
-    /// One of [`Self::fractions`], given `em1` = e^β − 1.
+    /// [`Self::fraction`] given `em1` = e^β − 1 (computed once by a caller that maps several
+    /// depths).
     #[inline]
-    fn fraction(&self, far: bool, u: F, em1: F) -> F {
+    fn fraction_with(&self, far: bool, u: F, em1: F) -> F {
         let one = F::of(1.0);
         if self.beta < F::of(1e-6) {
             if far {
@@ -520,8 +512,8 @@ impl<F: Real> Stretch<F> {
 
 /// A point's distances (mfp) to the faces of its slab, for the depth continuations of all its
 /// groups ([`depth_polynomial_in`]): e^β − 1 and the point's own distance to each face are
-/// computed at most once, however many groups continue toward that face; each value is the
-/// one [`Stretch::to_face`] gives.
+/// computed at most once, however many groups continue toward that face; each distance is t
+/// × [`Stretch::fraction`].
 pub(crate) struct FaceDistances<F> {
     stretch: Stretch<F>,
     /// The point's stretched depth.
@@ -547,7 +539,7 @@ impl<F: Real> FaceDistances<F> {
     pub(crate) fn to_face(&mut self, far: bool, a: F, b: F) -> [F; 3] {
         let s = self.stretch;
         let em1 = *self.em1.get_or_insert_with(|| s.exp_m1_beta());
-        let at = |u: F| s.t * s.fraction(far, u, em1);
+        let at = |u: F| s.t * s.fraction_with(far, u, em1);
         let own = *self.own[usize::from(far)].get_or_insert_with(|| at(self.u));
         [at(a), at(b), own]
     }
