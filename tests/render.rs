@@ -375,8 +375,9 @@ fn a_white_furnace_sees_the_sky_through_an_implicit_cloud() {
     });
 }
 
-/// The majorant grids bound σ_t from above and below everywhere (random points in the media's
-/// boxes); the implicit cloud's grid skips empty space and knows its homogeneous interior.
+/// The majorant grids (the march's and tracking's) bound σ_t from above and below everywhere
+/// (random points in the media's boxes); the implicit cloud's grid skips empty space and knows
+/// its homogeneous interior.
 #[test]
 fn majorant_grids_bound_the_extinction() {
     use nephele::render::medium::{Medium, Voxels};
@@ -390,8 +391,12 @@ fn majorant_grids_bound_the_extinction() {
         (&voxels, [-1.0, 0.0, 2.0], [1.6, 1.4, 3.8]),
         (&cloud, [-1.5, -1.2, -1.2], [1.5, 1.2, 1.2]),
     ];
-    for (medium, lo, hi) in media {
-        let Majorants::Grid(grid) = medium.majorants() else {
+    // Both the grid the march walks and the one delta and ratio tracking walk.
+    let grids = media.iter().flat_map(|&(medium, lo, hi)| {
+        [medium.majorants(), medium.tracking_majorants()].map(|m| (medium, m, lo, hi))
+    });
+    for (medium, majorants, lo, hi) in grids {
+        let Majorants::Grid(grid) = majorants else {
             panic!("heterogeneous media have majorant grids");
         };
         let mut slack = 0.0;

@@ -108,6 +108,38 @@ impl MajorantGrid {
         }
     }
 
+    /// The grid of blocks of `factor`³ cells (the last block along an axis may hold fewer),
+    /// each bounded by the loosest bounds of its cells: the same medium bounded on fewer,
+    /// larger cells (fewer cell faces along a ray, and a grid that stays in cache).
+    pub fn coarsened(&self, factor: usize) -> Self {
+        let factor = factor.max(1);
+        let n = self.n.map(|m| m.div_ceil(factor));
+        let mut values = vec![
+            Bounds {
+                min: f64::INFINITY,
+                max: 0.0,
+            };
+            n[0] * n[1] * n[2]
+        ];
+        for z in 0..self.n[2] {
+            for y in 0..self.n[1] {
+                for x in 0..self.n[0] {
+                    let fine = self.values[self.index([x, y, z])];
+                    let c = (z / factor * n[1] + y / factor) * n[0] + x / factor;
+                    values[c].min = values[c].min.min(fine.min);
+                    values[c].max = values[c].max.max(fine.max);
+                }
+            }
+        }
+        Self {
+            lo: self.lo,
+            cell: self.cell.map(|c| c * factor as f64),
+            n,
+            values,
+            to_world: self.to_world,
+        }
+    }
+
     /// The cells along each axis.
     pub fn cells(&self) -> [usize; 3] {
         self.n
@@ -251,5 +283,31 @@ mod tests {
             assert!((t - t1).abs() < 1e-9, "the walk stopped at {t} before {t1}");
             assert!(segments >= 2);
         }
+    }
+
+    /// Each block of the coarsened grid bounds every cell it holds, by the loosest of their
+    /// bounds, partial blocks at the ends included; blocks of one cell are the grid itself.
+    #[test]
+    fn coarsened_blocks_hold_their_cells_bounds() {
+        let g = MajorantGrid::build([0.0; 3], [7.0, 5.0, 3.0], [7, 5, 3], |lo, _| Bounds {
+            min: lo[0] + lo[1],
+            max: 1.0 + lo[0] * lo[1] + lo[2],
+        });
+        let same = g.coarsened(1);
+        assert_eq!((same.n, &same.values), (g.n, &g.values));
+        let c = g.coarsened(2);
+        assert_eq!(c.cells(), [4, 3, 2]);
+        for z in 0..3 {
+            for y in 0..5 {
+                for x in 0..7 {
+                    let p = [x as f64 + 0.5, y as f64 + 0.5, z as f64 + 0.5];
+                    let (fine, block) = (g.at(p), c.at(p));
+                    assert!(block.min <= fine.min && fine.max <= block.max);
+                }
+            }
+        }
+        // The block of cells x ∈ {2, 3}, y ∈ {0, 1}, z ∈ {2}: its loosest bounds.
+        let block = c.at([3.0, 1.0, 2.5]);
+        assert_eq!((block.min, block.max), (2.0, 1.0 + 3.0 + 2.0));
     }
 }

@@ -174,7 +174,7 @@ pub fn collide_before<R: Rng>(
     }
     let segment = (a, b.min(reach));
     let mut flight = Flight::new(rng);
-    m.majorants().walk(o, w, segment, |a, b, bounds| {
+    m.tracking_majorants().walk(o, w, segment, |a, b, bounds| {
         let mut t = a;
         while let Some(event) = flight.next(rng, t, b, bounds.max) {
             t = event;
@@ -234,7 +234,7 @@ pub fn transmittance_within<R: Rng>(
             };
         }
     };
-    m.majorants().walk(o, w, segment, |a, b, bounds| {
+    m.tracking_majorants().walk(o, w, segment, |a, b, bounds| {
         if bounds.homogeneous() {
             tr *= (-bounds.max * (b - a)).exp();
         } else {
