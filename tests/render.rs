@@ -346,8 +346,14 @@ fn a_white_furnace_sees_the_sky_through_a_voxel_grid() {
     });
 }
 
-/// A small implicit cloud: three overlapping ellipsoids with a noisy boundary layer (m).
+/// A small implicit cloud: three overlapping ellipsoids with a noisy boundary layer (m), of
+/// extinction 1.2 /m (optical radius ≈ 1).
 fn implicit_cloud() -> nephele::render::medium::Cloud {
+    implicit_cloud_of(1.2)
+}
+
+/// [`implicit_cloud`] of extinction `sigma_t` (1/m) at density 1.
+fn implicit_cloud_of(sigma_t: f64) -> nephele::render::medium::Cloud {
     use nephele::render::medium::{Cloud, Ellipsoid};
     let blob = |center, radii| Ellipsoid { center, radii };
     let blobs = vec![
@@ -355,7 +361,7 @@ fn implicit_cloud() -> nephele::render::medium::Cloud {
         blob([0.7, 0.2, 0.3], [0.5, 0.5, 0.5]),
         blob([-0.6, -0.1, 0.2], [0.4, 0.5, 0.4]),
     ];
-    Cloud::new(blobs, 0.15, (0.25, 3.0, 4), 1.2, 3)
+    Cloud::new(blobs, 0.15, (0.25, 3.0, 4), sigma_t, 3)
 }
 
 /// The white furnace through the implicit cloud: its majorant grid is empty outside the
@@ -380,7 +386,7 @@ fn a_white_furnace_sees_the_sky_through_an_implicit_cloud() {
 /// its homogeneous interior.
 #[test]
 fn majorant_grids_bound_the_extinction() {
-    use nephele::render::medium::{Medium, Voxels};
+    use nephele::render::medium::Voxels;
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(4);
     let data: Vec<f32> = (0..13 * 7 * 9)
         .map(|_| rng.random::<f32>().powi(4))
@@ -536,7 +542,7 @@ fn a_time_budget_gives_the_image_of_its_total_spp() {
 #[test]
 fn a_rotated_voxel_grid_is_the_re_indexed_grid() {
     use nephele::render::geometry::Affine;
-    use nephele::render::medium::{Medium, Voxels};
+    use nephele::render::medium::Voxels;
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(21);
     let (nx, ny, nz) = (5usize, 4usize, 3usize);
     let a: Vec<f32> = (0..nx * ny * nz).map(|_| rng.random::<f32>()).collect();
@@ -688,17 +694,8 @@ impl Medium for FineTracking {
 #[test]
 fn tracking_on_coarse_majorant_blocks_keeps_every_order_group() {
     use nephele::phase::{Phase, PhaseSpec};
-    use nephele::render::medium::{Cloud, Ellipsoid};
-    let blob = |center, radii| Ellipsoid { center, radii };
-    let blobs = || {
-        vec![
-            blob([0.0, 0.0, 0.0], [1.0, 0.8, 0.7]),
-            blob([0.7, 0.2, 0.3], [0.5, 0.5, 0.5]),
-            blob([-0.6, -0.1, 0.2], [0.4, 0.5, 0.4]),
-        ]
-    };
-    let coarse = Cloud::new(blobs(), 0.15, (0.25, 3.0, 4), 8.0, 3);
-    let fine = FineTracking(Cloud::new(blobs(), 0.15, (0.25, 3.0, 4), 8.0, 3));
+    let coarse = implicit_cloud_of(8.0);
+    let fine = FineTracking(implicit_cloud_of(8.0));
     assert!(!std::ptr::eq(
         match coarse.tracking_majorants() {
             Majorants::Grid(g) => g,
