@@ -114,30 +114,29 @@ impl MajorantGrid {
     pub fn coarsened(&self, factor: usize) -> Self {
         let factor = factor.max(1);
         let n = self.n.map(|m| m.div_ceil(factor));
-        let mut values = vec![
-            Bounds {
-                min: f64::INFINITY,
-                max: 0.0,
-            };
-            n[0] * n[1] * n[2]
-        ];
+        let empty = Bounds {
+            min: f64::INFINITY,
+            max: 0.0,
+        };
+        let mut blocks = Self {
+            lo: self.lo,
+            cell: self.cell.map(|c| c * factor as f64),
+            n,
+            values: vec![empty; n[0] * n[1] * n[2]],
+            to_world: self.to_world,
+        };
         for z in 0..self.n[2] {
             for y in 0..self.n[1] {
                 for x in 0..self.n[0] {
                     let fine = self.values[self.index([x, y, z])];
-                    let c = (z / factor * n[1] + y / factor) * n[0] + x / factor;
-                    values[c].min = values[c].min.min(fine.min);
-                    values[c].max = values[c].max.max(fine.max);
+                    let at = blocks.index([x, y, z].map(|i| i / factor));
+                    let block = &mut blocks.values[at];
+                    block.min = block.min.min(fine.min);
+                    block.max = block.max.max(fine.max);
                 }
             }
         }
-        Self {
-            lo: self.lo,
-            cell: self.cell.map(|c| c * factor as f64),
-            n,
-            values,
-            to_world: self.to_world,
-        }
+        blocks
     }
 
     /// The cells along each axis.
