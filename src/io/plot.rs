@@ -421,12 +421,55 @@ impl Tile {
     }
 }
 
+/// A colour bar under an [`image_grid`]: the colour at each of its pixels left to right, the
+/// quantity it shows, and tick labels at fractions of its width.
+pub struct ColourBar {
+    /// One RGB colour per pixel of the bar's width.
+    pub rgb: Vec<u8>,
+    /// What the colours stand for (printed on the left, as a row title).
+    pub label: String,
+    /// (position in [0, 1] along the bar, text).
+    pub ticks: Vec<(f64, String)>,
+}
+
+/// The width (pixels) of `text` as the figures draw their titles (DejaVu Sans, 15 px),
+/// estimated from above by the font's widest advance in each class of character: narrow
+/// 0.42 em (i, l, r, t, space, brackets, punctuation), other lower case 0.64 em, wide 1 em
+/// (m, w, M, W, %, …, + and the relations), the rest (capitals, digits) 0.8 em.
+pub fn text_width(text: &str) -> usize {
+    let em: f64 = text
+        .chars()
+        .map(|c| match c {
+            'f' | 'i' | 'j' | 'l' | 'r' | 't' | ' ' | '(' | ')' | '[' | ']' | '.' | ',' | ':'
+            | ';' | '-' | '\'' | '|' | '/' => 0.42,
+            'm' | 'w' | 'M' | 'W' | '%' | '…' | '+' | '=' | '<' | '>' | '≥' | '≤' => 1.0,
+            'a'..='z' => 0.64,
+            _ => 0.8,
+        })
+        .sum();
+    (em * 15.0).ceil() as usize
+}
+
 /// Images on a labelled grid (column titles on top, row titles on the left; a missing tile is
 /// left blank), written as a PNG at `path`.
 pub fn image_grid(
     path: &Path,
     columns: &[String],
     rows: &[(String, Vec<Option<Tile>>)],
+) -> Result<()> {
+    image_grid_with_bar(path, columns, rows, None)
+}
+
+/// Bar height, tick length and the room under the bar for its labels (pixels).
+const BAR: (usize, usize, usize) = (18, 5, 24);
+
+/// [`image_grid`] with a colour bar under the images, as wide as one tile (at most 480
+/// pixels), its ticks labelled below it.
+pub fn image_grid_with_bar(
+    path: &Path,
+    columns: &[String],
+    rows: &[(String, Vec<Option<Tile>>)],
+    bar: Option<&ColourBar>,
 ) -> Result<()> {
     register_font();
     let err = |e: &dyn std::fmt::Display| anyhow!("figure '{}': {e}", path.display());
@@ -441,7 +484,8 @@ pub fn image_grid(
         .len()
         .max(rows.iter().map(|r| r.1.len()).max().unwrap_or(0));
     let width = left + ncols * (tw + gap);
-    let height = top + rows.len() * (th + gap);
+    let grid_height = top + rows.len() * (th + gap);
+    let height = grid_height + bar.map_or(0, |_| 8 + BAR.0 + BAR.1 + BAR.2);
     let root = BitMapBackend::new(path, (width as u32, height as u32)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| err(&e))?;
     let style = ("sans-serif", 15).into_font().color(&BLACK);
@@ -470,6 +514,51 @@ pub fn image_grid(
             }
         }
     }
+    if let Some(bar) = bar {
+        draw_bar(&root, bar, (left, grid_height + 8), tw.min(480), &style).map_err(|e| err(&e))?;
+    }
     root.present().map_err(|e| err(&e))?;
+    Ok(())
+}
+
+/// `bar` drawn `w` pixels wide with its top-left corner at `at`, its label left of it at the
+/// grid's row-title margin, and its ticks below.
+fn draw_bar<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    bar: &ColourBar,
+    (x0, y0): (usize, usize),
+    w: usize,
+    style: &TextStyle,
+) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let n = bar.rgb.len() / 3;
+    if n == 0 {
+        return Ok(());
+    }
+    let (h, tick, _) = BAR;
+    root.draw(&Text::new(
+        bar.label.clone(),
+        (4, (y0 + h / 2) as i32 - 8),
+        style.clone(),
+    ))?;
+    for i in 0..w {
+        let k = (i * n / w.max(1)).min(n - 1);
+        let c = RGBColor(bar.rgb[3 * k], bar.rgb[3 * k + 1], bar.rgb[3 * k + 2]);
+        let x = (x0 + i) as i32;
+        root.draw(&PathElement::new(
+            [(x, y0 as i32), (x, (y0 + h - 1) as i32)],
+            c,
+        ))?;
+    }
+    for (at, text) in &bar.ticks {
+        let x = x0 as i32 + (at.clamp(0.0, 1.0) * (w.max(1) - 1) as f64).round() as i32;
+        let y = (y0 + h) as i32;
+        root.draw(&PathElement::new([(x, y), (x, y + tick as i32)], BLACK))?;
+        let (tw, _) = root.estimate_text_size(text, style)?;
+        root.draw(&Text::new(
+            text.clone(),
+            (x - tw as i32 / 2, y + tick as i32 + 4),
+            style.clone(),
+        ))?;
+    }
     Ok(())
 }

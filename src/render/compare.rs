@@ -18,7 +18,7 @@
 use super::image::GROUP_FIRST;
 use super::output::{exposure as auto_exposure, png_bytes, tone_map_with, CLOUD_OPACITY};
 use crate::io::npy::read_npy;
-use crate::io::plot::{image_grid, Tile};
+use crate::io::plot::{image_grid, image_grid_with_bar, text_width, ColourBar, Tile};
 use crate::io::AtomicFiles;
 use anyhow::{bail, ensure, Context, Result};
 use serde::Serialize;
@@ -586,19 +586,20 @@ fn method_name(meta: &serde_json::Value) -> String {
     }
 }
 
-/// The colour bar of [`error_image`], w × h pixels: −50 % on the left, +50 % on the right,
-/// black ticks at −50, −25, 0, +25 and +50 % along its bottom quarter.
-fn colour_bar(w: usize, h: usize) -> Vec<u8> {
+/// The colour bar of [`error_image`]: −50 % on the left, +50 % on the right, `w` pixels wide,
+/// with its ticks at −50, −25, 0, +25 and +50 %.
+fn colour_bar(w: usize) -> ColourBar {
     let error = |i: usize| (i as f64 + 0.5) / w as f64 - 0.5;
-    let c: Vec<f64> = (0..w * h).map(|k| 1.0 + error(k % w)).collect();
-    let mut rgb = error_image(&c, &vec![1.0; w * h], &vec![true; w * h]);
-    for t in 0..5 {
-        let x = (t * (w - 1) + 2) / 4;
-        for y in h - h.div_ceil(4)..h {
-            rgb[(y * w + x) * 3..(y * w + x) * 3 + 3].fill(0);
-        }
+    let c: Vec<f64> = (0..w).map(|i| 1.0 + error(i)).collect();
+    ColourBar {
+        rgb: error_image(&c, &vec![1.0; w], &vec![true; w]),
+        label: "(c − r)/⟨r⟩".into(),
+        ticks: ["−50 %", "−25 %", "0", "+25 %", "+50 %"]
+            .iter()
+            .enumerate()
+            .map(|(k, t)| (k as f64 / 4.0, t.to_string()))
+            .collect(),
     }
-    rgb
 }
 
 /// The signed relative error (c − r)/r̄ per pixel as false colour: blue −50 %, white 0, red
@@ -628,29 +629,11 @@ fn error_image(c: &[f64], r: &[f64], opaque: &[bool]) -> Vec<u8> {
     out
 }
 
-/// The width (pixels) of `text` as `image_grid` draws its titles (DejaVu Sans, 15 px),
-/// estimated from above by the font's widest advance in each class of character: narrow
-/// 0.42 em (i, l, r, t, space, brackets, punctuation), other lower case 0.64 em, wide 1 em
-/// (m, w, M, W, %, …, + and the relations), the rest (capitals, digits) 0.8 em.
-fn title_width(text: &str) -> usize {
-    let em: f64 = text
-        .chars()
-        .map(|c| match c {
-            'f' | 'i' | 'j' | 'l' | 'r' | 't' | ' ' | '(' | ')' | '[' | ']' | '.' | ',' | ':'
-            | ';' | '-' | '\'' | '|' | '/' => 0.42,
-            'm' | 'w' | 'M' | 'W' | '%' | '…' | '+' | '=' | '<' | '>' | '≥' | '≤' => 1.0,
-            'a'..='z' => 0.64,
-            _ => 0.8,
-        })
-        .sum();
-    (em * 15.0).ceil() as usize
-}
-
 /// The integer factor that tiles w pixels wide are enlarged by so that every one of `titles`
 /// fits over its column: `image_grid` draws them on one line at one size, 2 pixels into a
 /// column, and a 40-pixel column would print them over each other (at most 8×).
 fn tile_scale(titles: &[String], w: usize) -> usize {
-    let need = titles.iter().map(|t| title_width(t)).max().unwrap_or(0) + 2;
+    let need = titles.iter().map(|t| text_width(t)).max().unwrap_or(0) + 2;
     need.div_ceil(w.max(1)).clamp(1, 8)
 }
 
@@ -711,13 +694,14 @@ fn figures(
     }
     files.write_via_path(&out.join("panel.png"), |p| image_grid(p, &cols, &rows))?;
     let err_rows = error_rows(r.size, s, cands.len(), errors);
+    let bar = colour_bar(r.size.0 * s);
     files.write_via_path(&out.join("errors.png"), |p| {
-        image_grid(p, &cols[1..], &err_rows)
+        image_grid_with_bar(p, &cols[1..], &err_rows, Some(&bar))
     })
 }
 
-/// errors.png's rows: order 1 and orders ≥ 2 per candidate, then the colour bar (tiles of
-/// `size` enlarged `s` times).
+/// errors.png's rows: order 1 and orders ≥ 2 per candidate (tiles of `size` enlarged `s`
+/// times).
 fn error_rows(
     size: (usize, usize),
     s: usize,
@@ -736,10 +720,26 @@ fn error_rows(
             .collect();
         rows.push((format!("{}: (c−r)/⟨r⟩", name.replace(">=", "≥")), tiles));
     }
-    let bar = colour_bar(size.0 * s, size.1 * s);
-    rows.push((
-        "−50 % … 0 … +50 %".into(),
-        vec![Some(Tile::new(bar, size.0 * s, size.1 * s))],
-    ));
     rows
+}
+
+#[cfg(test)]
+mod tests {
+    use super::colour_bar;
+
+    /// The bar runs from pure blue (−50 %) through white (0) to pure red (+50 %), one colour
+    /// per pixel, its five ticks evenly spaced from end to end.
+    #[test]
+    fn the_colour_bar_spans_the_error_scale() {
+        let bar = colour_bar(200);
+        assert_eq!(bar.rgb.len(), 200 * 3);
+        let px = |i: usize| &bar.rgb[3 * i..3 * i + 3];
+        let (blue, red) = (px(0), px(199));
+        assert!(blue[0] <= 3 && blue[1] <= 3 && blue[2] == 255, "{blue:?}");
+        assert!(red[0] == 255 && red[1] <= 3 && red[2] <= 3, "{red:?}");
+        assert!(px(100).iter().all(|&c| c >= 250), "{:?}", px(100));
+        let at: Vec<f64> = bar.ticks.iter().map(|t| t.0).collect();
+        assert_eq!(at, [0.0, 0.25, 0.5, 0.75, 1.0]);
+        assert_eq!(bar.ticks[2].1, "0");
+    }
 }
