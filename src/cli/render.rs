@@ -101,6 +101,12 @@ pub struct FastArgs {
     /// docs/collector.md, "Frame cost").
     #[arg(long, default_value_t = 1, value_name = "N")]
     pub search_block: u32,
+    /// Collector, with --search-block N > 1: a block shares one search only where each of its
+    /// pixels is at least this opaque (the cloud's interior); the pixels of any other block
+    /// (silhouettes, thin matter, where orders ≥ 2 change from pixel to pixel) search alone.
+    /// 0: every block shares, as before 5 Dec 2026.
+    #[arg(long, default_value_t = 0.99, value_name = "ALPHA")]
+    pub search_block_opacity: f64,
     /// Collector: search on every ray of a pixel, not once per pixel (an ablation: n² times the
     /// searches).
     #[arg(long)]
@@ -216,6 +222,7 @@ impl FastArgs {
             rays: self.rays,
             pattern: self.ray_pattern,
             search_block: self.search_block,
+            search_block_opacity: self.search_block_opacity,
             search_every_ray: self.search_every_ray,
             no_sun_depth: self.no_sun_depth,
             search: SearchOptions {
@@ -292,8 +299,9 @@ const FAST_ONLY: [&str; 9] = [
     "rays",
     "ray_pattern",
 ];
-const COLLECTOR_ONLY: [&str; 14] = [
+const COLLECTOR_ONLY: [&str; 15] = [
     "search_block",
+    "search_block_opacity",
     "search_every_ray",
     "no_sun_depth",
     "iterations",

@@ -101,6 +101,10 @@ pub struct FastOptions {
     /// opaque ray of the block, each pixel weighing the found light by its own opacity (1:
     /// once per pixel).
     pub search_block: u32,
+    /// A block shares its search only where each of its pixels is at least this opaque (the
+    /// interior, as [`crate::render::regions`] names it); the pixels of other blocks search
+    /// alone (0: every block shares).
+    pub search_block_opacity: f64,
     /// The collector searches on every ray of a pixel, not once per pixel (an ablation).
     pub search_every_ray: bool,
     /// The collector search is not told p's depth to the sun (an ablation: the local slab
@@ -130,6 +134,7 @@ impl Default for FastOptions {
             rays: 2,
             pattern: RayPattern::Grid,
             search_block: 1,
+            search_block_opacity: 0.99,
             search_every_ray: false,
             no_sun_depth: false,
             search: SearchOptions::default(),
@@ -193,6 +198,10 @@ impl FastOptions {
             !(self.search_every_ray && self.pattern.corners()),
             "--search-every-ray searches on a pixel's own rays; the quincunx shares its corner \
              rays among pixels: use the grid or the rooks"
+        );
+        ensure!(
+            (0.0..=1.0).contains(&self.search_block_opacity),
+            "--search-block-opacity must be in [0, 1]"
         );
         ensure!(
             self.search_block == 1 || !self.search_every_ray,
@@ -530,29 +539,24 @@ impl Frame<'_> {
                 (bj..(bj + b).min(rows))
                     .flat_map(move |j| (bi..(bi + b).min(w)).map(move |i| j * w + i))
             };
-            let mut densest: Option<Densest> = None;
-            for k in block() {
-                if let Some(d) = pixels[k].1 {
-                    if densest.as_ref().is_none_or(|best| d.alpha > best.alpha) {
-                        densest = Some(d);
-                    }
+            // A block with a pixel less opaque than the threshold (a silhouette, thin matter)
+            // searches pixel by pixel: there orders ≥ 2 change from pixel to pixel.
+            let alone = b > 1
+                && block().any(|k| {
+                    pixels[k].1.is_some()
+                        && 1.0 - pixels[k].0.transmittance < self.opts.search_block_opacity
+                });
+            if alone {
+                for k in block() {
+                    self.search_for(
+                        std::iter::once(k),
+                        &mut pixels,
+                        &mut shared,
+                        &mut sums.stats,
+                    );
                 }
-            }
-            let Some(d) = densest else {
-                continue;
-            };
-            let found = match d.corner {
-                Some(c) => *shared
-                    .entry(c)
-                    .or_insert_with(|| self.search(&d.viewpoint, &mut sums.stats)),
-                None => self.search(&d.viewpoint, &mut sums.stats),
-            };
-            for k in block() {
-                let (px, own) = &mut pixels[k];
-                if own.is_some() {
-                    let alpha = 1.0 - px.transmittance;
-                    self.apply(px, alpha, &found);
-                }
+            } else {
+                self.search_for(block(), &mut pixels, &mut shared, &mut sums.stats);
             }
         }
         let (sun, sky) = (self.scene.sun.irradiance, self.scene.sky);
@@ -571,6 +575,42 @@ impl Frame<'_> {
                     total += v;
                 }
                 images.beauty[k * 3 + c] = total as f32;
+            }
+        }
+    }
+
+    /// One collector search for the pixels `members` (indices into `pixels`), at their most
+    /// opaque ray, each of them weighing the light found by its own opacity; a corner ray's
+    /// search is kept in `shared` for every block that chooses it.
+    fn search_for(
+        &self,
+        members: impl Iterator<Item = usize> + Clone,
+        pixels: &mut [(Pixel, Option<Densest>)],
+        shared: &mut HashMap<usize, Searched>,
+        stats: &mut [GroupStats],
+    ) {
+        let mut densest: Option<Densest> = None;
+        for k in members.clone() {
+            if let Some(d) = pixels[k].1 {
+                if densest.as_ref().is_none_or(|best| d.alpha > best.alpha) {
+                    densest = Some(d);
+                }
+            }
+        }
+        let Some(d) = densest else {
+            return;
+        };
+        let found = match d.corner {
+            Some(c) => *shared
+                .entry(c)
+                .or_insert_with(|| self.search(&d.viewpoint, stats)),
+            None => self.search(&d.viewpoint, stats),
+        };
+        for k in members {
+            let (px, own) = &mut pixels[k];
+            if own.is_some() {
+                let alpha = 1.0 - px.transmittance;
+                self.apply(px, alpha, &found);
             }
         }
     }
