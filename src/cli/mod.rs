@@ -21,7 +21,7 @@ use std::process::ExitCode;
 
 /// nephele — light scattering by water droplets, from Mie theory to renderer-ready tables.
 ///
-/// Without a subcommand, `nephele` runs the main job on built-in configs (~3 min on 2 cores, 158 s measured):
+/// Without a subcommand, `nephele` runs the main job on built-in configs (~2 min on 2 cores, 113 s measured on 5 Dec 2026):
 /// Mie tables and phase-model fits (→ outputs/mie, outputs/fit), quick slab tables of 10 µm
 /// droplets (→ outputs/slab-quick), their compression (→ outputs/transport/quick), the
 /// path-traced default cloud (→ outputs/render/cloud) and the same cloud by the collector

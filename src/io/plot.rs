@@ -549,14 +549,41 @@ fn draw_bar<DB: DrawingBackend>(
             c,
         ))?;
     }
+    // Each label centred under its tick, kept inside the figure; on a narrow bar the inner
+    // labels that would touch a kept one are left out (the ends first).
+    let y = (y0 + h) as i32;
+    let right_edge = root.dim_in_pixel().0 as i32;
+    let mut labels = Vec::with_capacity(bar.ticks.len());
     for (at, text) in &bar.ticks {
         let x = x0 as i32 + (at.clamp(0.0, 1.0) * (w.max(1) - 1) as f64).round() as i32;
-        let y = (y0 + h) as i32;
         root.draw(&PathElement::new([(x, y), (x, y + tick as i32)], BLACK))?;
-        let (tw, _) = root.estimate_text_size(text, style)?;
+        let tw = root.estimate_text_size(text, style)?.0 as i32;
+        let left = (x - tw / 2).clamp(0, (right_edge - tw).max(0));
+        labels.push((left, left + tw, text));
+    }
+    let n = labels.len();
+    let mut kept: Vec<usize> = Vec::with_capacity(n);
+    // The ends first, then the middle, then the rest.
+    let mut order: Vec<usize> = vec![0, n.saturating_sub(1), n / 2];
+    order.extend(1..n.saturating_sub(1));
+    order.dedup();
+    for i in order.into_iter().filter(|&i| i < n) {
+        if kept.contains(&i) {
+            continue;
+        }
+        let (l, r, _) = labels[i];
+        if kept
+            .iter()
+            .all(|&k| r + 6 <= labels[k].0 || labels[k].1 + 6 <= l)
+        {
+            kept.push(i);
+        }
+    }
+    for i in kept {
+        let (left, _, text) = labels[i];
         root.draw(&Text::new(
             text.clone(),
-            (x - tw as i32 / 2, y + tick as i32 + 4),
+            (left, y + tick as i32 + 4),
             style.clone(),
         ))?;
     }
