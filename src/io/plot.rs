@@ -521,7 +521,7 @@ pub fn image_grid_with_bar(
     Ok(())
 }
 
-/// `bar` drawn `w` pixels wide with its top-left corner at `at`, its label left of it at the
+/// `bar` drawn `w` pixels wide with its top-left corner at (x0, y0), its label left of it at the
 /// grid's row-title margin, and its ticks below.
 fn draw_bar<DB: DrawingBackend>(
     root: &DrawingArea<DB, plotters::coord::Shift>,
@@ -550,7 +550,7 @@ fn draw_bar<DB: DrawingBackend>(
         ))?;
     }
     // Each label centred under its tick, kept inside the figure; on a narrow bar the inner
-    // labels that would touch a kept one are left out (the ends first).
+    // labels that would touch a kept one are left out (the ends first, then the middle).
     let y = (y0 + h) as i32;
     let right_edge = root.dim_in_pixel().0 as i32;
     let mut labels = Vec::with_capacity(bar.ticks.len());

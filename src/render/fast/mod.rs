@@ -519,8 +519,9 @@ impl Frame<'_> {
     /// The rows from `j0` on that `images` hold (whole blocks of `search_block` rows): every
     /// pixel's rays marched, then one collector search per block of pixels, at the block's
     /// most opaque ray, each pixel weighing what it found by its own opacity (a corner ray's
-    /// search is shared by the blocks that choose it); the searches and the light added into
-    /// `sums`.
+    /// search is shared by the blocks that choose it) — or, in a block that holds a pixel
+    /// less opaque than `search_block_opacity`, one search per pixel; the searches and the
+    /// light added into `sums`.
     fn band(&self, cam: &Pinhole, j0: usize, images: BandImages, sums: &mut BandSums) {
         let w = cam.width;
         let rows = images.transmittance.len() / w;
