@@ -564,18 +564,15 @@ fn draw_bar<DB: DrawingBackend>(
     let n = labels.len();
     let mut kept: Vec<usize> = Vec::with_capacity(n);
     // The ends first, then the middle, then the rest.
-    let mut order: Vec<usize> = vec![0, n.saturating_sub(1), n / 2];
-    order.extend(1..n.saturating_sub(1));
-    order.dedup();
-    for i in order.into_iter().filter(|&i| i < n) {
-        if kept.contains(&i) {
-            continue;
-        }
+    let order = [0, n.saturating_sub(1), n / 2]
+        .into_iter()
+        .chain(1..n.saturating_sub(1));
+    for i in order.filter(|&i| i < n) {
         let (l, r, _) = labels[i];
-        if kept
+        let clear = kept
             .iter()
-            .all(|&k| r + 6 <= labels[k].0 || labels[k].1 + 6 <= l)
-        {
+            .all(|&k| r + 6 <= labels[k].0 || labels[k].1 + 6 <= l);
+        if !kept.contains(&i) && clear {
             kept.push(i);
         }
     }

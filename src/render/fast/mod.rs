@@ -134,7 +134,7 @@ impl Default for FastOptions {
             rays: 2,
             pattern: RayPattern::Grid,
             search_block: 1,
-            search_block_opacity: 0.99,
+            search_block_opacity: crate::render::regions::OPAQUE,
             search_every_ray: false,
             no_sun_depth: false,
             search: SearchOptions::default(),
