@@ -84,15 +84,21 @@ typedef struct NepheleTransport {
 } NepheleTransport;
 
 /**
- * The search's settings (`nephele_search_options_default` gives the runtime's): most table
- * reads, the tolerance ε (converged when the collector moves less than ε σ across the light
- * and σ changes by less than ε σ), the step clamp and the filtering at σ (1 on, 0 off).
+ * The search's settings (`nephele_search_options_default` gives the runtime's default,
+ * `nephele_search_options_for_tables` the one for a set of tables): most table reads, the
+ * tolerance ε (converged when the collector moves less than ε σ across the light and σ
+ * changes by less than ε σ), the step clamp and the filtering at σ (1 on, 0 off), and
+ * whether each group reads p's depth to the sun averaged across the light over its walks'
+ * spread (`sun_spread` 1, for a phase function of mean cosine `mean_cosine` in (−1, 1); 0:
+ * p's own depth for every group).
  */
 typedef struct NepheleSearchOptions {
   uint32_t max_reads;
   float tolerance;
   int32_t step_clamp;
   int32_t filter;
+  int32_t sun_spread;
+  float mean_cosine;
 } NepheleSearchOptions;
 
 /**
@@ -152,6 +158,12 @@ typedef struct NepheleLitSurface {
    * finite-cloud correction; null: the surface knows no edge (an unbounded slab).
    */
   int32_t (*lateral)(void *user, const float *at, float sigma, struct NepheleLateral *out);
+  /**
+   * The sun's optical depth (mean free paths) to `at` through the cloud as it is, into
+   * `*out` (1; 0 where unknown), which the search averages across the light over each
+   * group's spread (`NepheleSearchOptions::sun_spread`); null: unknown everywhere.
+   */
+  int32_t (*sun_depth)(void *user, const float *at, float *out);
   /**
    * σ₀ (m, > 0): the scale of the first filtering, the cloud's size.
    */
@@ -478,6 +490,16 @@ enum NepheleStatus nephele_phase_sample(const struct NephelePhase *phase, float 
  * `out` is valid for writes (or null).
  */
 enum NepheleStatus nephele_search_options_default(struct NepheleSearchOptions *out);
+
+/**
+ * The search settings for `tables` into `*out`: the runtime's default with each group's
+ * sun depth spread by the tables' phase function.
+ *
+ * # Safety
+ * `tables` is a valid handle (or null); `out` is valid for writes (or null).
+ */
+enum NepheleStatus nephele_search_options_for_tables(const struct NepheleTables *tables,
+                                                     struct NepheleSearchOptions *out);
 
 /**
  * The collector of `group` seen from `*viewpoint`, the sun toward `sun` (unit, 3 floats), on

@@ -64,6 +64,11 @@ pub struct NepheleLitSurface {
             out: *mut NepheleLateral,
         ) -> i32,
     >,
+    /// The sun's optical depth (mean free paths) to `at` through the cloud as it is, into
+    /// `*out` (1; 0 where unknown), which the search averages across the light over each
+    /// group's spread (`NepheleSearchOptions::sun_spread`); null: unknown everywhere.
+    pub sun_depth:
+        Option<unsafe extern "C" fn(user: *mut c_void, at: *const f32, out: *mut f32) -> i32>,
     /// σ₀ (m, > 0): the scale of the first filtering, the cloud's size.
     pub initial_scale: f32,
 }
@@ -82,9 +87,13 @@ pub struct NepheleViewpoint {
     pub sun_depth: f32,
 }
 
-/// The search's settings (`nephele_search_options_default` gives the runtime's): most table
-/// reads, the tolerance ε (converged when the collector moves less than ε σ across the light
-/// and σ changes by less than ε σ), the step clamp and the filtering at σ (1 on, 0 off).
+/// The search's settings (`nephele_search_options_default` gives the runtime's default,
+/// `nephele_search_options_for_tables` the one for a set of tables): most table reads, the
+/// tolerance ε (converged when the collector moves less than ε σ across the light and σ
+/// changes by less than ε σ), the step clamp and the filtering at σ (1 on, 0 off), and
+/// whether each group reads p's depth to the sun averaged across the light over its walks'
+/// spread (`sun_spread` 1, for a phase function of mean cosine `mean_cosine` in (−1, 1); 0:
+/// p's own depth for every group).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct NepheleSearchOptions {
@@ -92,6 +101,21 @@ pub struct NepheleSearchOptions {
     pub tolerance: f32,
     pub step_clamp: i32,
     pub filter: i32,
+    pub sun_spread: i32,
+    pub mean_cosine: f32,
+}
+
+impl NepheleSearchOptions {
+    fn of(d: &SearchOptions) -> Self {
+        Self {
+            max_reads: d.max_reads,
+            tolerance: d.tolerance,
+            step_clamp: i32::from(d.step_clamp),
+            filter: i32::from(d.filter),
+            sun_spread: i32::from(d.sun_spread.is_some()),
+            mean_cosine: d.sun_spread.unwrap_or(0.0),
+        }
+    }
 }
 
 /// Which finite-cloud corrections apply and the medium's constants
@@ -178,6 +202,14 @@ impl LitSurface for CSurface {
             edge_distance: out.edge_distance,
         })
     }
+
+    fn sun_depth(&self, at: [f32; 3]) -> Option<f32> {
+        let f = self.0.sun_depth?;
+        let mut out = 0.0f32;
+        // SAFETY: as `filtered`.
+        let known = unsafe { f(self.0.user, at.as_ptr(), &mut out) };
+        (known != 0).then_some(out)
+    }
 }
 
 /// The runtime's search, checked: a `filtered` callback, σ₀ > 0, p finite, a unit view and a
@@ -206,10 +238,11 @@ fn search_inputs(
         || !(opts.tolerance >= 0.0)
         || !(v.behind_min >= 0.0)
         || !(v.sun_depth >= 0.0)
+        || (opts.sun_spread != 0 && !(opts.mean_cosine.abs() < 1.0))
     {
         return bad(
-            "options.max_reads ≥ 1, options.tolerance ≥ 0, viewpoint.behind_min ≥ 0, \
-             viewpoint.sun_depth ≥ 0",
+            "options.max_reads ≥ 1, options.tolerance ≥ 0, options.mean_cosine in (−1, 1) \
+             with options.sun_spread, viewpoint.behind_min ≥ 0, viewpoint.sun_depth ≥ 0",
         );
     }
     Ok((
@@ -226,6 +259,7 @@ fn search_inputs(
             tolerance: opts.tolerance,
             step_clamp: opts.step_clamp != 0,
             filter: opts.filter != 0,
+            sun_spread: (opts.sun_spread != 0).then_some(opts.mean_cosine),
         },
     ))
 }
@@ -262,17 +296,28 @@ pub unsafe extern "C" fn nephele_search_options_default(
 ) -> NepheleStatus {
     guarded(|| match unsafe { get_mut(out, "out") } {
         Ok(o) => {
-            let d = SearchOptions::default();
-            *o = NepheleSearchOptions {
-                max_reads: d.max_reads,
-                tolerance: d.tolerance,
-                step_clamp: i32::from(d.step_clamp),
-                filter: i32::from(d.filter),
-            };
+            *o = NepheleSearchOptions::of(&SearchOptions::default());
             NepheleStatus::Ok
         }
         Err(s) => s,
     })
+}
+
+/// The search settings for `tables` into `*out`: the runtime's default with each group's
+/// sun depth spread by the tables' phase function.
+///
+/// # Safety
+/// `tables` is a valid handle (or null); `out` is valid for writes (or null).
+#[no_mangle]
+pub unsafe extern "C" fn nephele_search_options_for_tables(
+    tables: *const NepheleTables,
+    out: *mut NepheleSearchOptions,
+) -> NepheleStatus {
+    unsafe {
+        crate::from_tables(tables, out, |t| {
+            NepheleSearchOptions::of(&SearchOptions::for_tables(t))
+        })
+    }
 }
 
 /// The collector of `group` seen from `*viewpoint`, the sun toward `sun` (unit, 3 floats), on
@@ -360,24 +405,20 @@ pub unsafe extern "C" fn nephele_finite_cloud_for_tables(
     tables: *const NepheleTables,
     out: *mut NepheleFiniteCloud,
 ) -> NepheleStatus {
-    guarded(
-        || match unsafe { (get(tables, "tables"), get_mut(out, "out")) } {
-            (Ok(t), Ok(o)) => {
-                let f = FiniteCloud::for_tables(t.tables());
-                *o = NepheleFiniteCloud {
-                    leakage: i32::from(f.leakage),
-                    coverage: i32::from(f.coverage),
-                    rate_scale: f.rate_scale,
-                    delay_scale: f.delay_scale,
-                    spread: i32::from(f.spread),
-                    absorption: f.absorption,
-                    mean_cosine: f.mean_cosine,
-                };
-                NepheleStatus::Ok
+    unsafe {
+        crate::from_tables(tables, out, |t| {
+            let f = FiniteCloud::for_tables(t);
+            NepheleFiniteCloud {
+                leakage: i32::from(f.leakage),
+                coverage: i32::from(f.coverage),
+                rate_scale: f.rate_scale,
+                delay_scale: f.delay_scale,
+                spread: i32::from(f.spread),
+                absorption: f.absorption,
+                mean_cosine: f.mean_cosine,
             }
-            (Err(s), _) | (_, Err(s)) => s,
-        },
-    )
+        })
+    }
 }
 
 /// The share of `group`'s T the cloud keeps at the collector `*found` (from

@@ -258,10 +258,22 @@ pub unsafe extern "C" fn nephele_tables_groups(
     tables: *const NepheleTables,
     out: *mut usize,
 ) -> NepheleStatus {
+    unsafe { from_tables(tables, out, |t| t.groups()) }
+}
+
+/// `*out = f(the tables)`, the handle and `out` checked (null: their status), panics caught.
+///
+/// # Safety
+/// As the entry points': the pointers are valid (or null).
+unsafe fn from_tables<T>(
+    tables: *const NepheleTables,
+    out: *mut T,
+    f: impl FnOnce(&TransportTables) -> T,
+) -> NepheleStatus {
     guarded(
         || match unsafe { (get(tables, "tables"), get_mut(out, "out")) } {
             (Ok(t), Ok(o)) => {
-                *o = t.tables().groups();
+                *o = f(t.tables());
                 NepheleStatus::Ok
             }
             (Err(s), _) | (_, Err(s)) => s,

@@ -275,6 +275,12 @@ impl LitSurface for Sphere {
             edge_distance: self.radius - rho2.max(0.0).sqrt(),
         })
     }
+
+    fn sun_depth(&self, at: [f32; 3]) -> Option<f32> {
+        let (disc, b) = self.line_disc(at);
+        let d = if disc > 0.0 { disc.sqrt() - b } else { 0.0 };
+        Some(self.kappa * d.max(0.0))
+    }
 }
 
 /// The C example's viewpoint `i`.
@@ -324,7 +330,7 @@ fn the_collectors_are_the_runtimes(lines: &[&str], tab: &TransportTables) {
             &sphere,
             &viewpoint(i),
             SUN,
-            &SearchOptions::default(),
+            &SearchOptions::for_tables(tab),
             &mut all,
         );
         for (g, c) in all.iter().enumerate() {

@@ -69,6 +69,16 @@ unsafe extern "C" fn sphere(
     1
 }
 
+/// The same sphere's optical depth to the sun: known (1) where the light line crosses it.
+unsafe extern "C" fn sphere_sun_depth(_user: *mut c_void, at: *const f32, out: *mut f32) -> i32 {
+    let at = unsafe { std::slice::from_raw_parts(at, 3) };
+    let sun = [0.0f32, 0.6, 0.8];
+    let b: f32 = at.iter().zip(sun).map(|(a, s)| a * s).sum();
+    let disc = b * b - (at.iter().map(|a| a * a).sum::<f32>() - 1e4);
+    unsafe { *out = 0.05 * (disc.max(0.0).sqrt() - b).max(0.0) };
+    1
+}
+
 proptest! {
     // A fixed seed: CI runs the same 2 000 cases per property every time (set PROPTEST_CASES
     // or change the seed to explore further).
@@ -199,6 +209,7 @@ proptest! {
         scale in any_f32(),
         reads in 0u32..20,
         group in 0usize..10,
+        sun_depth in prop_oneof![Just(f32::INFINITY), 0.0f32..100.0, any_f32()],
     ) {
         let t = tables().0;
         let unit = |v: [f32; 3]| {
@@ -209,11 +220,12 @@ proptest! {
             user: std::ptr::null_mut(),
             filtered: Some(sphere),
             lateral: None,
+            sun_depth: Some(sphere_sun_depth),
             initial_scale: scale,
         };
-        let v = NepheleViewpoint { position, view: unit(view), behind_min: 0.0, behind_max: f32::INFINITY, sun_depth: f32::INFINITY };
+        let v = NepheleViewpoint { position, view: unit(view), behind_min: 0.0, behind_max: f32::INFINITY, sun_depth };
         let mut opts = NepheleSearchOptions::default();
-        unsafe { nephele_search_options_default(&mut opts) };
+        unsafe { nephele_search_options_for_tables(t, &mut opts) };
         opts.max_reads = reads;
         let sun = unit(sun);
         let mut out = NepheleCollector::default();

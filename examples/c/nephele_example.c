@@ -102,6 +102,16 @@ static int32_t sphere_lateral(void *user, const float *at, float sigma, NepheleL
     return 1;
 }
 
+/* The sphere's optical depth to the sun: from at to where the light line enters it. */
+static int32_t sphere_sun_depth(void *user, const float *at, float *out) {
+    const Sphere *s = user;
+    float b = 0;
+    float disc = line_disc(s, at, &b);
+    float d = disc > 0.0f ? sqrtf(disc) - b : 0.0f;
+    *out = s->kappa * (d > 0.0f ? d : 0.0f);
+    return 1;
+}
+
 /* The viewpoints of the collector search: four points inside the sphere, four views; the last
    four know the view ray's medium beyond p (1 to 2 mean free paths) and p's depth to the sun
    (1 mean free path). */
@@ -182,11 +192,12 @@ int main(int argc, char **argv) {
 
     /* The collector search of every group on the sphere, and what the finite cloud keeps. */
     Sphere sphere = {500.0f, 0.05f};
-    NepheleLitSurface surface = {&sphere, sphere_filtered, sphere_lateral, sphere.radius};
+    NepheleLitSurface surface = {&sphere, sphere_filtered, sphere_lateral, sphere_sun_depth,
+                                 sphere.radius};
     NepheleSearchOptions options;
     NepheleFiniteCloud finite;
     NepheleCollector found[NEPHELE_MAX_GROUPS];
-    if (check(nephele_search_options_default(&options), "options") ||
+    if (check(nephele_search_options_for_tables(tables, &options), "options") ||
         check(nephele_finite_cloud_for_tables(tables, &finite), "finite"))
         return 1;
     for (int i = 0; i < 16; i++) {

@@ -115,6 +115,11 @@ pub struct FastArgs {
     /// slab is not cut to it; docs/collector.md, "Shadowed faces and silhouettes").
     #[arg(long)]
     pub no_sun_depth: bool,
+    /// Collector: each group reads p's own depth to the sun, not that depth averaged across the
+    /// light over the spread of the group's walks (an ablation; docs/collector.md, "The sun's
+    /// depth, spread across the light").
+    #[arg(long)]
+    pub no_sun_spread: bool,
     /// Collector search: most table reads per group.
     #[arg(long, default_value_t = 8, value_name = "N")]
     pub iterations: u32,
@@ -225,11 +230,13 @@ impl FastArgs {
             search_block_opacity: self.search_block_opacity,
             search_every_ray: self.search_every_ray,
             no_sun_depth: self.no_sun_depth,
+            no_sun_spread: self.no_sun_spread,
             search: SearchOptions {
                 max_reads: self.iterations,
                 tolerance: self.tolerance,
                 step_clamp: !self.no_step_clamp,
                 filter: !self.no_filter,
+                sun_spread: None,
             },
             octaves,
             allow_mismatch: self.allow_table_mismatch,
@@ -299,11 +306,12 @@ const FAST_ONLY: [&str; 9] = [
     "rays",
     "ray_pattern",
 ];
-const COLLECTOR_ONLY: [&str; 15] = [
+const COLLECTOR_ONLY: [&str; 16] = [
     "search_block",
     "search_block_opacity",
     "search_every_ray",
     "no_sun_depth",
+    "no_sun_spread",
     "iterations",
     "tolerance",
     "no_step_clamp",

@@ -92,10 +92,11 @@ pub fn tables(group: u32, binding: u32) -> String {
 
 /// The collector search and the finite-cloud correction in WGSL (`find_collector(g, viewpoint,
 /// sun, options) -> NepheleCollector`, `finite_cloud(g, collector, finite) -> Kept`), for
-/// after [`tables`]. The renderer supplies its lit surface as three functions of its module:
+/// after [`tables`]. The renderer supplies its lit surface as four functions of its module:
 /// `nephele_surface_filtered(at: vec3<f32>, sigma: f32) -> LitSample`,
-/// `nephele_surface_lateral(at: vec3<f32>, sigma: f32) -> LateralSample` and
-/// `nephele_surface_initial_scale() -> f32` (search.wgsl has the structs).
+/// `nephele_surface_lateral(at: vec3<f32>, sigma: f32) -> LateralSample`,
+/// `nephele_surface_initial_scale() -> f32` and `nephele_surface_sun_depth(at: vec3<f32>) -> f32`
+/// (the sun's optical depth, negative where unknown; search.wgsl has the structs).
 pub const SEARCH: &str = concat!(include_str!("search.wgsl"), include_str!("finite.wgsl"));
 
 /// Words of the index uniform ([`NttGpu::index`]).

@@ -9,14 +9,16 @@
 //           the move across the light clamped to σ_i from step 2 on;
 //   stop when the move across the light and the change of σ are both ≤ ε σ_i, or after N reads.
 //
-// The renderer supplies its lit surface (its light-space maps) as three functions of this
+// The renderer supplies its lit surface (its light-space maps) as four functions of this
 // module, which the port calls:
 //
 //   fn nephele_surface_filtered(at: vec3<f32>, sigma: f32) -> LitSample
 //   fn nephele_surface_lateral(at: vec3<f32>, sigma: f32) -> LateralSample
 //   fn nephele_surface_initial_scale() -> f32
+//   fn nephele_surface_sun_depth(at: vec3<f32>) -> f32
 //
-// (positions in metres, world; `hit` 0 where no cloud covers the light line through `at`).
+// (positions in metres, world; `hit` 0 where no cloud covers the light line through `at`;
+// the sun's optical depth to `at` in mfp, negative where unknown).
 // They are called in non-uniform control flow: sample textures with `textureSampleLevel`
 // (the level of σ), not `textureSample`.
 // Needs ntt.wgsl, order1.wgsl, transport.wgsl and collector.wgsl before it.
@@ -51,12 +53,16 @@ struct Viewpoint {
     sun_depth: f32,
 }
 
-// Most reads N, tolerance ε, the step clamp and the filtering at σ (1 on).
+// Most reads N, tolerance ε, the step clamp and the filtering at σ (1 on), and each group's
+// sun depth averaged across the light over its walks' spread (1 on, for a phase function of
+// mean cosine `mean_cosine`).
 struct SearchOptions {
     max_reads: u32,
     tolerance: f32,
     step_clamp: u32,
     filtering: u32,
+    sun_spread: u32,
+    mean_cosine: f32,
 }
 
 // One group's search (the runtime's `Collector`): `found` 0 where none; T, c, σ (mfp) of the
@@ -119,6 +125,67 @@ fn ns_perpendicular(n: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
 }
 
+// The second basis vector of Duff et al. 2017, with `ns_perpendicular` ⊥ n.
+fn ns_perpendicular2(n: vec3<f32>) -> vec3<f32> {
+    let sign = select(1.0, -1.0, n.z < 0.0);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    return vec3<f32>(b, sign + n.y * n.y * a, -n.y);
+}
+
+// The lateral spread (mfp) of group g's light for mean cosine `mean_cosine`: √(4 D n⊥(n̄)), n̄
+// the group's middle order, twice the first for the open last group (the runtime's
+// `sun_depth::group_spread`).
+fn ns_group_spread(g: u32, mean_cosine: f32) -> f32 {
+    let x = nephele_ntt_index;
+    var first = 2.0;
+    if g < x.groups {
+        first = ntt_f32(x.group_first + g);
+    }
+    var middle = 2.0 * first;
+    if g + 1u < x.groups {
+        middle = 0.5 * (first + (ntt_f32(x.group_first + g + 1u) - 1.0));
+    }
+    let across = nf_lateral_orders(middle, mean_cosine);
+    return sqrt(max(4.0 * nf_diffusion(mean_cosine) * across, 0.0));
+}
+
+// The viewpoint group g's search reads: p's depth to the sun averaged over p and four points
+// at the group's spread across the light (the cloud's extinction `extinction`, 1/m), where
+// the options ask for it and every depth is known; `v` as it is otherwise (the runtime's
+// `sun_depth::group_viewpoint`).
+fn ns_group_viewpoint(g: u32, v: Viewpoint, sun: vec3<f32>, extinction: f32,
+        opts: SearchOptions) -> Viewpoint {
+    if opts.sun_spread == 0u || !(extinction > 0.0) {
+        return v;
+    }
+    let radius = ns_group_spread(g, opts.mean_cosine) / extinction;
+    if !(v.sun_depth < NEPHELE_F32_MAX) || !(radius > 0.0) {
+        return v;
+    }
+    let e1 = ns_perpendicular(sun);
+    let e2 = ns_perpendicular2(sun);
+    var sum = v.sun_depth;
+    for (var k = 0u; k < 4u; k++) {
+        let e = select(e1, e2, k >= 2u);
+        let s = select(1.0, -1.0, k % 2u == 1u);
+        let p = v.position;
+        let q = vec3<f32>(p.x + s * radius * e.x, p.y + s * radius * e.y, p.z + s * radius * e.z);
+        let tau = nephele_surface_sun_depth(q);
+        if !(tau >= 0.0) {
+            return v;
+        }
+        sum += tau;
+    }
+    let mean = sum / 5.0;
+    if !(mean < NEPHELE_F32_MAX) {
+        return v;
+    }
+    var out = v;
+    out.sun_depth = mean;
+    return out;
+}
+
 // The angle in [0, π] from its cosine and sine (≥ 0) up to a common positive factor.
 fn ns_angle(c: f32, s: f32) -> f32 {
     let r = sqrt(c * c + s * s);
@@ -142,7 +209,8 @@ fn ns_hold_thickness(t: f32) -> f32 {
 // t = max(τ_chord μ_L, d + μ_V⁺ behind_min), d = κ̄ (entry − p)·n̄ held within the view ray's own
 // medium, μ_V = ω_V·n̄, ψ_V between the horizontal parts of the beam's travel and of ω_V; t and
 // μ_L held within the tables' grid; seen going up, where p lies deeper than μ_L τ_☉, the slab
-// above p cut to it (the runtime's `local_slab`).
+// above p cut to it; where μ_L τ_☉ exceeds the slab's thickness, the slab grown at its lit face
+// by the excess, p with it (the runtime's `local_slab`).
 fn local_slab(s: LitSample, v: Viewpoint, sun: vec3<f32>) -> LocalSlab {
     let x = nephele_ntt_index;
     let p = v.position;
@@ -190,6 +258,13 @@ fn local_slab(s: LitSample, v: Viewpoint, sun: vec3<f32>) -> LocalSlab {
         thickness_v = ns_hold_thickness(t_cut);
         clamps |= select(0u, 1u, thickness_v != t_cut);
         depth_v = min(d_sun, thickness_v);
+    } else if v.sun_depth < NEPHELE_F32_MAX && d_sun > thickness {
+        clamps |= 16u;
+        let excess = d_sun - thickness;
+        let t_grown = thickness + excess;
+        thickness_v = ns_hold_thickness(t_grown);
+        clamps |= select(0u, 1u, thickness_v != t_grown);
+        depth_v = min(depth_v + excess, thickness_v);
     }
     let beam_h = ns_add(-sun, n, mu_l_raw);
     let view_h = ns_add(v.view, n, -mu_v);
@@ -235,11 +310,18 @@ fn ns_query(c_in: vec3<f32>, scale: f32, last: NepheleCollector) -> LitSample {
 }
 
 // The collector of group g seen from `v`, the sun toward `sun` (unit).
-fn find_collector(g: u32, v: Viewpoint, sun: vec3<f32>, opts: SearchOptions) -> NepheleCollector {
-    var c = v.position;
+fn find_collector(g: u32, v_in: Viewpoint, sun: vec3<f32>, opts: SearchOptions) -> NepheleCollector {
+    var c = v_in.position;
     var sigma = nephele_surface_initial_scale();
     var last: NepheleCollector;
     var reads = 0u;
+    // The cloud's extinction along the light at the first scale: the group's spread in metres.
+    let s0 = ns_query(c, select(0.0, sigma, opts.filtering != 0u), last);
+    var extinction0 = 0.0;
+    if s0.hit != 0u && s0.length > 0.0 {
+        extinction0 = s0.optical_length / s0.length;
+    }
+    let v = ns_group_viewpoint(g, v_in, sun, extinction0, opts);
     loop {
         let scale = select(0.0, sigma, opts.filtering != 0u);
         let s = ns_query(c, scale, last);

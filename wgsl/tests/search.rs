@@ -59,6 +59,12 @@ impl LitSurface for Sphere {
             edge_distance: RADIUS - rho2.max(0.0).sqrt(),
         })
     }
+
+    fn sun_depth(&self, at: [f32; 3]) -> Option<f32> {
+        let (d, b) = disc(at);
+        let d = if d > 0.0 { d.sqrt() - b } else { 0.0 };
+        Some(KAPPA * d.max(0.0))
+    }
 }
 
 /// Viewpoints inside the sphere: the centre, just under the lit top, the bottom, then random
@@ -150,6 +156,10 @@ fn the_search_on_the_gpu_follows_the_runtime() {
     let groups = tables.groups();
     let finite = FiniteCloud::for_tables(&tables);
     assert_eq!(finite.mean_cosine, mean_cosine(&tables));
+    // Each group's sun depth spread across the light, as the kernel asks (its mean cosine: the
+    // job's third word).
+    let search = SearchOptions::for_tables(&tables);
+    assert_eq!(search.sun_spread, Some(finite.mean_cosine));
     let vps = viewpoints(2048);
     let ntt = nephele_wgsl::ntt_for_gpu(SHIPPED).unwrap();
     let source = format!(
@@ -176,7 +186,7 @@ fn the_search_on_the_gpu_follows_the_runtime() {
     for vp in &vps {
         let v = viewpoint(vp);
         for g in 0..groups {
-            let c = find_collector(&tables, g, &Sphere, &v, SUN, &SearchOptions::default());
+            let c = find_collector(&tables, g, &Sphere, &v, SUN, &search);
             std::hint::black_box(c.map(|c| finite_cloud(&tables, g, &Sphere, &c, &finite)));
         }
     }
@@ -190,7 +200,7 @@ fn the_search_on_the_gpu_follows_the_runtime() {
         let v = viewpoint(vp);
         for g in 0..groups {
             let o = &got[24 * (k * groups + g)..24 * (k * groups + g) + 22];
-            let want = find_collector(&tables, g, &Sphere, &v, SUN, &SearchOptions::default());
+            let want = find_collector(&tables, g, &Sphere, &v, SUN, &search);
             let Some(c) = want else {
                 if o[0] != 0.0 {
                     found_mismatch += 1;

@@ -41,6 +41,15 @@ fn nephele_surface_initial_scale() -> f32 {
     return RADIUS;
 }
 
+fn nephele_surface_sun_depth(at: vec3<f32>) -> f32 {
+    let db = sphere_disc(at);
+    var d = 0.0;
+    if db.x > 0.0 {
+        d = sqrt(db.x) - db.y;
+    }
+    return KAPPA * max(d, 0.0);
+}
+
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = id.x;
@@ -53,7 +62,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let v = Viewpoint(vec3<f32>(viewpoints[b], viewpoints[b + 1u], viewpoints[b + 2u]),
         vec3<f32>(viewpoints[b + 3u], viewpoints[b + 4u], viewpoints[b + 5u]), viewpoints[b + 6u],
         viewpoints[b + 7u], viewpoints[b + 8u]);
-    let c = find_collector(g, v, SUN, SearchOptions(8u, 0.1, 1u, 1u));
+    let c = find_collector(g, v, SUN, SearchOptions(8u, 0.1, 1u, 1u, 1u, bitcast<f32>(job.z)));
     var kept = Kept(1.0, NEPHELE_F32_MAX, 1.0);
     if c.found != 0u {
         kept = finite_cloud(g, c, FiniteCloud(1u, 0u, 1.0, 0.0, 1u, 0.0, bitcast<f32>(job.z)));

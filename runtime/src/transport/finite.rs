@@ -154,7 +154,7 @@ pub fn absorbed(
 }
 
 /// The orders group `g` holds: its first and its last (None: no end).
-fn group_orders(tables: &TransportTables, g: usize) -> (f32, Option<f32>) {
+pub(super) fn group_orders(tables: &TransportTables, g: usize) -> (f32, Option<f32>) {
     let first = tables.group_first_order(g).unwrap_or(2.0);
     (
         first,

@@ -28,6 +28,7 @@ pub mod leakage;
 #[cfg(feature = "std")]
 mod owned;
 mod search;
+pub mod sun_depth;
 
 #[cfg(feature = "std")]
 pub use batch::column_names;

@@ -29,6 +29,7 @@
 
 use super::format::MAX_GROUPS;
 use super::geometry::SlabPoint;
+use super::sun_depth::group_viewpoint;
 use super::tables::{Transport, TransportTables};
 use crate::frame::{cross, dot, Vec3};
 use crate::real::Real;
@@ -64,6 +65,14 @@ pub trait LitSurface {
     fn lateral(&self, _at: Vec3<f32>, _sigma: f32) -> Option<Lateral> {
         None
     }
+
+    /// The sun's optical depth (mfp) to `at` (m, world) through the cloud as it is, unfiltered
+    /// (the toolchain's deep optical-depth map): what the search averages across the light
+    /// over each group's spread ([`SearchOptions::sun_spread`]). None (the default) where the
+    /// surface does not know it: every group then reads [`Viewpoint::sun_depth`] as it is.
+    fn sun_depth(&self, _at: Vec3<f32>) -> Option<f32> {
+        None
+    }
 }
 
 /// The cloud's section around a point, filtered at a scale.
@@ -88,15 +97,32 @@ pub struct SearchOptions {
     pub step_clamp: bool,
     /// Filter the surface at σ (else always at the finest scale: an ablation).
     pub filter: bool,
+    /// Some(g), the medium's mean cosine: each group reads p's depth to the sun averaged
+    /// across the light over its walks' spread ([`super::sun_depth`]; where the surface knows
+    /// the sun's depth). None: p's own depth for every group.
+    pub sun_spread: Option<f32>,
 }
 
 impl Default for SearchOptions {
+    /// The default search, p's own depth to the sun for every group (no mean cosine is known
+    /// here: [`Self::for_tables`] sets it).
     fn default() -> Self {
         Self {
             max_reads: 8,
             tolerance: 0.1,
             step_clamp: true,
             filter: true,
+            sun_spread: None,
+        }
+    }
+}
+
+impl SearchOptions {
+    /// The default search for `tables`: the sun's depth spread by their phase function.
+    pub fn for_tables(tables: &TransportTables) -> Self {
+        Self {
+            sun_spread: Some(super::finite::mean_cosine(tables)),
+            ..Self::default()
         }
     }
 }
@@ -146,7 +172,7 @@ pub struct Clamps {
     /// moved to hold the ray's medium above it).
     pub view: bool,
     /// The slab above p cut to p's own depth to the sun, which the filtered face put deeper
-    /// (a cloud's sunlit edge seen grazing).
+    /// (a cloud's sunlit edge seen grazing), or grown to it where the slab is thinner.
     pub sun: bool,
 }
 
@@ -234,8 +260,9 @@ fn angle_of(cos: f32, sin: f32) -> f32 {
 /// the medium behind p, and a slab fitted to the light alone may have far more there than the
 /// cloud (a thin wisp, a grazing ray) or, seen going down, less. Last, seen going up, p lies
 /// no deeper than its own depth to the sun, d_☉ = μ_L τ_☉ (`v.sun_depth`): where d > d_☉ the
-/// slab above p is cut to it, d = d_☉ and t = d_☉ + (t − d), the medium below p kept (flagged
-/// `sun`).
+/// slab above p is cut to it, d = d_☉ and t = d_☉ + (t − d), the medium below p kept; and
+/// where d_☉ > t, whatever the view, the slab grows at its lit face by d_☉ − t, and p with it
+/// (both flagged `sun`).
 pub fn local_slab(
     tables: &TransportTables,
     s: &FilteredSurface,
@@ -249,11 +276,7 @@ pub fn local_slab(
     let mu_l_raw = dot(n, sun);
     let mu_l = mu_l_raw.clamp_to(domain.mu_l.0, domain.mu_l.1);
     clamps.mu_l = mu_l != mu_l_raw;
-    let extinction = if s.length > 0.0 {
-        s.optical_length / s.length
-    } else {
-        0.0
-    };
+    let extinction = extinction_of(s);
     let below = dot([s.entry[0] - p[0], s.entry[1] - p[1], s.entry[2] - p[2]], n);
     let d_raw = extinction * below;
     let mu_v = dot(view, n).clamp_to(-1.0, 1.0);
@@ -295,11 +318,20 @@ pub fn local_slab(
     // cloud's sunlit edge, which a grazing ray sees, at the far face of a thick slab, whose
     // light has crossed all of it, while the sun reaches p through μ_L τ_☉
     // (docs/collector.md, "Shadowed faces and silhouettes").
+    // And where the slab is thinner than p's depth to the sun, the light has crossed more cloud
+    // to reach p than the slab holds (a cloud lit from behind, seen through its thinner lower
+    // part): the slab grows at its lit face by what it lacks, p as far from its far face as
+    // before (docs/collector.md, "The sun's depth, spread across the light").
     let d_sun = mu_l * v.sun_depth;
     let (depth, thickness) = if mu_v > 0.0 && depth_v > d_sun {
         clamps.sun = true;
         let t = hold_thickness(d_sun + (thickness - depth_v), &mut clamps);
         (d_sun.min(t), t)
+    } else if d_sun.is_finite() && d_sun > thickness {
+        clamps.sun = true;
+        let excess = d_sun - thickness;
+        let t = hold_thickness(thickness + excess, &mut clamps);
+        ((depth_v + excess).min(t), t)
     } else {
         (depth_v, thickness)
     };
@@ -356,7 +388,11 @@ pub fn find_collector<S: LitSurface + ?Sized>(
     sun: Vec3<f32>,
     opts: &SearchOptions,
 ) -> Option<Collector> {
-    Search::new(v, surface).run(tables, g, (surface, v, sun), opts)
+    let start = Search::new(v, surface);
+    let scale = if opts.filter { start.sigma } else { 0.0 };
+    let extinction = query(surface, start.c, scale, None).map_or(0.0, |s| extinction_of(&s));
+    let v = group_viewpoint(tables, g, surface, v, sun, extinction, opts);
+    start.run(tables, g, (surface, &v, sun), opts)
 }
 
 /// The collectors of every group for the viewpoint `v` into `out[..groups()]` (each as
@@ -379,15 +415,40 @@ pub fn find_collectors<S: LitSurface + ?Sized>(
     let Some(s) = query(surface, start.c, scale, None) else {
         return;
     };
-    let slab = local_slab(tables, &s, v, sun);
+    let extinction = extinction_of(&s);
+    let views: [Viewpoint; MAX_GROUPS] = core::array::from_fn(|g| {
+        if g < groups {
+            group_viewpoint(tables, g, surface, v, sun, extinction, opts)
+        } else {
+            *v
+        }
+    });
+    let slabs: [LocalSlab; MAX_GROUPS] =
+        core::array::from_fn(|g| local_slab(tables, &s, &views[g.min(groups - 1)], sun));
     let mut first = [Transport::default(); MAX_GROUPS];
-    tables.evaluate_all(&slab.at, &mut first[..groups]);
+    // Groups whose spread sun depth cuts or grows the slab differently read it alone.
+    if slabs[..groups].iter().all(|l| l.at == slabs[0].at) {
+        tables.evaluate_all(&slabs[0].at, &mut first[..groups]);
+    } else {
+        for (g, slot) in first[..groups].iter_mut().enumerate() {
+            *slot = tables.evaluate(g, &slabs[g].at);
+        }
+    }
     for (g, slot) in out[..groups].iter_mut().enumerate() {
         let mut search = start;
-        *slot = match search.advance(first[g], &slab, sun, opts) {
+        *slot = match search.advance(first[g], &slabs[g], sun, opts) {
             Step::Done(c) => c,
-            Step::Next => search.run(tables, g, (surface, v, sun), opts),
+            Step::Next => search.run(tables, g, (surface, &views[g], sun), opts),
         };
+    }
+}
+
+/// κ̄ (1/m) of a filtered surface's chord: its optical over its geometric length (0 for none).
+fn extinction_of(s: &FilteredSurface) -> f32 {
+    if s.length > 0.0 {
+        s.optical_length / s.length
+    } else {
+        0.0
     }
 }
 
@@ -681,8 +742,20 @@ mod tests {
         assert!(cut.clamps.view && cut.clamps.sun, "{cut:?}");
         assert!((cut.at.depth - d_sun).abs() < 1e-5, "{cut:?}");
         assert!((cut.at.thickness - (d_sun + below)).abs() < 1e-4, "{cut:?}");
-        vp.sun_depth = 20.0;
+        // Deeper to the sun than p lies, within the slab: nothing to do.
+        vp.sun_depth = 12.0;
         assert_eq!(local_slab(&tables, &s, &vp, sun), held);
+        // Deeper to the sun than the slab is thick (d_☉ = 16 mfp): the slab grows at its lit
+        // face by 6 mfp, p with it.
+        vp.sun_depth = 20.0;
+        let grown = local_slab(&tables, &s, &vp, sun);
+        assert!(grown.clamps.sun, "{grown:?}");
+        assert!((grown.at.thickness - 16.0).abs() < 1e-4, "{grown:?}");
+        assert!(
+            (grown.at.depth - (held.at.depth + 6.0)).abs() < 1e-4,
+            "{grown:?}"
+        );
+        vp.sun_depth = 12.0;
         let down = Viewpoint {
             view: [view[0], view[1], -view[2]],
             sun_depth: 1.5,
@@ -726,6 +799,19 @@ mod tests {
         sun: Vec3<f32>,
     }
 
+    impl Ball {
+        /// 400 m of κ = 0.05/m (20 mfp across its radius) under a sun toward (0, 0.5, 0.8).
+        fn lit() -> (Vec3<f32>, Self) {
+            let sun = unit([0.0, 0.5, 0.8]);
+            let ball = Ball {
+                r: 400.0,
+                k: 0.05,
+                sun,
+            };
+            (sun, ball)
+        }
+    }
+
     impl LitSurface for Ball {
         fn filtered(&self, at: Vec3<f32>, sigma: f32) -> Option<FilteredSurface> {
             // Distance of the light line from the centre.
@@ -749,6 +835,49 @@ mod tests {
         fn initial_scale(&self) -> f32 {
             self.r
         }
+        fn sun_depth(&self, at: Vec3<f32>) -> Option<f32> {
+            let along = dot(at, self.sun);
+            let perp = add(at, self.sun, -along);
+            let q = dot(perp, perp);
+            let half = (self.r * self.r - q).max(0.0).sqrt();
+            Some(self.k * (half - along).clamp(0.0, 2.0 * half))
+        }
+    }
+
+    /// With each group's sun depth spread across the light, the search of all groups at once is
+    /// still each group's own, bit for bit (the first read shared only where the groups' slabs
+    /// are the same), and the spread moves the groups whose disk reaches shallower or deeper
+    /// matter than p's own light line.
+    #[test]
+    fn spread_sun_depths_keep_the_groups_searches_their_own() {
+        let tables = crate::embedded::mie_10um();
+        let (sun, ball) = Ball::lit();
+        let spread = SearchOptions::for_tables(&tables);
+        let g = spread.sun_spread.expect("a mean cosine");
+        assert!((g - 0.86).abs() < 0.02, "{g}");
+        let mut moved = 0;
+        for (p, view) in [
+            ([150.0, 200.0, 250.0], unit([0.4, 0.6, 0.5])),
+            ([-100.0, -300.0, 100.0], unit([-0.2, -0.9, 0.1])),
+            ([250.0, -100.0, -200.0], unit([0.5, -0.3, -0.8])),
+            ([0.0, -150.0, -340.0], unit([0.1, -0.2, -0.97])),
+        ] {
+            let p = unit(p).map(|x| x * 380.0);
+            let v = Viewpoint {
+                sun_depth: ball.sun_depth(p).unwrap(),
+                ..Viewpoint::new(p, view)
+            };
+            let mut all = [None; MAX_GROUPS];
+            find_collectors(&tables, &ball, &v, sun, &spread, &mut all);
+            let mut own = [None; MAX_GROUPS];
+            find_collectors(&tables, &ball, &v, sun, &SearchOptions::default(), &mut own);
+            for g in 0..tables.groups() {
+                let one = find_collector(&tables, g, &ball, &v, sun, &spread);
+                assert_eq!(all[g], one, "group {g} at {p:?}");
+                moved += usize::from(all[g] != own[g]);
+            }
+        }
+        assert!(moved > 0, "the spread changed nothing");
     }
 
     /// Mirroring p and the view across the plane that holds the sun and the ball's centre
@@ -756,12 +885,7 @@ mod tests {
     #[test]
     fn a_ball_gives_answers_symmetric_about_the_suns_plane() {
         let tables = crate::embedded::mie_10um();
-        let sun = unit([0.0, 0.5, 0.8]);
-        let ball = Ball {
-            r: 400.0,
-            k: 0.05,
-            sun,
-        };
+        let (sun, ball) = Ball::lit();
         // The sun's plane here is x = 0: mirror x.
         let m = |v: Vec3<f32>| [-v[0], v[1], v[2]];
         let mut total_reads = 0;

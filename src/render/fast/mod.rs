@@ -110,7 +110,11 @@ pub struct FastOptions {
     /// The collector search is not told p's depth to the sun (an ablation: the local slab
     /// is not cut to it).
     pub no_sun_depth: bool,
-    /// Collector search settings.
+    /// Each group's search reads p's own depth to the sun, not that depth averaged across the
+    /// light over the group's spread (an ablation; docs/collector.md, "The sun's depth,
+    /// spread across the light").
+    pub no_sun_spread: bool,
+    /// Collector search settings (the sun's spread set by [`prepare`] from the tables).
     #[serde(skip)]
     pub search: SearchOptions,
     /// Octave baseline settings.
@@ -137,6 +141,7 @@ impl Default for FastOptions {
             search_block_opacity: crate::render::regions::OPAQUE,
             search_every_ray: false,
             no_sun_depth: false,
+            no_sun_spread: false,
             search: SearchOptions::default(),
             octaves: Octaves::default(),
             allow_mismatch: false,
@@ -308,18 +313,22 @@ pub fn prepare<'a>(
     let has_sky = scene.sky.iter().any(|&s| s > 0.0);
     let sky = has_sky.then(|| SkyTable::build(tables));
     let sky_seconds = t0.elapsed().as_secs_f64();
+    let finite = opts.finite.runtime(tables, scene.albedo);
+    let mut opts = *opts;
+    opts.search.sun_spread =
+        (!opts.no_sun_spread && !opts.no_sun_depth).then_some(finite.mean_cosine);
     let frame = Frame {
         scene,
         medium,
         side,
         tables,
         sky,
-        opts: *opts,
+        opts,
         step,
         threshold,
         phases,
         g,
-        finite: opts.finite.runtime(tables, scene.albedo),
+        finite,
         offsets: opts.pattern.offsets(opts.rays as usize),
     };
     Ok(Prepared {
@@ -355,13 +364,20 @@ impl Prepared<'_> {
         r.details = serde_json::json!({
             "method": opts.method,
             "correction": opts.finite.name()
-                + if opts.no_sun_depth { ", slab not cut to the sun's depth" } else { "" },
+                + if opts.no_sun_depth {
+                    ", slab not cut to the sun's depth"
+                } else if opts.no_sun_spread {
+                    ", the sun's depth not spread"
+                } else {
+                    ""
+                },
             "options": opts,
             "search": {
                 "max_reads": opts.search.max_reads,
                 "tolerance": opts.search.tolerance,
                 "step_clamp": opts.search.step_clamp,
                 "filter": opts.search.filter,
+                "sun_spread_mean_cosine": opts.search.sun_spread,
             },
             "march_step_m": self.frame.step,
             "surface_sigma_t": self.frame.threshold,

@@ -84,6 +84,10 @@ impl LitSurface for SunSide {
             SunSide::Scaled(side, _) => side.lateral(at, sigma),
         }
     }
+
+    fn sun_depth(&self, at: [f32; 3]) -> Option<f32> {
+        Some(self.optical_depth(at.map(f64::from)) as f32)
+    }
 }
 
 /// The scene's sun side: the exact plane for a slab, light-space maps otherwise.
