@@ -426,11 +426,11 @@ pub fn find_collectors<S: LitSurface + ?Sized>(
     let slabs: [LocalSlab; MAX_GROUPS] =
         core::array::from_fn(|g| local_slab(tables, &s, &views[g.min(groups - 1)], sun));
     let mut first = [Transport::default(); MAX_GROUPS];
-    // Groups whose spread sun depth cuts or grows the slab differently read it alone.
-    if slabs[..groups].iter().all(|l| l.at == slabs[0].at) {
-        tables.evaluate_all(&slabs[0].at, &mut first[..groups]);
-    } else {
-        for (g, slot) in first[..groups].iter_mut().enumerate() {
+    // Groups whose spread sun depth cuts or grows the slab otherwise than the first group's
+    // read their own alone (the same bits: one group of `evaluate_all` is `evaluate`'s).
+    tables.evaluate_all(&slabs[0].at, &mut first[..groups]);
+    for (g, slot) in first[..groups].iter_mut().enumerate().skip(1) {
+        if slabs[g].at != slabs[0].at {
             *slot = tables.evaluate(g, &slabs[g].at);
         }
     }
