@@ -39,6 +39,7 @@ VARIANTS = {
     "leakage by order, R from the projection (2 Dec)": ["--leakage-count", "orders",
                                                         "--lateral", "projection"],
     "leakage, slab not cut to the sun's depth": ["--no-sun-depth"],
+    "leakage, the sun's depth not spread": ["--no-sun-spread"],
 }
 GROUPS = ["order 2", "orders 3-4", "orders 5-6", "orders 7-8", "orders 9-12", "orders 13-18",
           "orders 19-30", "orders 31+"]
