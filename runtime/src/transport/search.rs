@@ -410,6 +410,9 @@ pub fn find_collectors<S: LitSurface + ?Sized>(
 ) {
     let groups = tables.groups().min(out.len()).min(MAX_GROUPS);
     out[..groups].iter_mut().for_each(|o| *o = None);
+    if groups == 0 {
+        return;
+    }
     let start = Search::new(v, surface);
     let scale = if opts.filter { start.sigma } else { 0.0 };
     let Some(s) = query(surface, start.c, scale, None) else {
@@ -878,6 +881,9 @@ mod tests {
             }
         }
         assert!(moved > 0, "the spread changed nothing");
+        // No room for any group: nothing to do, and no panic.
+        let p = [0.0, 0.0, 100.0];
+        find_collectors(&tables, &ball, &Viewpoint::new(p, sun), sun, &spread, &mut []);
     }
 
     /// Mirroring p and the view across the plane that holds the sun and the ball's centre
