@@ -883,7 +883,14 @@ mod tests {
         assert!(moved > 0, "the spread changed nothing");
         // No room for any group: nothing to do, and no panic.
         let p = [0.0, 0.0, 100.0];
-        find_collectors(&tables, &ball, &Viewpoint::new(p, sun), sun, &spread, &mut []);
+        find_collectors(
+            &tables,
+            &ball,
+            &Viewpoint::new(p, sun),
+            sun,
+            &spread,
+            &mut [],
+        );
     }
 
     /// Mirroring p and the view across the plane that holds the sun and the ball's centre
