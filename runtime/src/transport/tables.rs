@@ -653,14 +653,9 @@ const _: () = assert!(C_SUMS >= MAX_COLLECTOR_LEGENDRE * MAX_Q);
 /// one vectorised multiply-add; group-major β (version 1) is gathered group by group. The sums
 /// are linear in β, so the Legendre terms in ln t, which differ per group, are applied after
 /// ([`Sums::depth_sums`], [`Sums::dot`]).
-///
-/// Only the accumulators a run uses (its first `used`) are ever written: a run of one group
-/// uses 35 of T's 384, and zeroing or copying all of them took 5 % of T of every group.
 #[derive(Clone, Copy)]
 struct Sums<const N: usize> {
-    acc: [MaybeUninit<f32>; N],
-    /// The accumulators written (zeroed by `new` or `reset`, then summed into).
-    used: usize,
+    acc: [f32; N],
     strides: Strides,
     first: usize,
     groups: usize,
@@ -670,8 +665,7 @@ struct Sums<const N: usize> {
 
 impl<const N: usize> Sums<N> {
     const EMPTY: Self = Self {
-        acc: [const { MaybeUninit::uninit() }; N],
-        used: 0,
+        acc: [0.0; N],
         strides: Strides {
             param: 0,
             group: 0,
@@ -683,33 +677,6 @@ impl<const N: usize> Sums<N> {
         depth: 0,
     };
 
-    /// The accumulators `range`, where they lie among the `used` ones (None elsewhere).
-    #[inline(always)]
-    fn acc(&self, range: core::ops::Range<usize>) -> Option<&[f32]> {
-        let written = self.acc.get(..self.used)?.get(range)?;
-        // SAFETY: the first `used` slots were written by `zero_used` and only ever assigned
-        // f32s since; `MaybeUninit<f32>` has the layout of `f32`.
-        Some(unsafe { &*(written as *const [MaybeUninit<f32>] as *const [f32]) })
-    }
-
-    /// [`Self::acc`], mutable.
-    #[inline(always)]
-    fn acc_mut(&mut self, range: core::ops::Range<usize>) -> Option<&mut [f32]> {
-        let used = self.used;
-        let written = self.acc.get_mut(..used)?.get_mut(range)?;
-        // SAFETY: as `acc`.
-        Some(unsafe { &mut *(written as *mut [MaybeUninit<f32>] as *mut [f32]) })
-    }
-
-    /// Zeroes the accumulators of the run (groups × q × depth of them) and marks them used.
-    #[inline(always)]
-    fn zero_used(&mut self) {
-        self.used = (self.groups * self.q * self.depth).min(N);
-        self.acc[..self.used].iter_mut().for_each(|a| {
-            a.write(0.0);
-        });
-    }
-
     /// Most groups of `q` terms in `depth` depth terms one holds (≥ 1: a form's q and depth
     /// terms are at most 16 each).
     fn capacity(q: usize, depth: usize) -> usize {
@@ -718,16 +685,14 @@ impl<const N: usize> Sums<N> {
 
     /// Empty sums of the groups `first .. first + groups` (at most [`Self::capacity`]).
     fn new(strides: Strides, (first, groups): (usize, usize), q: usize, depth: usize) -> Self {
-        let mut s = Self {
+        Self {
             strides,
             first,
             groups: groups.min(Self::capacity(q, depth)),
             q,
             depth: depth.min(MAX_LEGENDRE),
             ..Self::EMPTY
-        };
-        s.zero_used();
-        s
+        }
     }
 
     /// [`Self::new`] in place: only the accumulators the run uses are zeroed. (`new` keeps its
@@ -738,26 +703,26 @@ impl<const N: usize> Sums<N> {
         self.groups = groups.min(Self::capacity(q, depth));
         self.q = q;
         self.depth = depth.min(MAX_LEGENDRE);
-        self.zero_used();
+        let used = (self.groups * q * self.depth).min(N);
+        self.acc[..used].iter_mut().for_each(|a| *a = 0.0);
     }
 
     /// Adds feature `v` of column `col` and depth degree `j`, its parameters in `beta`.
     #[inline(always)]
     fn add(&mut self, beta: &[u8], col: usize, v: f32, j: usize) {
-        let (strides, first, q) = (self.strides, self.first, self.q);
-        let width = self.groups * q;
-        let Some(acc) = self.acc_mut(j * width..(j + 1) * width) else {
+        let width = self.groups * self.q;
+        let Some(acc) = self.acc.get_mut(j * width..(j + 1) * width) else {
             return;
         };
-        if strides.feature_major {
-            let start = strides.at(first, col);
+        if self.strides.feature_major {
+            let start = self.strides.at(self.first, col);
             if let Some(run) = beta.get(4 * start..4 * (start + width)) {
                 multiply_add(acc, v, run);
             }
         } else {
-            for (i, acc) in acc.chunks_exact_mut(q).enumerate() {
-                let start = strides.at(first + i, col);
-                if let Some(run) = beta.get(4 * start..4 * (start + q)) {
+            for (i, acc) in acc.chunks_exact_mut(self.q).enumerate() {
+                let start = self.strides.at(self.first + i, col);
+                if let Some(run) = beta.get(4 * start..4 * (start + self.q)) {
                     multiply_add(acc, v, run);
                 }
             }
@@ -815,7 +780,6 @@ impl<const N: usize> Sums<N> {
     /// order.
     #[inline(always)]
     fn add_runs<const W: usize>(&mut self, beta: &[u8], row: &[(u32, f32)]) {
-        let (strides, first_group) = (self.strides, self.first);
         let mut rest = row;
         while let Some(&(first, _)) = rest.first() {
             let degree = first >> DEGREE_SHIFT;
@@ -826,13 +790,13 @@ impl<const N: usize> Sums<N> {
             let (run, tail) = rest.split_at(len);
             rest = tail;
             let j = degree as usize;
-            let Some(acc) = self.acc_mut(j * W..(j + 1) * W) else {
+            let Some(acc) = self.acc.get_mut(j * W..(j + 1) * W) else {
                 continue;
             };
             let mut sums = [0.0f32; W];
             sums.copy_from_slice(acc);
             for &(key, v) in run {
-                let start = 4 * strides.at(first_group, (key & COL) as usize);
+                let start = 4 * self.strides.at(self.first, (key & COL) as usize);
                 if let Some(params) = beta.get(start..start + 4 * W) {
                     multiply_add(&mut sums, v, params);
                 }
@@ -853,7 +817,7 @@ impl<const N: usize> Sums<N> {
         for (j, d) in d.iter_mut().enumerate().take(self.depth) {
             for (i, slot) in d.iter_mut().enumerate().take(lanes) {
                 let at = j * width + base + i * self.q;
-                if let Some(run) = self.acc(at..at + self.q) {
+                if let Some(run) = self.acc.get(at..at + self.q) {
                     *slot = run.iter().zip(lq).map(|(a, l)| a * l[i]).sum();
                 }
             }
