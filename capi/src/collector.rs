@@ -145,8 +145,8 @@ pub struct NepheleFiniteCloud {
 /// or the tables hold no light there (the rest 0); else T, c and σ of the last read, the slab
 /// it was read at, the collector's centre on the filtered lit face (m, world) and spread σ
 /// (m), the reads, whether it converged (1) before the cap, the parameters held at the
-/// tables' domain (bits: 1 thickness, 2 μ_L, 4 depth, 8 view, 16 the slab cut to p's depth to
-/// the sun) and κ̄ (1/m).
+/// tables' domain (bits: 1 thickness, 2 μ_L, 4 depth, 8 view, 16 the slab cut or grown to p's
+/// depth to the sun) and κ̄ (1/m).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct NepheleCollector {

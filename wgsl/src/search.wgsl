@@ -67,7 +67,8 @@ struct SearchOptions {
 
 // One group's search (the runtime's `Collector`): `found` 0 where none; T, c, σ (mfp) of the
 // last read, the slab it was read at, the centre on the filtered lit face (m, world) and σ (m),
-// the reads, convergence, the clamps (bits: 1 thickness, 2 μ_L, 4 depth, 8 view) and κ̄ (1/m).
+// the reads, convergence, the clamps (bits: 1 thickness, 2 μ_L, 4 depth, 8 view, 16 the slab
+// cut or grown to p's depth to the sun) and κ̄ (1/m).
 struct NepheleCollector {
     found: u32,
     transport: NepheleTransport,

@@ -12,9 +12,11 @@
 //! ```
 //!
 //! e_k = ±e₁, ±e₂ unit vectors across the light, n̄_g the group's middle order (the open last
-//! group: twice its first), κ̄ the cloud's extinction along the light (1/m). No fitted
-//! constant: order 2 spreads by 0.6 mfp (g = 0.86) and keeps p's own depth, order 31 by 14 mfp.
-//! A tap outside the cloud counts τ = 0: light does not reach p from where there is no cloud.
+//! group: twice its first), κ̄ the cloud's extinction along the light at the cloud's own scale
+//! (the search's first read; 1/m). No fitted constant: for g = 0.854 order 2 spreads by
+//! 0.6 mfp and keeps nearly p's own depth, orders 19–30 by 11.8 mfp, the open group 31+ (read
+//! at order 62) by 21.9 mfp. A tap outside the cloud counts τ = 0: light does not reach p from
+//! where there is no cloud.
 
 use super::finite::group_orders;
 use super::leakage::{diffusion_coefficient, lateral_orders};
