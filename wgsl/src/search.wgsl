@@ -324,8 +324,11 @@ fn find_collector(g: u32, v_in: Viewpoint, sun: vec3<f32>, opts: SearchOptions) 
     }
     let v = ns_group_viewpoint(g, v_in, sun, extinction0, opts);
     loop {
-        let scale = select(0.0, sigma, opts.filtering != 0u);
-        let s = ns_query(c, scale, last);
+        // The first step's surface is s0, already queried.
+        var s = s0;
+        if reads > 0u {
+            s = ns_query(c, select(0.0, sigma, opts.filtering != 0u), last);
+        }
         if s.hit == 0u {
             return last;
         }

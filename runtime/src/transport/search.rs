@@ -389,10 +389,11 @@ pub fn find_collector<S: LitSurface + ?Sized>(
     opts: &SearchOptions,
 ) -> Option<Collector> {
     let start = Search::new(v, surface);
-    let scale = if opts.filter { start.sigma } else { 0.0 };
-    let extinction = query(surface, start.c, scale, None).map_or(0.0, |s| extinction_of(&s));
-    let v = group_viewpoint(tables, g, surface, v, sun, extinction, opts);
-    start.run(tables, g, (surface, &v, sun), opts)
+    let s = start.first_surface(surface, opts)?;
+    let v = group_viewpoint(tables, g, surface, v, sun, extinction_of(&s), opts);
+    let slab = local_slab(tables, &s, &v, sun);
+    let first = tables.evaluate(g, &slab.at);
+    start.continue_after(first, &slab, tables, g, (surface, &v, sun), opts)
 }
 
 /// The collectors of every group for the viewpoint `v` into `out[..groups()]` (each as
@@ -414,8 +415,7 @@ pub fn find_collectors<S: LitSurface + ?Sized>(
         return;
     }
     let start = Search::new(v, surface);
-    let scale = if opts.filter { start.sigma } else { 0.0 };
-    let Some(s) = query(surface, start.c, scale, None) else {
+    let Some(s) = start.first_surface(surface, opts) else {
         return;
     };
     let extinction = extinction_of(&s);
@@ -427,7 +427,7 @@ pub fn find_collectors<S: LitSurface + ?Sized>(
         }
     });
     let slabs: [LocalSlab; MAX_GROUPS] =
-        core::array::from_fn(|g| local_slab(tables, &s, &views[g.min(groups - 1)], sun));
+        core::array::from_fn(|g| local_slab(tables, &s, &views[g], sun));
     let mut first = [Transport::default(); MAX_GROUPS];
     // Groups whose spread sun depth cuts or grows the slab otherwise than the first group's
     // read their own alone (the same bits: one group of `evaluate_all` is `evaluate`'s).
@@ -438,11 +438,14 @@ pub fn find_collectors<S: LitSurface + ?Sized>(
         }
     }
     for (g, slot) in out[..groups].iter_mut().enumerate() {
-        let mut search = start;
-        *slot = match search.advance(first[g], &slabs[g], sun, opts) {
-            Step::Done(c) => c,
-            Step::Next => search.run(tables, g, (surface, &views[g], sun), opts),
-        };
+        *slot = start.continue_after(
+            first[g],
+            &slabs[g],
+            tables,
+            g,
+            (surface, &views[g], sun),
+            opts,
+        );
     }
 }
 
@@ -481,6 +484,33 @@ impl Search {
             sigma: surface.initial_scale(),
             last: None,
             reads: 0,
+        }
+    }
+
+    /// The surface filtered at σ₀ around p: the first step's, the same for every group (None:
+    /// no cloud on p's light line).
+    fn first_surface<S: LitSurface + ?Sized>(
+        &self,
+        surface: &S,
+        opts: &SearchOptions,
+    ) -> Option<FilteredSurface> {
+        let scale = if opts.filter { self.sigma } else { 0.0 };
+        query(surface, self.c, scale, None)
+    }
+
+    /// The search of group `g` from its first read `first` in the slab `slab` on to its end.
+    fn continue_after<S: LitSurface + ?Sized>(
+        mut self,
+        first: Transport,
+        slab: &LocalSlab,
+        tables: &TransportTables,
+        g: usize,
+        (surface, v, sun): (&S, &Viewpoint, Vec3<f32>),
+        opts: &SearchOptions,
+    ) -> Option<Collector> {
+        match self.advance(first, slab, sun, opts) {
+            Step::Done(c) => c,
+            Step::Next => self.run(tables, g, (surface, v, sun), opts),
         }
     }
 
