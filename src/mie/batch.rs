@@ -16,14 +16,16 @@ use num_complex::Complex64;
 use rayon::prelude::*;
 
 /// Spheres per block of the first product (2 rows each per matrix, so M = 256). The GEMM packs
-/// the angle basis (k × n_θ) anew for every product: with 32 spheres that packing took 29 % of
-/// the time, with 128 it takes 11 % (docs/mie.md, "Where the time goes").
+/// the coefficients and the angle basis anew for every product: with 32 spheres that packing
+/// took 29 % of the time, with 128 it takes 11 % (docs/mie.md, "Where the time goes").
 pub const BLOCK: usize = 128;
-/// Spheres per chunk of the accumulating product (eight blocks, for the threads to share).
+/// Spheres per chunk of the accumulating product (eight blocks).
 const CHUNK: usize = 1024;
-/// Columns per parallel panel of the accumulating product (a multiple of the kernel width).
-const PANEL: usize = 256;
-
+/// Angles per panel: a chunk's products, squared sums and accumulation run panel by panel, each
+/// panel on one thread, so that a panel's intermediate rows stay in that core's cache instead
+/// of a chunk's intensities filling ~18 MB of fresh memory (docs/mie.md, "Panels"). A multiple
+/// of the kernels' widths.
+const PANEL: usize = 128;
 /// One sphere: size parameter and relative refractive index (Im ≥ 0 absorbs).
 #[derive(Clone, Copy, Debug)]
 pub struct Particle {
@@ -97,27 +99,36 @@ pub fn weighted_intensity<R: AsRef<WeightRow> + Sync>(
         ..Default::default()
     };
     let mut eff = vec![Efficiencies::default(); n_p];
-    let mut intensity = vec![0.0; CHUNK * n_ang];
     let mut terms_done = 0;
     for idx in order.chunks(CHUNK) {
-        let block_rows = &mut intensity[..idx.len() * n_ang];
-        let blocks: Vec<(f64, Vec<Efficiencies>)> = block_rows
-            .par_chunks_mut(BLOCK * n_ang)
-            .zip(idx.par_chunks(BLOCK))
-            .map(|(dst, block_idx)| {
-                let block: Vec<Particle> = block_idx.iter().map(|&i| particles[i]).collect();
-                block_intensity(&block, basis, dst)
-            })
+        let blocks: Vec<BlockCoefficients> = idx
+            .par_chunks(BLOCK)
+            .map(|block_idx| BlockCoefficients::new(block_idx, particles, basis))
             .collect();
-        for ((flops, e), block_idx) in blocks.into_iter().zip(idx.chunks(BLOCK)) {
-            work.flops += flops;
-            for (&i, e) in block_idx.iter().zip(e) {
-                eff[i] = e;
+        for (block, block_idx) in blocks.iter().zip(idx.chunks(BLOCK)) {
+            work.flops += block.flops(n_ang);
+            for (&i, e) in block_idx.iter().zip(&block.efficiencies) {
+                eff[i] = *e;
             }
         }
         let terms: usize = idx.iter().map(|&i| n_terms(particles[i].x)).sum();
         work.useful_flops += 8.0 * (terms * n_ang) as f64;
-        let (done, useful) = accumulate(&mut out, rows, idx, block_rows, n_ang);
+        let weights = ChunkWeights::new(rows, idx);
+        // Each panel is computed in the same order whatever the thread that takes it: the
+        // products' sums run over the terms k, never across angles, so a panel's values are
+        // bit for bit those of the whole width.
+        let panels: Vec<(usize, Vec<f64>)> = (0..n_ang.div_ceil(PANEL))
+            .into_par_iter()
+            .map(|q| {
+                let columns = q * PANEL..((q + 1) * PANEL).min(n_ang);
+                let c = chunk_panel(&blocks, basis, &weights, columns);
+                (q * PANEL, c)
+            })
+            .collect();
+        for (j0, c) in panels {
+            weights.add_into(&mut out, n_ang, j0, &c);
+        }
+        let (done, useful) = weights.flops(n_ang);
         work.flops += done;
         work.useful_flops += useful;
         terms_done += terms;
@@ -126,149 +137,209 @@ pub fn weighted_intensity<R: AsRef<WeightRow> + Sync>(
     (out, eff, work)
 }
 
-/// Writes the intensities of `block` (sorted by x) into `rows` (b × n_θ); returns the flops
-/// and the spheres' efficiencies.
-fn block_intensity(
-    block: &[Particle],
-    basis: &AngleBasis,
-    rows: &mut [f64],
-) -> (f64, Vec<Efficiencies>) {
-    let b = block.len();
-    let n_ang = basis.n_angles();
-    let k = block.iter().map(|p| n_terms(p.x)).max().unwrap_or(1);
-    assert!(
-        k <= basis.n_max,
-        "angle basis has {} orders, sphere needs {k}",
-        basis.n_max
-    );
-    let mut cp = vec![0.0; 2 * b * k];
-    let mut cm = vec![0.0; 2 * b * k];
-    let mut eff = Vec::with_capacity(b);
-    for (p, part) in block.iter().enumerate() {
-        let coef = MieCoefficients::new(part.m, part.x);
-        eff.push(coef.efficiencies());
-        for (i, (a, bn)) in coef.a.iter().zip(&coef.b).enumerate() {
-            let n = (i + 1) as f64;
-            let c = (2.0 * n + 1.0) / (n * (n + 1.0));
-            let (sp, sm): (Complex64, Complex64) = (c * (a + bn), c * (a - bn));
-            cp[2 * p * k + i] = sp.re;
-            cp[(2 * p + 1) * k + i] = sp.im;
-            cm[2 * p * k + i] = sm.re;
-            cm[(2 * p + 1) * k + i] = sm.im;
+/// The coefficient matrices C⁺ and C⁻ ([Re; Im] rows, 2b × K each) of a block of spheres
+/// (sorted by x), with their efficiencies.
+struct BlockCoefficients {
+    /// Spheres in the block.
+    spheres: usize,
+    /// K: the largest number of terms among them.
+    terms: usize,
+    plus: Vec<f64>,
+    minus: Vec<f64>,
+    efficiencies: Vec<Efficiencies>,
+}
+
+impl BlockCoefficients {
+    fn new(block_idx: &[usize], particles: &[Particle], basis: &AngleBasis) -> Self {
+        let b = block_idx.len();
+        let k = block_idx
+            .iter()
+            .map(|&i| n_terms(particles[i].x))
+            .max()
+            .unwrap_or(1);
+        assert!(
+            k <= basis.n_max,
+            "angle basis has {} orders, sphere needs {k}",
+            basis.n_max
+        );
+        let mut plus = vec![0.0; 2 * b * k];
+        let mut minus = vec![0.0; 2 * b * k];
+        let mut efficiencies = Vec::with_capacity(b);
+        for (p, &i) in block_idx.iter().enumerate() {
+            let coef = MieCoefficients::new(particles[i].m, particles[i].x);
+            efficiencies.push(coef.efficiencies());
+            for (n0, (a, bn)) in coef.a.iter().zip(&coef.b).enumerate() {
+                let n = (n0 + 1) as f64;
+                let c = (2.0 * n + 1.0) / (n * (n + 1.0));
+                let (sp, sm): (Complex64, Complex64) = (c * (a + bn), c * (a - bn));
+                plus[2 * p * k + n0] = sp.re;
+                plus[(2 * p + 1) * k + n0] = sp.im;
+                minus[2 * p * k + n0] = sm.re;
+                minus[(2 * p + 1) * k + n0] = sm.im;
+            }
+        }
+        Self {
+            spheres: b,
+            terms: k,
+            plus,
+            minus,
+            efficiencies,
         }
     }
-    SCRATCH.with_borrow_mut(|(sp, sm)| {
-        // Reused per thread: fresh multi-megabyte buffers cost more in page faults than the
-        // products themselves for small droplets. The products overwrite them completely.
-        sp.resize(2 * b * n_ang, 0.0);
-        sm.resize(2 * b * n_ang, 0.0);
-        gemm_strided(2 * b, k, n_ang, &cp, &basis.u[..k * n_ang], n_ang, sp);
-        gemm_strided(2 * b, k, n_ang, &cm, &basis.v[..k * n_ang], n_ang, sm);
-        squared_sum(b, n_ang, sp, sm, rows);
-    });
-    (2.0 * 2.0 * (2 * b * k * n_ang) as f64, eff)
+
+    /// The two products' flops over `n_ang` angles, the zero padding of short series included.
+    fn flops(&self, n_ang: usize) -> f64 {
+        2.0 * 2.0 * (2 * self.spheres * self.terms * n_ang) as f64
+    }
+}
+
+/// W · I of one chunk on the angles `columns`: the blocks' intensities there, then their
+/// weighted sums, in scratch memory of the thread (reused: fresh multi-megabyte buffers cost
+/// more in page faults than the products themselves for small droplets).
+fn chunk_panel(
+    blocks: &[BlockCoefficients],
+    basis: &AngleBasis,
+    weights: &ChunkWeights,
+    columns: std::ops::Range<usize>,
+) -> Vec<f64> {
+    let (n_ang, width) = (basis.n_angles(), columns.len());
+    let spheres: usize = blocks.iter().map(|b| b.spheres).sum();
+    SCRATCH.with_borrow_mut(|(sp, sm, intensity)| {
+        intensity.resize(spheres * width, 0.0);
+        let mut rows = &mut intensity[..spheres * width];
+        for block in blocks {
+            let (b, k) = (block.spheres, block.terms);
+            let (mine, rest) = rows.split_at_mut(b * width);
+            rows = rest;
+            sp.resize(2 * b * width, 0.0);
+            sm.resize(2 * b * width, 0.0);
+            let u = &basis.u[columns.start..k * n_ang];
+            let v = &basis.v[columns.start..k * n_ang];
+            gemm_strided(2 * b, k, width, &block.plus, u, n_ang, sp);
+            gemm_strided(2 * b, k, width, &block.minus, v, n_ang, sm);
+            squared_sum(b, width, sp, sm, mine);
+        }
+        weights.apply(&intensity[..spheres * width], width)
+    })
 }
 
 thread_local! {
-    static SCRATCH: std::cell::RefCell<(Vec<f64>, Vec<f64>)> = const { std::cell::RefCell::new((Vec::new(), Vec::new())) };
+    static SCRATCH: std::cell::RefCell<(Vec<f64>, Vec<f64>, Vec<f64>)> =
+        const { std::cell::RefCell::new((Vec::new(), Vec::new(), Vec::new())) };
 }
 
-/// rows[p] = (|S1 + S2|² + |S1 − S2|²)/4 from the [Re; Im] rows of both products.
-fn squared_sum(b: usize, n_ang: usize, sp: &[f64], sm: &[f64], rows: &mut [f64]) {
+/// rows[p] = (|S1 + S2|² + |S1 − S2|²)/4 from the [Re; Im] rows of both products (`width`
+/// angles each).
+fn squared_sum(b: usize, width: usize, sp: &[f64], sm: &[f64], rows: &mut [f64]) {
     for p in 0..b {
-        let row = &mut rows[p * n_ang..(p + 1) * n_ang];
-        let (pr, pi) = (&sp[2 * p * n_ang..], &sp[(2 * p + 1) * n_ang..]);
-        let (mr, mi) = (&sm[2 * p * n_ang..], &sm[(2 * p + 1) * n_ang..]);
-        for j in 0..n_ang {
+        let row = &mut rows[p * width..(p + 1) * width];
+        let (pr, pi) = (&sp[2 * p * width..], &sp[(2 * p + 1) * width..]);
+        let (mr, mi) = (&sm[2 * p * width..], &sm[(2 * p + 1) * width..]);
+        for j in 0..width {
             row[j] = 0.25 * (pr[j] * pr[j] + pi[j] * pi[j] + mr[j] * mr[j] + mi[j] * mi[j]);
         }
     }
 }
 
-/// `out[r] += Σ_p W[r, idx[p]] · chunk[p]` for the rows that weigh spheres of this chunk, as
-/// one matrix product (or sparse row updates) split into column panels; returns the flops
-/// done and the flops on non-zero weights.
-fn accumulate<R: AsRef<WeightRow>>(
-    out: &mut [f64],
-    rows: &[R],
-    idx: &[usize],
-    chunk: &[f64],
-    n_ang: usize,
-) -> (f64, f64) {
-    let kc = idx.len();
-    let (lo, hi) = idx
-        .iter()
-        .fold((usize::MAX, 0), |(a, b), &i| (a.min(i), b.max(i + 1)));
-    let candidates =
-        (0..rows.len()).filter(|&r| rows[r].as_ref().start < hi && rows[r].as_ref().end() > lo);
-    let mut active = Vec::new();
-    let mut w = Vec::new();
-    for r in candidates {
-        let row = rows[r].as_ref();
-        let weights = idx.iter().map(|&i| {
-            if (row.start..row.end()).contains(&i) {
-                row.weights[i - row.start]
+/// The rows of W that weigh spheres of one chunk, restricted to the chunk's spheres (in its
+/// order): `out[r] += Σ_p W[r, idx[p]] · I[p]`.
+struct ChunkWeights {
+    /// The output rows with a non-zero weight in the chunk.
+    active: Vec<usize>,
+    /// Their weights, active.len() × kc, row-major.
+    w: Vec<f64>,
+    /// Spheres in the chunk.
+    kc: usize,
+    /// Non-zero weights.
+    nnz: usize,
+    /// Whether the weights are added one by one rather than by a matrix product.
+    sparse: bool,
+}
+
+impl ChunkWeights {
+    fn new<R: AsRef<WeightRow>>(rows: &[R], idx: &[usize]) -> Self {
+        let kc = idx.len();
+        let (lo, hi) = idx
+            .iter()
+            .fold((usize::MAX, 0), |(a, b), &i| (a.min(i), b.max(i + 1)));
+        let candidates =
+            (0..rows.len()).filter(|&r| rows[r].as_ref().start < hi && rows[r].as_ref().end() > lo);
+        let mut active = Vec::new();
+        let mut w = Vec::new();
+        for r in candidates {
+            let row = rows[r].as_ref();
+            let weights = idx.iter().map(|&i| {
+                if (row.start..row.end()).contains(&i) {
+                    row.weights[i - row.start]
+                } else {
+                    0.0
+                }
+            });
+            let len = w.len();
+            w.extend(weights);
+            if w[len..].iter().all(|&v| v == 0.0) {
+                w.truncate(len);
             } else {
-                0.0
+                active.push(r);
             }
-        });
-        let len = w.len();
-        w.extend(weights);
-        if w[len..].iter().all(|&v| v == 0.0) {
-            w.truncate(len);
-        } else {
-            active.push(r);
+        }
+        let nnz = w.iter().filter(|&&v| v != 0.0).count();
+        // A matrix product does ~4× more flops per second than row updates: below a quarter
+        // filled (the product rule puts each sphere in one wavelength row), add the non-zeros
+        // one by one. The choice depends on the data only, never on the thread count.
+        let sparse = 4 * nnz < active.len() * kc;
+        Self {
+            active,
+            w,
+            kc,
+            nnz,
+            sparse,
         }
     }
-    let na = active.len();
-    let nnz = w.iter().filter(|&&v| v != 0.0).count();
-    // A matrix product does ~4× more flops per second than row updates: below a quarter
-    // filled (the product rule puts each sphere in one wavelength row), add the non-zeros one
-    // by one. The choice depends on the data only, never on the thread count.
-    let sparse = 4 * nnz < na * kc;
-    // Panels: each is computed in the same order whatever the split, so splitting the columns
-    // does not change a single bit of the result.
-    let panels: Vec<(usize, Vec<f64>)> = (0..n_ang.div_ceil(PANEL))
-        .into_par_iter()
-        .map(|q| {
-            let (j0, j1) = (q * PANEL, ((q + 1) * PANEL).min(n_ang));
-            let width = j1 - j0;
-            let mut c = vec![0.0; na * width];
-            if sparse {
-                for (a, c_row) in c.chunks_mut(width).enumerate() {
-                    for (p, &wp) in w[a * kc..(a + 1) * kc]
-                        .iter()
-                        .enumerate()
-                        .filter(|(_, v)| **v != 0.0)
-                    {
-                        let src = &chunk[p * n_ang + j0..p * n_ang + j1];
-                        c_row.iter_mut().zip(src).for_each(|(d, s)| *d += wp * s);
-                    }
+
+    /// W · I on one panel: `intensity` is kc × `width` (the chunk's spheres in order); the
+    /// result active × `width`.
+    fn apply(&self, intensity: &[f64], width: usize) -> Vec<f64> {
+        let (na, kc) = (self.active.len(), self.kc);
+        let mut c = vec![0.0; na * width];
+        if self.sparse {
+            for (a, c_row) in c.chunks_mut(width).enumerate() {
+                for (p, &wp) in self.w[a * kc..(a + 1) * kc]
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, v)| **v != 0.0)
+                {
+                    let src = &intensity[p * width..(p + 1) * width];
+                    c_row.iter_mut().zip(src).for_each(|(d, s)| *d += wp * s);
                 }
-            } else {
-                gemm_strided(na, kc, width, &w, &chunk[j0..], n_ang, &mut c);
             }
-            (j0, c)
-        })
-        .collect();
-    for (j0, c) in panels {
-        let width = c.len() / na.max(1);
-        for (a, &r) in active.iter().enumerate() {
+        } else {
+            gemm_strided(na, kc, width, &self.w, intensity, width, &mut c);
+        }
+        c
+    }
+
+    /// Adds a panel's W · I (from [`Self::apply`], its first column `j0`) into `out`.
+    fn add_into(&self, out: &mut [f64], n_ang: usize, j0: usize, c: &[f64]) {
+        let width = c.len() / self.active.len().max(1);
+        for (a, &r) in self.active.iter().enumerate() {
             let dst = &mut out[r * n_ang + j0..r * n_ang + j0 + width];
             for (d, s) in dst.iter_mut().zip(&c[a * width..(a + 1) * width]) {
                 *d += s;
             }
         }
     }
-    let useful = 2.0 * (nnz * n_ang) as f64;
-    (
-        if sparse {
+
+    /// The flops the weighted sums take over `n_ang` angles, and those on non-zero weights.
+    fn flops(&self, n_ang: usize) -> (f64, f64) {
+        let useful = 2.0 * (self.nnz * n_ang) as f64;
+        let done = if self.sparse {
             useful
         } else {
-            2.0 * (na * kc * n_ang) as f64
-        },
-        useful,
-    )
+            2.0 * (self.active.len() * self.kc * n_ang) as f64
+        };
+        (done, useful)
+    }
 }
 
 /// C (m × n, contiguous) = A (m × k, contiguous) · B (k × n with row stride `ldb`), through
