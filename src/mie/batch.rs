@@ -26,6 +26,7 @@ const CHUNK: usize = 1024;
 /// of a chunk's intensities filling ~18 MB of fresh memory (docs/mie.md, "Panels"). A multiple
 /// of the kernels' widths.
 const PANEL: usize = 128;
+
 /// One sphere: size parameter and relative refractive index (Im ≥ 0 absorbs).
 #[derive(Clone, Copy, Debug)]
 pub struct Particle {
