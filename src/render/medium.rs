@@ -201,6 +201,18 @@ impl Cloud {
                 let (lo, hi) = Self::depth_range(b, c_lo, c_hi);
                 (deepest, shallowest) = (deepest.max(hi), shallowest.max(lo));
             }
+            let density = |s: f64| (s / edge).clamp(0.0, 1.0);
+            // Where no noise within its clamp (±1.2) can lift the depth above 0, or take it
+            // below the edge, both bounds are what they would be for any noise: the fBm is not
+            // evaluated (most cells: the empty box around the cloud and its interior). Each
+            // side is monotone in n, so the bounds are the same bits as below.
+            if deepest + amplitude * 1.2 < 0.0 || shallowest + amplitude * -1.2 >= edge {
+                let settled = sigma_t * density(deepest + amplitude * 1.2);
+                return Bounds {
+                    min: settled,
+                    max: settled,
+                };
+            }
             let centre: Vec3 = std::array::from_fn(|k| 0.5 * (c_lo[k] + c_hi[k]) * frequency);
             let half_diagonal = 0.5
                 * (0..3)
@@ -210,7 +222,6 @@ impl Cloud {
             let (n, spread) = (fbm.get(centre), slope * half_diagonal);
             let n_lo = (n - spread).clamp(-1.2, 1.2);
             let n_hi = (n + spread).clamp(-1.2, 1.2);
-            let density = |s: f64| (s / edge).clamp(0.0, 1.0);
             Bounds {
                 min: sigma_t * density(shallowest + amplitude * n_lo),
                 max: sigma_t * density(deepest + amplitude * n_hi),
