@@ -157,34 +157,48 @@ impl<'a> TransportTables<'a> {
         let Some(pt) = self.point(at) else {
             return;
         };
-        let mut sums = Sums::new(
+        // One group (a search's read) in a lane of its own, with sums sized for one group: no
+        // work for seven empty lanes, and no kilobytes of empty sums to set up.
+        if count == 1 && self.q * self.form.depth_terms() <= ONE_T_SUMS {
+            self.t_from::<ONE_T_SUMS, 1>(&pt, (first, count), out);
+        } else if count == 1 {
+            self.t_from::<T_SUMS, 1>(&pt, (first, count), out);
+        } else {
+            self.t_from::<T_SUMS, LANES>(&pt, (first, count), out);
+        }
+    }
+
+    /// T of the groups `first .. first + count` at `pt` into `out`, through sums of `N` floats
+    /// (the run fits them), `L` groups side by side.
+    #[inline(always)]
+    fn t_from<const N: usize, const L: usize>(
+        &self,
+        pt: &Point,
+        (first, count): (usize, usize),
+        out: &mut [f32],
+    ) {
+        let mut sums = Sums::<N>::new(
             self.strides,
             (first, count),
             self.q,
             self.form.depth_terms(),
         );
-        if !self.add_t_features(&pt, &mut sums) {
-            return;
-        }
-        // One group (a search's read) in a lane of its own: no work for seven empty ones.
-        if count == 1 {
-            self.t_runs::<1>(&pt, first, &sums, out);
-        } else {
-            self.t_runs::<LANES>(&pt, first, &sums, out);
+        if self.add_t_features(pt, &mut sums) {
+            self.t_runs::<N, L>(pt, first, &sums, out);
         }
     }
 
     /// T of the groups `first ..` into `out`, `L` groups side by side at a time.
     #[inline(always)]
-    fn t_runs<const L: usize>(
+    fn t_runs<const N: usize, const L: usize>(
         &self,
         pt: &Point,
         first: usize,
-        sums: &Sums<T_SUMS>,
+        sums: &Sums<N>,
         out: &mut [f32],
     ) {
         for (g0, out) in (first..).step_by(L).zip(out.chunks_mut(L)) {
-            let (t, _) = self.t_lanes::<L>(pt, (g0, out.len()), sums);
+            let (t, _) = self.t_lanes::<N, L>(pt, (g0, out.len()), sums);
             out.copy_from_slice(&t[..out.len()]);
         }
     }
@@ -243,41 +257,60 @@ impl<'a> TransportTables<'a> {
         let Some(pt) = self.point(at) else {
             return;
         };
-        let mut sums = Sums::new(
+        // One group (a search's read) with sums sized for one group, as in transport_run_any.
+        let one_c = self
+            .collector
+            .as_ref()
+            .is_none_or(|cp| cp.q * cp.form.depth_terms() <= ONE_C_SUMS);
+        if count == 1 && self.q * self.form.depth_terms() <= ONE_T_SUMS && one_c {
+            self.evaluate_from::<ONE_T_SUMS, ONE_C_SUMS, 1>(&pt, (first, count), out);
+        } else if count == 1 {
+            self.evaluate_from::<T_SUMS, C_SUMS, 1>(&pt, (first, count), out);
+        } else {
+            self.evaluate_from::<T_SUMS, C_SUMS, LANES>(&pt, (first, count), out);
+        }
+    }
+
+    /// T, c and σ of the groups `first .. first + count` at `pt` into `out`, through sums of
+    /// `N` (T) and `M` (each collector statistic) floats, `L` groups side by side.
+    #[inline(always)]
+    fn evaluate_from<const N: usize, const M: usize, const L: usize>(
+        &self,
+        pt: &Point,
+        (first, count): (usize, usize),
+        out: &mut [Transport],
+    ) {
+        let mut sums = Sums::<N>::new(
             self.strides,
             (first, count),
             self.q,
             self.form.depth_terms(),
         );
-        if !self.add_t_features(&pt, &mut sums) {
+        if !self.add_t_features(pt, &mut sums) {
             return;
         }
         // Filled in place: the sums are kilobytes, and moving them cost 6 % of a read.
-        let mut c = [Sums::<C_SUMS>::EMPTY; 4];
+        let mut c = [Sums::<M>::EMPTY; 4];
         if let Some(cp) = &self.collector {
-            self.add_collector_features(cp, &pt, (first, count), &mut c);
+            self.add_collector_features(cp, pt, (first, count), &mut c);
         }
-        if count == 1 {
-            self.evaluate_runs::<1>(&pt, first, (&sums, &c), out);
-        } else {
-            self.evaluate_runs::<LANES>(&pt, first, (&sums, &c), out);
-        }
+        self.evaluate_runs::<N, M, L>(pt, first, (&sums, &c), out);
     }
 
     /// T, c and σ of the groups `first ..` into `out` from the features' sums, `L` groups side
     /// by side at a time.
     #[inline(always)]
-    fn evaluate_runs<const L: usize>(
+    fn evaluate_runs<const N: usize, const M: usize, const L: usize>(
         &self,
         pt: &Point,
         first: usize,
-        (sums, c): (&Sums<T_SUMS>, &[Sums<C_SUMS>; 4]),
+        (sums, c): (&Sums<N>, &[Sums<M>; 4]),
         out: &mut [Transport],
     ) {
         for (g0, out) in (first..).step_by(L).zip(out.chunks_mut(L)) {
-            let (t, ranges) = self.t_lanes::<L>(pt, (g0, out.len()), sums);
+            let (t, ranges) = self.t_lanes::<N, L>(pt, (g0, out.len()), sums);
             match &self.collector {
-                Some(cp) => self.collector_lanes::<L>(cp, pt, (&t, &ranges), (g0, c), out),
+                Some(cp) => self.collector_lanes::<M, L>(cp, pt, (&t, &ranges), (g0, c), out),
                 None => out.iter_mut().zip(t).for_each(|(slot, t)| slot.t = t),
             }
         }
@@ -375,7 +408,7 @@ impl<'a> TransportTables<'a> {
     }
 
     /// Adds T's features at `pt` to `sums`; false where the form says every group is 0.
-    fn add_t_features(&self, pt: &Point, sums: &mut Sums<T_SUMS>) -> bool {
+    fn add_t_features<const N: usize>(&self, pt: &Point, sums: &mut Sums<N>) -> bool {
         let (nl, nm) = (self.mu_l.len(), self.mu_v.len());
         // The features are listed first and summed after, in one loop (faster than adding
         // each from inside the generator, measured: 1–3 % on 3 Dec, 10–40 % on 4 Dec against
@@ -390,12 +423,12 @@ impl<'a> TransportTables<'a> {
 
     /// Adds the collector's features at `pt` for the groups `run`: ln σ, c_z's terms, c_z's
     /// ℓ/σ̂ terms (computed with σ̂ = 1, divided by the group's σ̂ after), c_x.
-    fn add_collector_features(
+    fn add_collector_features<const M: usize>(
         &self,
         cp: &CollectorPart,
         pt: &Point,
         run: (usize, usize),
-        out: &mut [Sums<C_SUMS>; 4],
+        out: &mut [Sums<M>; 4],
     ) {
         let (nl, nm) = (self.mu_l.len(), self.mu_v.len());
         let n = cp.form.depth_terms();
@@ -431,11 +464,11 @@ impl<'a> TransportTables<'a> {
     /// group g0 + i, with the arithmetic of one group (the same operations in the same order),
     /// so that the compiler can put the lanes in one vector register.
     #[inline(always)]
-    fn t_lanes<const L: usize>(
+    fn t_lanes<const N: usize, const L: usize>(
         &self,
         pt: &Point,
         (g0, n): (usize, usize),
-        sums: &Sums<T_SUMS>,
+        sums: &Sums<N>,
     ) -> ([f32; L], [Option<FittedDepths<f32>>; L]) {
         let n = n.min(L);
         let ranges = self.fitted_lanes(pt, (g0, n));
@@ -560,12 +593,12 @@ impl<'a> TransportTables<'a> {
     /// `out`, given their T and fitted depths there, from the collector's `sums`; c and σ are 0
     /// where T is. Lanes as in [`Self::t_lanes`].
     #[inline(always)]
-    fn collector_lanes<const L: usize>(
+    fn collector_lanes<const M: usize, const L: usize>(
         &self,
         cp: &CollectorPart,
         pt: &Point,
         (t, ranges): (&[f32; L], &[Option<FittedDepths<f32>>; L]),
-        (g0, sums): (usize, &[Sums<C_SUMS>; 4]),
+        (g0, sums): (usize, &[Sums<M>; 4]),
         out: &mut [Transport],
     ) {
         let lq = self.ln_t_lanes(pt.ln_t, (g0, out.len()), cp.q);
@@ -644,6 +677,11 @@ const T_SUMS: usize = 384;
 /// Floats of the sums of one collector statistic: 8 groups × Q ≤ 4 × J ≤ 4 at once.
 const C_SUMS: usize = 128;
 // Every form the loader accepts fits at least one group.
+/// Floats of the sums of T's features for one group of the forms the shipped tables use (Q = 5,
+/// J = 8; a form beyond takes [`T_SUMS`]).
+const ONE_T_SUMS: usize = 48;
+/// The same for one collector statistic (Q = 4, J = 4 shipped).
+const ONE_C_SUMS: usize = 16;
 const _: () = assert!(T_SUMS >= MAX_LEGENDRE * MAX_Q);
 const _: () = assert!(C_SUMS >= MAX_COLLECTOR_LEGENDRE * MAX_Q);
 
