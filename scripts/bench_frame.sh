@@ -33,7 +33,7 @@ d = json.load(open(sys.argv[1]))
 s, v = d["seconds"], d["views"]
 pixels = [x["seconds_per_stage"]["pixels"] for x in v[1:]]
 print(f"{sys.argv[2]}×{sys.argv[3]} {d['method']} {sys.argv[5]}: whole command (one frame) {int(sys.argv[4]) / 1000:.2f} s; "
-      f"phase function {s['setup_phase_function']:.3f} s, light maps {s['light_maps_once']:.3f} s, "
+      f"setup (medium, phase functions, table check) {s['setup_medium_phase_tables']:.3f} s, light maps {s['light_maps_once']:.3f} s, "
       f"sky table {s['sky_table_once']:.3f} s (once); first frame {v[0]['frame_seconds']:.3f} s; "
       f"maps reused: frame {s['mean_frame_with_maps_reused']:.3f} s "
       f"(pixels {min(pixels):.3f}–{max(pixels):.3f} s), {d['frames_per_second_with_maps_reused']:.2f} frames/s")

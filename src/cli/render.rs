@@ -474,7 +474,7 @@ fn render_orbit(scene: &Scene, args: &RenderArgs, n: usize, out: &Path) -> Resul
             "dir": format!("view_{k:03}"), "camera": cam, "frame_seconds": s,
             "maps_reused": k > 0, "seconds_per_stage": stages,
         })).collect::<Vec<_>>(),
-        "seconds": {"setup_phase_function": setup, "light_maps_once": maps, "sky_table_once": sky,
+        "seconds": {"setup_medium_phase_tables": setup, "light_maps_once": maps, "sky_table_once": sky,
                     "mean_frame_with_maps_reused": if reused.is_empty() { None } else { Some(mean_reused) }},
         "frames_per_second_with_maps_reused": (!reused.is_empty()).then(|| 1.0 / mean_reused.max(1e-9)),
         "exposure": exposure,

@@ -265,7 +265,7 @@ struct Frame<'a> {
 pub struct Prepared<'a> {
     frame: Frame<'a>,
     warnings: Vec<String>,
-    /// Seconds: the phase functions and the table check, the maps, the sky table.
+    /// Seconds: the medium, the phase functions and the table check; the maps; the sky table.
     setup: f64,
     maps: f64,
     sky: f64,
@@ -342,8 +342,8 @@ pub fn prepare<'a>(
 }
 
 impl Prepared<'_> {
-    /// Seconds it took: the phase functions and the table check, the light maps, the sky
-    /// table.
+    /// Seconds it took: the medium (its majorant grid), the phase functions and the table
+    /// check; the light maps; the sky table.
     pub fn seconds(&self) -> (f64, f64, f64) {
         (self.setup, self.maps, self.sky)
     }
@@ -383,7 +383,7 @@ impl Prepared<'_> {
             "surface_sigma_t": self.frame.threshold,
             "mean_cosine_g": self.frame.g,
             "seconds_per_stage": {
-                "setup_phase_function": self.setup,
+                "setup_medium_phase_tables": self.setup,
                 "light_maps": self.maps,
                 "sky_table": self.sky,
                 "pixels": t_pixels,
