@@ -452,6 +452,9 @@ pub fn surface_points(scene: &Scene, stride: usize) -> Result<(SunSide, Vec<View
     Ok((frame.side, points))
 }
 
+/// Rows of a band and width of a tile of the pixels' work (at least one search block).
+const TILE: usize = 8;
+
 impl Frame<'_> {
     /// The order groups of orders ≥ 2 rendered: the tables' (at most the image's).
     fn groups(&self) -> usize {
@@ -473,15 +476,11 @@ impl Frame<'_> {
         out.method = format!("{:?}", self.opts.method).to_lowercase();
         out.regions = vec![0; w * h];
         // Bands of whole blocks of `search_block` rows (a search may serve pixels of several
-        // rows), at least 8 rows where pixels share their corner rays (a band marches the row
-        // of corners below its last row again), and each band's rows in every group's plane,
-        // side by side.
+        // rows), at least `TILE` rows: the band's pixels go tile by tile, and where pixels
+        // share their corner rays a band marches the row of corners below its last row again.
+        // Each band's rows in every group's plane, side by side.
         let block = self.opts.search_block as usize;
-        let band = if self.opts.pattern.corners() {
-            block * 8usize.div_ceil(block)
-        } else {
-            block
-        };
+        let band = block * TILE.div_ceil(block);
         let mut group_bands: Vec<Vec<&mut [f32]>> = (0..h.div_ceil(band))
             .map(|_| Vec::with_capacity(ng))
             .collect();
@@ -542,15 +541,28 @@ impl Frame<'_> {
         let w = cam.width;
         let rows = images.transmittance.len() / w;
         let corners = self.corner_rays(cam, j0, rows);
-        let mut pixels: Vec<(Pixel, Option<Densest>)> = (0..rows * w)
-            .map(|k| self.marched_pixel(cam, k % w, j0 + k / w, &corners, &mut sums.stats))
-            .collect();
         let b = self.opts.search_block as usize;
+        // Tiles of the band's rows, `TILE` (or a block) wide, one after the other: a tile's
+        // rays cross the same light-map columns, which stay in the core's cache between them.
+        let tile = b * TILE.div_ceil(b);
+        let tile_order = |step: usize| {
+            (0..w).step_by(tile).flat_map(move |i0| {
+                (0..rows)
+                    .step_by(step)
+                    .flat_map(move |j| (i0..(i0 + tile).min(w)).step_by(step).map(move |i| (j, i)))
+            })
+        };
+        let mut marched: Vec<Option<(Pixel, Option<Densest>)>> = vec![None; rows * w];
+        for (j, i) in tile_order(1) {
+            marched[j * w + i] =
+                Some(self.marched_pixel(cam, i, j0 + j, &corners, &mut sums.stats));
+        }
+        let mut pixels: Vec<(Pixel, Option<Densest>)> = marched
+            .into_iter()
+            .map(|p| p.expect("every pixel marched"))
+            .collect();
         let mut shared: HashMap<usize, Searched> = HashMap::new();
-        for (bj, bi) in (0..rows)
-            .step_by(b)
-            .flat_map(|j| (0..w).step_by(b).map(move |i| (j, i)))
-        {
+        for (bj, bi) in tile_order(b) {
             // The block's pixels, row by row.
             let block = || {
                 (bj..(bj + b).min(rows))
