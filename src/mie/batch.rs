@@ -21,12 +21,6 @@ use rayon::prelude::*;
 pub const BLOCK: usize = 128;
 /// Spheres per chunk of the accumulating product (eight blocks).
 const CHUNK: usize = 1024;
-/// Angles per panel: a chunk's products, squared sums and accumulation run panel by panel, each
-/// panel on one thread, so that a panel's intermediate rows stay in that core's cache instead
-/// of a chunk's intensities filling ~18 MB of fresh memory (docs/mie.md, "Panels"). A multiple
-/// of the kernels' widths.
-const PANEL: usize = 128;
-
 /// One sphere: size parameter and relative refractive index (Im ≥ 0 absorbs).
 #[derive(Clone, Copy, Debug)]
 pub struct Particle {
@@ -118,13 +112,9 @@ pub fn weighted_intensity<R: AsRef<WeightRow> + Sync>(
         // Each panel is computed in the same order whatever the thread that takes it: the
         // products' sums run over the terms k, never across angles, so a panel's values are
         // bit for bit those of the whole width.
-        let panels: Vec<(usize, Vec<f64>)> = (0..n_ang.div_ceil(PANEL))
+        let panels: Vec<(usize, Vec<f64>)> = (0..basis.panels())
             .into_par_iter()
-            .map(|q| {
-                let columns = q * PANEL..((q + 1) * PANEL).min(n_ang);
-                let c = chunk_panel(&blocks, basis, &weights, columns);
-                (q * PANEL, c)
-            })
+            .map(|q| chunk_panel(&blocks, basis, &weights, q))
             .collect();
         for (j0, c) in panels {
             weights.add_into(&mut out, n_ang, j0, &c);
@@ -194,16 +184,18 @@ impl BlockCoefficients {
     }
 }
 
-/// W · I of one chunk on the angles `columns`: the blocks' intensities there, then their
-/// weighted sums, in scratch memory of the thread (reused: fresh multi-megabyte buffers cost
-/// more in page faults than the products themselves for small droplets).
+/// W · I of one chunk on the angles of the basis's panel `q`: the blocks' intensities there,
+/// then their weighted sums, in scratch memory of the thread (reused: fresh multi-megabyte
+/// buffers cost more in page faults than the products themselves for small droplets); with the
+/// panel's first angle.
 fn chunk_panel(
     blocks: &[BlockCoefficients],
     basis: &AngleBasis,
     weights: &ChunkWeights,
-    columns: std::ops::Range<usize>,
-) -> Vec<f64> {
-    let (n_ang, width) = (basis.n_angles(), columns.len());
+    q: usize,
+) -> (usize, Vec<f64>) {
+    let (columns, u, v) = basis.panel(q);
+    let width = columns.len();
     let spheres: usize = blocks.iter().map(|b| b.spheres).sum();
     SCRATCH.with_borrow_mut(|(sp, sm, intensity)| {
         intensity.resize(spheres * width, 0.0);
@@ -214,13 +206,14 @@ fn chunk_panel(
             rows = rest;
             sp.resize(2 * b * width, 0.0);
             sm.resize(2 * b * width, 0.0);
-            let u = &basis.u[columns.start..k * n_ang];
-            let v = &basis.v[columns.start..k * n_ang];
-            gemm_strided(2 * b, k, width, &block.plus, u, n_ang, sp);
-            gemm_strided(2 * b, k, width, &block.minus, v, n_ang, sm);
+            gemm_strided(2 * b, k, width, &block.plus, &u[..k * width], width, sp);
+            gemm_strided(2 * b, k, width, &block.minus, &v[..k * width], width, sm);
             squared_sum(b, width, sp, sm, mine);
         }
-        weights.apply(&intensity[..spheres * width], width)
+        (
+            columns.start,
+            weights.apply(&intensity[..spheres * width], width),
+        )
     })
 }
 
