@@ -7,8 +7,10 @@
 //!   i(θ) = (|S1|² + |S2|²)/2 = (|S1 + S2|² + |S1 − S2|²)/4.
 //! The requested outputs are weighted sums over spheres, `out = W · I` (W sparse: each row
 //! weighs a contiguous run of spheres), accumulated chunk by chunk with one more matrix
-//! product. The chunking does not depend on the thread count and
-//! every sum runs in a fixed order, so results are bit-identical for any number of threads.
+//! product. Within a chunk the work runs in panels of the basis's angles, one per task: no sum
+//! runs across angles, so a panel's values are those of the whole width. The chunking does not
+//! depend on the thread count and every sum runs in a fixed order, so results are
+//! bit-identical for any number of threads.
 
 use super::angular::AngleBasis;
 use super::sphere::{n_terms, Efficiencies, MieCoefficients};
@@ -21,6 +23,7 @@ use rayon::prelude::*;
 pub const BLOCK: usize = 128;
 /// Spheres per chunk of the accumulating product (eight blocks).
 const CHUNK: usize = 1024;
+
 /// One sphere: size parameter and relative refractive index (Im ≥ 0 absorbs).
 #[derive(Clone, Copy, Debug)]
 pub struct Particle {
