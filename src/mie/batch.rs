@@ -141,16 +141,46 @@ struct BlockCoefficients {
     plus: Vec<f64>,
     minus: Vec<f64>,
     efficiencies: Vec<Efficiencies>,
+    /// The products' steps ([`term_steps`]): (first sphere, last order + 1), orders growing.
+    steps: Vec<(usize, usize)>,
+}
+
+/// Spheres whose Mie coefficients are computed side by side ([`MieCoefficients::many`]).
+const LANES: usize = 4;
+/// Spheres per part of a block that [`term_steps`] may give its own term count.
+const PART: usize = 8;
+/// The fewest orders a step adds: a product over fewer terms spends more on loading and
+/// storing its rows than it saves on the padding.
+const MIN_STEP: usize = 8;
+
+/// The steps of a block's products, from its spheres' term counts `terms` (non-decreasing, as
+/// the block is sorted by x): step j multiplies orders `steps[j−1].1 .. steps[j].1` for the
+/// spheres from `steps[j].0` on, the only ones with terms there. One product over all K
+/// orders would multiply the short series' zero padding too (12 % of the flops at 20 µm).
+fn term_steps(terms: &[usize]) -> Vec<(usize, usize)> {
+    let mut steps: Vec<(usize, usize)> = Vec::new();
+    // The order count the current step opened with: a step grows in small increments until
+    // its parts need MIN_STEP orders more than that.
+    let mut opened = 0;
+    for first in (0..terms.len()).step_by(PART) {
+        let k = terms[(first + PART).min(terms.len()) - 1];
+        match steps.last_mut() {
+            Some(last) if k < opened + MIN_STEP => last.1 = k,
+            _ => {
+                steps.push((first, k));
+                opened = k;
+            }
+        }
+    }
+    steps
 }
 
 impl BlockCoefficients {
     fn new(block_idx: &[usize], particles: &[Particle], basis: &AngleBasis) -> Self {
         let b = block_idx.len();
-        let k = block_idx
-            .iter()
-            .map(|&i| n_terms(particles[i].x))
-            .max()
-            .unwrap_or(1);
+        let terms: Vec<usize> = block_idx.iter().map(|&i| n_terms(particles[i].x)).collect();
+        let steps = term_steps(&terms);
+        let k = steps.last().map_or(1, |s| s.1);
         assert!(
             k <= basis.n_max,
             "angle basis has {} orders, sphere needs {k}",
@@ -159,8 +189,13 @@ impl BlockCoefficients {
         let mut plus = vec![0.0; 2 * b * k];
         let mut minus = vec![0.0; 2 * b * k];
         let mut efficiencies = Vec::with_capacity(b);
-        for (p, &i) in block_idx.iter().enumerate() {
-            let coef = MieCoefficients::new(particles[i].m, particles[i].x);
+        let sphere = |i: usize| (particles[i].m, particles[i].x);
+        let lanes = block_idx.chunks_exact(LANES);
+        let rest = lanes.remainder().iter();
+        let coefficients = lanes
+            .flat_map(|l| MieCoefficients::many::<LANES>(std::array::from_fn(|j| sphere(l[j]))))
+            .chain(rest.map(|&i| MieCoefficients::new(particles[i].m, particles[i].x)));
+        for (p, coef) in coefficients.enumerate() {
             efficiencies.push(coef.efficiencies());
             for (n0, (a, bn)) in coef.a.iter().zip(&coef.b).enumerate() {
                 let n = (n0 + 1) as f64;
@@ -178,19 +213,42 @@ impl BlockCoefficients {
             plus,
             minus,
             efficiencies,
+            steps,
         }
     }
 
-    /// The two products' flops over `n_ang` angles, the zero padding of short series included.
+    /// The two products' flops over `n_ang` angles, the zero padding within steps included.
     fn flops(&self, n_ang: usize) -> f64 {
-        2.0 * 2.0 * (2 * self.spheres * self.terms * n_ang) as f64
+        let mut from = 0;
+        let mut multiplied = 0;
+        for &(first, to) in &self.steps {
+            multiplied += (self.spheres - first) * (to - from);
+            from = to;
+        }
+        2.0 * 2.0 * (2 * multiplied * n_ang) as f64
+    }
+
+    /// [Re; Im] rows (2b × `width`) of `coefficients` (C⁺ or C⁻) times the panel's `basis`
+    /// (U or V, its orders' rows `width` wide), step by step: each step's orders are added to
+    /// the rows of the spheres that have them.
+    fn product(&self, coefficients: &[f64], basis: &[f64], width: usize, rows: &mut [f64]) {
+        let (b, k) = (self.spheres, self.terms);
+        let mut from = 0;
+        for &(first, to) in &self.steps {
+            let a = Strided::new(&coefficients[2 * first * k + from..], k);
+            let u = Strided::new(&basis[from * width..], width);
+            let beta = if from == 0 { 0.0 } else { 1.0 };
+            gemm(2 * (b - first), to - from, width, a, u, beta, &mut rows[2 * first * width..]);
+            from = to;
+        }
     }
 }
 
 /// W · I of one chunk on the angles of the basis's panel `q`: the blocks' intensities there,
 /// then their weighted sums, in scratch memory of the thread (reused: fresh multi-megabyte
 /// buffers cost more in page faults than the products themselves for small droplets); with the
-/// panel's first angle.
+/// panel's first angle. Sparse weights take each sphere's intensities as its block yields
+/// them, while they are in cache; dense ones a product over the chunk's intensities.
 fn chunk_panel(
     blocks: &[BlockCoefficients],
     basis: &AngleBasis,
@@ -200,24 +258,32 @@ fn chunk_panel(
     let (columns, u, v) = basis.panel(q);
     let width = columns.len();
     let spheres: usize = blocks.iter().map(|b| b.spheres).sum();
+    let mut c = vec![0.0; weights.active.len() * width];
     SCRATCH.with_borrow_mut(|(sp, sm, intensity)| {
-        intensity.resize(spheres * width, 0.0);
-        let mut rows = &mut intensity[..spheres * width];
+        let dense = !weights.sparse;
+        intensity.resize(if dense { spheres } else { 1 } * width, 0.0);
+        let mut first = 0;
         for block in blocks {
             let (b, k) = (block.spheres, block.terms);
-            let (mine, rest) = rows.split_at_mut(b * width);
-            rows = rest;
             sp.resize(2 * b * width, 0.0);
             sm.resize(2 * b * width, 0.0);
-            gemm_strided(2 * b, k, width, &block.plus, &u[..k * width], width, sp);
-            gemm_strided(2 * b, k, width, &block.minus, &v[..k * width], width, sm);
-            squared_sum(b, width, sp, sm, mine);
+            block.product(&block.plus, &u[..k * width], width, sp);
+            block.product(&block.minus, &v[..k * width], width, sm);
+            for p in 0..b {
+                let row = if dense { first + p } else { 0 };
+                let row = &mut intensity[row * width..(row + 1) * width];
+                intensity_row(p, width, sp, sm, row);
+                if !dense {
+                    weights.add_sphere(first + p, row, &mut c);
+                }
+            }
+            first += b;
         }
-        (
-            columns.start,
-            weights.apply(&intensity[..spheres * width], width),
-        )
-    })
+        if dense {
+            weights.apply_dense(&intensity[..spheres * width], width, &mut c);
+        }
+    });
+    (columns.start, c)
 }
 
 thread_local! {
@@ -225,16 +291,13 @@ thread_local! {
         const { std::cell::RefCell::new((Vec::new(), Vec::new(), Vec::new())) };
 }
 
-/// rows[p] = (|S1 + S2|² + |S1 − S2|²)/4 from the [Re; Im] rows of both products (`width`
-/// angles each).
-fn squared_sum(b: usize, width: usize, sp: &[f64], sm: &[f64], rows: &mut [f64]) {
-    for p in 0..b {
-        let row = &mut rows[p * width..(p + 1) * width];
-        let (pr, pi) = (&sp[2 * p * width..], &sp[(2 * p + 1) * width..]);
-        let (mr, mi) = (&sm[2 * p * width..], &sm[(2 * p + 1) * width..]);
-        for j in 0..width {
-            row[j] = 0.25 * (pr[j] * pr[j] + pi[j] * pi[j] + mr[j] * mr[j] + mi[j] * mi[j]);
-        }
+/// row = (|S1 + S2|² + |S1 − S2|²)/4 of sphere `p` from the [Re; Im] rows of both products
+/// (`width` angles each).
+fn intensity_row(p: usize, width: usize, sp: &[f64], sm: &[f64], row: &mut [f64]) {
+    let (pr, pi) = (&sp[2 * p * width..], &sp[(2 * p + 1) * width..]);
+    let (mr, mi) = (&sm[2 * p * width..], &sm[(2 * p + 1) * width..]);
+    for j in 0..width {
+        row[j] = 0.25 * (pr[j] * pr[j] + pi[j] * pi[j] + mr[j] * mr[j] + mi[j] * mi[j]);
     }
 }
 
@@ -251,6 +314,10 @@ struct ChunkWeights {
     nnz: usize,
     /// Whether the weights are added one by one rather than by a matrix product.
     sparse: bool,
+    /// The non-zero weights sphere by sphere, (active row, weight), in row order: sphere p's
+    /// are `by_sphere[starts[p]..starts[p + 1]]`.
+    by_sphere: Vec<(usize, f64)>,
+    starts: Vec<usize>,
 }
 
 impl ChunkWeights {
@@ -285,35 +352,40 @@ impl ChunkWeights {
         // filled (the product rule puts each sphere in one wavelength row), add the non-zeros
         // one by one. The choice depends on the data only, never on the thread count.
         let sparse = 4 * nnz < active.len() * kc;
+        let mut by_sphere = Vec::with_capacity(nnz);
+        let mut starts = Vec::with_capacity(kc + 1);
+        for p in 0..kc {
+            starts.push(by_sphere.len());
+            let column = (0..active.len()).map(|a| (a, w[a * kc + p]));
+            by_sphere.extend(column.filter(|&(_, v)| v != 0.0));
+        }
+        starts.push(by_sphere.len());
         Self {
             active,
             w,
             kc,
             nnz,
             sparse,
+            by_sphere,
+            starts,
         }
     }
 
-    /// W · I on one panel: `intensity` is kc × `width` (the chunk's spheres in order); the
-    /// result active × `width`.
-    fn apply(&self, intensity: &[f64], width: usize) -> Vec<f64> {
-        let (na, kc) = (self.active.len(), self.kc);
-        let mut c = vec![0.0; na * width];
-        if self.sparse {
-            for (a, c_row) in c.chunks_mut(width).enumerate() {
-                for (p, &wp) in self.w[a * kc..(a + 1) * kc]
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, v)| **v != 0.0)
-                {
-                    let src = &intensity[p * width..(p + 1) * width];
-                    c_row.iter_mut().zip(src).for_each(|(d, s)| *d += wp * s);
-                }
-            }
-        } else {
-            gemm_strided(na, kc, width, &self.w, intensity, width, &mut c);
+    /// c[a] += W[a, p] · I_p for the chunk's sphere `p` and every active row a it weighs
+    /// (`c` is active × width). Taken sphere after sphere, each row gets its terms in the
+    /// order of a row-by-row sum.
+    fn add_sphere(&self, p: usize, intensity: &[f64], c: &mut [f64]) {
+        let width = intensity.len();
+        for &(a, wp) in &self.by_sphere[self.starts[p]..self.starts[p + 1]] {
+            let c_row = &mut c[a * width..(a + 1) * width];
+            c_row.iter_mut().zip(intensity).for_each(|(d, s)| *d += wp * s);
         }
-        c
+    }
+
+    /// c = W · I on one panel by a matrix product: `intensity` is kc × `width` (the chunk's
+    /// spheres in order), `c` active × `width`.
+    fn apply_dense(&self, intensity: &[f64], width: usize, c: &mut [f64]) {
+        gemm_strided(self.active.len(), self.kc, width, &self.w, intensity, width, c);
     }
 
     /// Adds a panel's W · I (from [`Self::apply`], its first column `j0`) into `out`.
@@ -339,14 +411,27 @@ impl ChunkWeights {
     }
 }
 
-/// C (m × n, contiguous) = A (m × k, contiguous) · B (k × n with row stride `ldb`), through
-/// matrixmultiply's dgemm (its kernels are picked at run time: AVX-512, AVX2/FMA, SSE2). Public
-/// for the GEMM benchmark (benches/mie.rs), which times this very call against the `gemm` crate.
-pub fn gemm_strided(m: usize, k: usize, n: usize, a: &[f64], b: &[f64], ldb: usize, c: &mut [f64]) {
-    if m == 0 || n == 0 {
+/// A matrix operand: its elements and its row stride (columns contiguous).
+#[derive(Clone, Copy)]
+struct Strided<'a> {
+    data: &'a [f64],
+    stride: usize,
+}
+
+impl<'a> Strided<'a> {
+    fn new(data: &'a [f64], stride: usize) -> Self {
+        Self { data, stride }
+    }
+}
+
+/// C (m × n, contiguous) = A (m × k) · B (k × n) + β C, through matrixmultiply's dgemm (its
+/// kernels are picked at run time: AVX-512, AVX2/FMA, SSE2).
+fn gemm(m: usize, k: usize, n: usize, a: Strided, b: Strided, beta: f64, c: &mut [f64]) {
+    if m == 0 || n == 0 || k == 0 {
         return;
     }
-    assert!(a.len() >= m * k && c.len() >= m * n && b.len() >= (k - 1) * ldb + n);
+    assert!(a.data.len() >= (m - 1) * a.stride + k && c.len() >= m * n);
+    assert!(b.data.len() >= (k - 1) * b.stride + n);
     // SAFETY: bounds checked just above.
     unsafe {
         matrixmultiply::dgemm(
@@ -354,16 +439,50 @@ pub fn gemm_strided(m: usize, k: usize, n: usize, a: &[f64], b: &[f64], ldb: usi
             k,
             n,
             1.0,
-            a.as_ptr(),
-            k as isize,
+            a.data.as_ptr(),
+            a.stride as isize,
             1,
-            b.as_ptr(),
-            ldb as isize,
+            b.data.as_ptr(),
+            b.stride as isize,
             1,
-            0.0,
+            beta,
             c.as_mut_ptr(),
             n as isize,
             1,
         );
+    }
+}
+
+/// C (m × n, contiguous) = A (m × k, contiguous) · B (k × n with row stride `ldb`): the call
+/// the products make. Public for the GEMM benchmark (benches/mie.rs), which times it against
+/// the `gemm` crate.
+pub fn gemm_strided(m: usize, k: usize, n: usize, a: &[f64], b: &[f64], ldb: usize, c: &mut [f64]) {
+    gemm(m, k, n, Strided::new(a, k), Strided::new(b, ldb), 0.0, c);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every sphere's own terms lie within the orders its steps give it, the steps' orders
+    /// grow, and the last step reaches the block's largest term count.
+    #[test]
+    fn term_steps_cover_every_sphere() {
+        let cases: [&[usize]; 4] = [
+            &[5],
+            &[3, 3, 3, 3, 3, 3, 3, 3, 3, 3],
+            &[10, 11, 12, 20, 21, 22, 23, 40, 41, 60, 61, 62, 63, 64, 65, 66, 90],
+            &[1, 1, 1, 1, 1, 1, 1, 1, 200],
+        ];
+        for terms in cases {
+            let steps = term_steps(terms);
+            assert_eq!(steps[0].0, 0);
+            assert_eq!(steps.last().unwrap().1, *terms.last().unwrap());
+            assert!(steps.windows(2).all(|s| s[0].0 < s[1].0 && s[0].1 < s[1].1));
+            for (p, &n) in terms.iter().enumerate() {
+                let reach = steps.iter().filter(|s| s.0 <= p).map(|s| s.1).max().unwrap();
+                assert!(reach >= n, "sphere {p} needs {n} terms, gets {reach}: {steps:?}");
+            }
+        }
     }
 }

@@ -17,6 +17,7 @@
 //! cancellation of the textbook form at small x.
 
 use num_complex::Complex64;
+use std::array::from_fn;
 
 /// Number of terms of the Mie series: Wiscombe (1980), N = x + 4.05 x^{1/3} + 2.
 ///
@@ -50,23 +51,27 @@ pub struct Efficiencies {
     pub g: f64,
 }
 
-/// Logarithmic derivative D_n(z) for n = 0..=n_max, by downward recurrence
-/// D_{n−1} = n/z − 1/(D_n + n/z) from D_start = 0, started `start − n_max` orders above.
+/// Logarithmic derivatives D_n(z) for n = 0..=n_max, by downward recurrence
+/// D_{n−1} = n/z − 1/(D_n + n/z) from D_start = 0, started `start − n_max` orders above; for L
+/// arguments at once, each with its own n_max (the recurrences are chains of divisions: side by
+/// side, their latencies overlap; each lane's operations are those of a lone call).
 ///
 /// The recurrence is stable downward, and the error of the arbitrary start value shrinks like
 /// ψ_start/χ_start, which only becomes tiny some turning-point widths (|z|/2)^{1/3} above |z|:
 /// BHMIE's classic "max(N, |z|) + 15" leaves errors of 1e-6 at |z| ≈ 130 with Im z ≈ 0. We
 /// start [`start_order`] orders up, where that ratio is below 1e-17.
-fn log_derivative(z: Complex64, n_max: usize) -> Vec<Complex64> {
-    let start = start_order(n_max, z.norm());
-    let mut d = vec![Complex64::new(0.0, 0.0); n_max + 1];
-    let mut dn = Complex64::new(0.0, 0.0);
-    let inv_z = 1.0 / z;
-    for n in (1..=start).rev() {
-        let nz = inv_z * n as f64;
-        dn = nz - 1.0 / (dn + nz);
-        if n - 1 <= n_max {
-            d[n - 1] = dn;
+fn log_derivative<const L: usize>(z: [Complex64; L], n_max: [usize; L]) -> [Vec<Complex64>; L] {
+    let start: [usize; L] = from_fn(|l| start_order(n_max[l], z[l].norm()));
+    let mut d: [Vec<Complex64>; L] = from_fn(|l| vec![Complex64::new(0.0, 0.0); n_max[l] + 1]);
+    let mut dn = [Complex64::new(0.0, 0.0); L];
+    let inv_z: [Complex64; L] = from_fn(|l| 1.0 / z[l]);
+    for n in (1..=start.into_iter().max().unwrap_or(0)).rev() {
+        for l in (0..L).filter(|&l| n <= start[l]) {
+            let nz = inv_z[l] * n as f64;
+            dn[l] = nz - 1.0 / (dn[l] + nz);
+            if n - 1 <= n_max[l] {
+                d[l][n - 1] = dn[l];
+            }
         }
     }
     d
@@ -85,43 +90,50 @@ fn start_order(n_max: usize, z_abs: f64) -> usize {
 /// recurrence ψ_{n−1} = ((2n + 1)/x) ψ_n − ψ_{n+1} from an arbitrary start far above
 /// max(n_max, x), rescaled on the way to stay in range, then normalised by whichever of the
 /// exact ψ_0 = sin x and ψ_1 = sin x / x − cos x is larger in magnitude (both never vanish
-/// together, and ψ_0 is the larger one for small x, where ψ_1 would lose digits).
-fn riccati_psi(x: f64, n_max: usize) -> Vec<f64> {
-    let start = start_order(n_max, x);
-    let mut psi = vec![0.0; n_max + 1];
-    let (mut above, mut here) = (0.0, 1e-200);
-    for n in (1..=start).rev() {
-        let below = (2 * n + 1) as f64 / x * here - above;
-        (above, here) = (here, below);
-        if here.abs() > 1e200 {
-            (above, here) = (above * 1e-200, here * 1e-200);
-            psi.iter_mut().for_each(|p| *p *= 1e-200);
-        }
-        if n - 1 <= n_max {
-            psi[n - 1] = here;
+/// together, and ψ_0 is the larger one for small x, where ψ_1 would lose digits). L arguments
+/// side by side, as [`log_derivative`].
+fn riccati_psi<const L: usize>(x: [f64; L], n_max: [usize; L]) -> [Vec<f64>; L] {
+    let start: [usize; L] = from_fn(|l| start_order(n_max[l], x[l]));
+    let mut psi: [Vec<f64>; L] = from_fn(|l| vec![0.0; n_max[l] + 1]);
+    let (mut above, mut here) = ([0.0; L], [1e-200; L]);
+    for n in (1..=start.into_iter().max().unwrap_or(0)).rev() {
+        for l in (0..L).filter(|&l| n <= start[l]) {
+            let below = (2 * n + 1) as f64 / x[l] * here[l] - above[l];
+            (above[l], here[l]) = (here[l], below);
+            if here[l].abs() > 1e200 {
+                (above[l], here[l]) = (above[l] * 1e-200, here[l] * 1e-200);
+                psi[l].iter_mut().for_each(|p| *p *= 1e-200);
+            }
+            if n - 1 <= n_max[l] {
+                psi[l][n - 1] = here[l];
+            }
         }
     }
-    let (s, c) = x.sin_cos();
-    let psi1 = s / x - c;
-    let scale = if s.abs() >= psi1.abs() {
-        s / psi[0]
-    } else {
-        psi1 / psi[1]
-    };
-    psi.iter_mut().for_each(|p| *p *= scale);
+    for (psi, x) in psi.iter_mut().zip(x) {
+        let (s, c) = x.sin_cos();
+        let psi1 = s / x - c;
+        let scale = if s.abs() >= psi1.abs() {
+            s / psi[0]
+        } else {
+            psi1 / psi[1]
+        };
+        psi.iter_mut().for_each(|p| *p *= scale);
+    }
     psi
 }
 
 /// Real-argument version of [`log_derivative`] (for the medium side, z = x).
-fn log_derivative_real(x: f64, n_max: usize) -> Vec<f64> {
-    let start = start_order(n_max, x);
-    let mut d = vec![0.0; n_max + 1];
-    let mut dn = 0.0;
-    for n in (1..=start).rev() {
-        let nx = n as f64 / x;
-        dn = nx - 1.0 / (dn + nx);
-        if n - 1 <= n_max {
-            d[n - 1] = dn;
+fn log_derivative_real<const L: usize>(x: [f64; L], n_max: [usize; L]) -> [Vec<f64>; L] {
+    let start: [usize; L] = from_fn(|l| start_order(n_max[l], x[l]));
+    let mut d: [Vec<f64>; L] = from_fn(|l| vec![0.0; n_max[l] + 1]);
+    let mut dn = [0.0; L];
+    for n in (1..=start.into_iter().max().unwrap_or(0)).rev() {
+        for l in (0..L).filter(|&l| n <= start[l]) {
+            let nx = n as f64 / x[l];
+            dn[l] = nx - 1.0 / (dn[l] + nx);
+            if n - 1 <= n_max[l] {
+                d[l][n - 1] = dn[l];
+            }
         }
     }
     d
@@ -135,11 +147,31 @@ impl MieCoefficients {
 
     /// Computes the first `n` coefficients (n ≥ 1).
     pub fn with_terms(m: Complex64, x: f64, n: usize) -> Self {
-        let dm = log_derivative(m * x, n);
+        let [coefficients] = Self::side_by_side([(m, x)], [n]);
+        coefficients
+    }
+
+    /// [`Self::new`] of L spheres (m, x) at once: their downward recurrences run side by
+    /// side, so that one sphere's chain of divisions overlaps another's (the same values, bit
+    /// for bit, as one at a time).
+    pub fn many<const L: usize>(spheres: [(Complex64, f64); L]) -> [Self; L] {
+        Self::side_by_side(spheres, from_fn(|l| n_terms(spheres[l].1)))
+    }
+
+    fn side_by_side<const L: usize>(spheres: [(Complex64, f64); L], n: [usize; L]) -> [Self; L] {
+        let x: [f64; L] = from_fn(|l| spheres[l].1);
+        let dm = log_derivative(from_fn(|l| spheres[l].0 * x[l]), n);
         let dx = log_derivative_real(x, n);
+        let psi = riccati_psi(x, n);
+        from_fn(|l| Self::from_recurrences(spheres[l].0, x[l], &dm[l], &dx[l], &psi[l]))
+    }
+
+    /// a_n, b_n (n = 1 … dm.len() − 1) from D_n(mx), D_n(x) and ψ_n(x), with the growing
+    /// η_n = x y_n(x) by upward recurrence.
+    fn from_recurrences(m: Complex64, x: f64, dm: &[Complex64], dx: &[f64], psi: &[f64]) -> Self {
+        let n = dm.len() - 1;
         let (sin_x, cos_x) = x.sin_cos();
         // ψ_{n−1}, ψ_n and η = x y: η_{−1}... start at n = 0: η_0 = −cos x, η_1 = −cos x / x − sin x.
-        let psi = riccati_psi(x, n);
         let mut psi_prev = psi[0];
         let mut eta_prev = -cos_x;
         let mut eta = -cos_x / x - sin_x;
