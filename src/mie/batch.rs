@@ -238,7 +238,15 @@ impl BlockCoefficients {
             let a = Strided::new(&coefficients[2 * first * k + from..], k);
             let u = Strided::new(&basis[from * width..], width);
             let beta = if from == 0 { 0.0 } else { 1.0 };
-            gemm(2 * (b - first), to - from, width, a, u, beta, &mut rows[2 * first * width..]);
+            gemm(
+                2 * (b - first),
+                to - from,
+                width,
+                a,
+                u,
+                beta,
+                &mut rows[2 * first * width..],
+            );
             from = to;
         }
     }
@@ -378,14 +386,25 @@ impl ChunkWeights {
         let width = intensity.len();
         for &(a, wp) in &self.by_sphere[self.starts[p]..self.starts[p + 1]] {
             let c_row = &mut c[a * width..(a + 1) * width];
-            c_row.iter_mut().zip(intensity).for_each(|(d, s)| *d += wp * s);
+            c_row
+                .iter_mut()
+                .zip(intensity)
+                .for_each(|(d, s)| *d += wp * s);
         }
     }
 
     /// c = W · I on one panel by a matrix product: `intensity` is kc × `width` (the chunk's
     /// spheres in order), `c` active × `width`.
     fn apply_dense(&self, intensity: &[f64], width: usize, c: &mut [f64]) {
-        gemm_strided(self.active.len(), self.kc, width, &self.w, intensity, width, c);
+        gemm_strided(
+            self.active.len(),
+            self.kc,
+            width,
+            &self.w,
+            intensity,
+            width,
+            c,
+        );
     }
 
     /// Adds a panel's W · I (from [`Self::apply`], its first column `j0`) into `out`.
@@ -471,7 +490,9 @@ mod tests {
         let cases: [&[usize]; 4] = [
             &[5],
             &[3, 3, 3, 3, 3, 3, 3, 3, 3, 3],
-            &[10, 11, 12, 20, 21, 22, 23, 40, 41, 60, 61, 62, 63, 64, 65, 66, 90],
+            &[
+                10, 11, 12, 20, 21, 22, 23, 40, 41, 60, 61, 62, 63, 64, 65, 66, 90,
+            ],
             &[1, 1, 1, 1, 1, 1, 1, 1, 200],
         ];
         for terms in cases {
@@ -480,8 +501,16 @@ mod tests {
             assert_eq!(steps.last().unwrap().1, *terms.last().unwrap());
             assert!(steps.windows(2).all(|s| s[0].0 < s[1].0 && s[0].1 < s[1].1));
             for (p, &n) in terms.iter().enumerate() {
-                let reach = steps.iter().filter(|s| s.0 <= p).map(|s| s.1).max().unwrap();
-                assert!(reach >= n, "sphere {p} needs {n} terms, gets {reach}: {steps:?}");
+                let reach = steps
+                    .iter()
+                    .filter(|s| s.0 <= p)
+                    .map(|s| s.1)
+                    .max()
+                    .unwrap();
+                assert!(
+                    reach >= n,
+                    "sphere {p} needs {n} terms, gets {reach}: {steps:?}"
+                );
             }
         }
     }

@@ -261,14 +261,21 @@ impl SlabGrid {
             return 0;
         }
         // Bin k holds cos ψ = z/r ∈ (cos ψ_{k+1}, cos ψ_k]; edges inside (0, π) only; compared
-        // as z against r cos ψ_k, without a division.
+        // as z against r cos ψ_k, without a division. The edges' cosines decrease, so the bin is
+        // the count of those at or above z/r: counted without a branch (a binary search's
+        // branches go either way at random, a mispredicted jump each).
         let inner = &self.psi_cos[1..self.psi_cos.len() - 1];
-        inner.partition_point(|e| *e * r >= z)
+        inner.iter().map(|e| (*e * r >= z) as usize).sum()
     }
 }
 
+/// The bin of `x` among increasing `edges` (edges belong to the bin above), counted without a
+/// branch as in [`SlabGrid::psi_bin_of`].
 fn bin(edges: &[f64], x: f64) -> usize {
-    edges[1..edges.len() - 1].partition_point(|e| *e <= x)
+    edges[1..edges.len() - 1]
+        .iter()
+        .map(|e| (*e <= x) as usize)
+        .sum()
 }
 
 /// `n` ≥ 2 planes from 0 to t, stretched toward the lit face (module docs).
