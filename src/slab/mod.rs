@@ -4,6 +4,7 @@
 //! - [`grid`]: tally planes, view-direction bins, order groups.
 //! - [`aureole`]: cones around the transmitted beam, the halo the view bins smear.
 //! - [`walk`]: the photon walk of one slice (t, μ_L) and its per-batch random streams.
+//! - [`lanes`]: the walk's photons side by side in SIMD lanes, their streams and free paths.
 //! - [`tally`]: per-batch sums, batch-means statistics, the tables of a slice.
 //! - [`run`]: a slice run to its stopping rule, deterministic for any thread count.
 //! - [`single`]: the order-1 collector by quadrature, for validation (T₁ itself is the
@@ -16,6 +17,7 @@ pub mod aureole;
 pub mod checkpoint;
 pub mod config;
 pub mod grid;
+pub mod lanes;
 pub mod output;
 pub mod run;
 pub mod single;

@@ -79,6 +79,15 @@ pub trait PhaseFunction<F: Real> {
     /// [`Self::sample_mu`] with 1 − μ kept precise.
     fn sample_cosine(&self, xi: F) -> Cosine<F>;
 
+    /// [`Self::sample_cosine`] of every ξ in `xi` into `out`, in order: one call for many
+    /// samples (a slab walk's lanes), so that the model's own sampler is inlined into the loop
+    /// rather than called through a trait object for each. The same values as one at a time.
+    fn sample_cosines(&self, xi: &[F], out: &mut [Cosine<F>]) {
+        for (c, &x) in out.iter_mut().zip(xi) {
+            *c = self.sample_cosine(x);
+        }
+    }
+
     /// [`Self::pdf`] from a [`Cosine`], using 1 − μ where it matters.
     fn pdf_cosine(&self, c: Cosine<F>) -> F {
         self.pdf(c.mu)
