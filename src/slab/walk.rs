@@ -164,6 +164,12 @@ impl Slice<'_> {
                 if !p.alive[l] {
                     continue;
                 }
+                // A photon still in the slab has scattered (an event, even if absorption
+                // then ends it).
+                if !left[l] {
+                    p.order[l] = p.order[l].saturating_add(1);
+                    tally.events += 1;
+                }
                 let absorbed =
                     !left[l] && survive.is_some_and(|u| self.absorb(&mut p, l, u[l], &mut tally));
                 if left[l] || absorbed {
@@ -172,9 +178,6 @@ impl Slice<'_> {
                         self.launch(&mut p, l);
                         launched += 1;
                     }
-                } else {
-                    p.order[l] = p.order[l].saturating_add(1);
-                    tally.events += 1;
                 }
             }
         }
@@ -237,7 +240,7 @@ impl Slice<'_> {
     }
 
     /// Every lane's flight frame for the tally, side by side: at normal incidence the pooled
-    /// frame ([`Self::pooled_frame`]), else the view bins with the mirror of x.
+    /// frame ([`pooled_frame`]), else the view bins with the mirror of x.
     #[inline(always)]
     fn flight_frames(&self, p: &Photons) -> FlightFrame {
         let g = self.grid;
@@ -404,7 +407,7 @@ fn visit_planes(
 }
 
 /// Spreads the normal-incidence sums w/|μ| · (1, a, b, a² + b²) of the ψ_V = 0 cells (see
-/// [`Slice::pooled_frame`]) over every ψ_V bin k: Δψ_k/π · (1, a S_k + b C_k, a C_k − b S_k,
+/// [`pooled_frame`]) over every ψ_V bin k: Δψ_k/π · (1, a S_k + b C_k, a C_k − b S_k,
 /// a² + b²), with S_k, C_k the bin's means of sin ψ and cos ψ.
 fn expand_pooled(g: &SlabGrid, tally: &mut BatchTally) {
     let means = g.psi_bin_means();
