@@ -2,7 +2,8 @@
 //! their steps together. The arithmetic that is the same for all of them (random numbers, the
 //! flight, the flight's frame for the tally, the turn to the new direction) runs as loops over
 //! the lanes, which the compiler turns into vector instructions; what differs (the planes a
-//! flight crosses, the phase function's sampler, leaving the slab) runs lane by lane. The
+//! flight crosses, leaving the slab) runs lane by lane, and the phase function's sampler takes
+//! all lanes in one call (`PhaseFunction::sample_cosines`). The
 //! whole walk is compiled three times, for AVX-512, AVX2 and baseline x86-64, and picked at run
 //! time ([`super::walk::Slice::run_batch`]); no fused multiply–add is formed, so the three give
 //! the same bits.
