@@ -146,30 +146,23 @@ mod tests {
             .map(|k| k as f64 / 4098.0)
             .chain([1e-300, 1.0 - f64::EPSILON, 0.5])
             .collect();
+        let xi32: Vec<f32> = xi.iter().map(|&x| x as f32).collect();
         for g in [0.9, 0.6, 0.3, 0.0, -0.4, -0.85] {
-            let hg = HenyeyGreenstein::new(g);
-            let mut many = vec![Cosine::from_mu(0.0); xi.len()];
-            hg.sample_cosines(&xi, &mut many);
-            for (c, &x) in many.iter().zip(&xi) {
-                let one = hg.sample_cosine(x);
-                assert_eq!(
-                    (c.mu.to_bits(), c.one_minus_mu.to_bits()),
-                    (one.mu.to_bits(), one.one_minus_mu.to_bits()),
-                    "g {g}, xi {x}"
-                );
-            }
-            let hg32 = HenyeyGreenstein::new(g as f32);
-            let xi32: Vec<f32> = xi.iter().map(|&x| x as f32).collect();
-            let mut many32 = vec![Cosine::from_mu(0.0f32); xi.len()];
-            hg32.sample_cosines(&xi32, &mut many32);
-            for (c, &x) in many32.iter().zip(&xi32) {
-                let one = hg32.sample_cosine(x);
-                assert_eq!(
-                    (c.mu.to_bits(), c.one_minus_mu.to_bits()),
-                    (one.mu.to_bits(), one.one_minus_mu.to_bits()),
-                    "g {g}, xi {x}"
-                );
-            }
+            same_as_one_at_a_time(g, &xi);
+            same_as_one_at_a_time(g as f32, &xi32);
+        }
+    }
+
+    /// `sample_cosines` of `xi` against `sample_cosine` of each, bit for bit (f32 values are
+    /// compared as their exact f64 widening).
+    fn same_as_one_at_a_time<F: Real>(g: F, xi: &[F]) {
+        let hg = HenyeyGreenstein::new(g);
+        let mut many = vec![Cosine::from_mu(F::of(0.0)); xi.len()];
+        hg.sample_cosines(xi, &mut many);
+        let bits = |c: Cosine<F>| (c.mu.f64().to_bits(), c.one_minus_mu.f64().to_bits());
+        for (&c, &x) in many.iter().zip(xi) {
+            let (g, x) = (g.f64(), x.f64());
+            assert_eq!(bits(c), bits(hg.sample_cosine(F::of(x))), "g {g}, xi {x}");
         }
     }
 }
