@@ -1,5 +1,6 @@
 //! Scattering events per second on one core of the slab walk with full tallies (default grid:
-//! 16 planes × 16 μ_V × 12 ψ_V × 9 order groups, collector moments), on the problem of
+//! 16 planes × 16 μ_V × 12 ψ_V × 9 order groups, collector moments, and the 9 aureole annuli
+//! around the beam that every table made from a config tallies), on the problem of
 //! benches/baselines/slab_ref.c (τ = 4, HG g = 0.9, normal incidence), so that
 //! scripts/bench_slab.sh can print both side by side.
 //!
@@ -9,6 +10,7 @@
 //! of 10 µm droplets the default tables walk with, sampled exactly).
 
 use nephele::phase::{Phase, PhaseSpec};
+use nephele::slab::aureole::{Aureole, DEFAULT_AUREOLE_DEG};
 use nephele::slab::walk::batch_rng;
 use nephele::slab::{SlabGrid, Slice};
 use nephele_runtime::phase::HenyeyGreenstein;
@@ -37,7 +39,9 @@ fn main() {
         Some(other) => panic!("phase {other}: expected hg or mie10"),
     };
     let hg = HenyeyGreenstein::new(0.9);
-    let grid = SlabGrid::default_for(4.0).expect("default grid");
+    let mut grid = SlabGrid::default_for(4.0).expect("default grid");
+    // The annuli of every config's grid (`aureole_deg`'s default): `default_for` has none.
+    grid.aureole = Aureole::new(DEFAULT_AUREOLE_DEG.to_vec()).expect("the default annuli");
     let walk = |phase: &(dyn PhaseFunction<f64> + Sync)| {
         let slice = Slice {
             grid: &grid,

@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
 # Slab walk speed: nephele's walk with full tallies (examples/bench_slab.rs) next to the plain
 # scalar C walk of benches/baselines/slab_ref.c (cc -O3 -march=native), same problem (τ = 4,
-# HG g = 0.9, normal incidence), one core each, in one run.
+# HG g = 0.9, normal incidence), one core each, in one run. The walk tallies what every table
+# made from a config tallies: the cells' collector moments and the 9 aureole annuli around the
+# beam. Last, the walk with the Mie phase function of 10 µm droplets (what the default tables
+# walk with) at mu_L = 0.5.
 # Usage: scripts/bench_slab.sh [PHOTONS]
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -14,8 +17,11 @@ cargo build --release --quiet --example bench_slab
 echo "== benches/baselines/slab_ref.c (analog walk, totals and 10 μ bins)"
 "$tmp/slab_ref" 4 0.9 "$n" | head -2
 echo
-echo "== nephele slab walk (16 planes × 16 μ_V × 12 ψ_V × 9 groups, collector moments)"
+echo "== nephele slab walk (16 planes × 16 μ_V × 12 ψ_V × 9 groups, collector moments, 9 aureole annuli)"
 target/release/examples/bench_slab "$n"
 echo
 echo "== the same at mu_L = 0.5 (the plain tally; slab_ref.c has normal incidence only)"
 target/release/examples/bench_slab "$n" 0.5
+echo
+echo "== the Mie phase function of 10 µm droplets at mu_L = 0.5 (the default tables' walk)"
+target/release/examples/bench_slab "$n" 0.5 mie10

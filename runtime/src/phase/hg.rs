@@ -94,38 +94,12 @@ impl<F: Real> PhaseFunction<F> for HenyeyGreenstein<F> {
         Some(self.g)
     }
 
-    /// Many samples at once, compiled for AVX2 where the CPU has it (no FMA: the same values
-    /// as one at a time, bit for bit).
-    fn sample_cosines(&self, xi: &[F], out: &mut [Cosine<F>]) {
-        #[cfg(all(feature = "std", target_arch = "x86_64"))]
-        {
-            if std::is_x86_feature_detected!("avx512f") && std::is_x86_feature_detected!("avx512vl")
-            {
-                // SAFETY: the CPU has AVX-512 F and VL, checked just above.
-                return unsafe { self.sample_cosines_avx512(xi, out) };
-            }
-            if std::is_x86_feature_detected!("avx2") {
-                // SAFETY: the CPU has AVX2, checked just above.
-                return unsafe { self.sample_cosines_avx2(xi, out) };
-            }
-        }
-        self.sample_cosines_any(xi, out);
-    }
+    // Many samples at once, compiled for the CPU's vector units ([`sample_cosines_on_cpu`]).
+    sample_cosines_on_cpu!(HenyeyGreenstein<F>, sample_cosines_any);
 }
 
 impl<F: Real> HenyeyGreenstein<F> {
-    #[cfg(all(feature = "std", target_arch = "x86_64"))]
-    #[target_feature(enable = "avx512f,avx512vl,avx2")]
-    fn sample_cosines_avx512(&self, xi: &[F], out: &mut [Cosine<F>]) {
-        self.sample_cosines_any(xi, out);
-    }
-
-    #[cfg(all(feature = "std", target_arch = "x86_64"))]
-    #[target_feature(enable = "avx2")]
-    fn sample_cosines_avx2(&self, xi: &[F], out: &mut [Cosine<F>]) {
-        self.sample_cosines_any(xi, out);
-    }
-
+    /// `sample_cosine` of each ξ, in a loop the compiler vectorises.
     #[inline(always)]
     fn sample_cosines_any(&self, xi: &[F], out: &mut [Cosine<F>]) {
         for (c, &x) in out.iter_mut().zip(xi) {

@@ -5,6 +5,40 @@
 //! to a cosine distributed as p; for single-lobe models it is the inverse CDF (monotone in ξ),
 //! for mixtures it picks a lobe with ξ and reuses the rescaled ξ within it.
 
+/// The body of [`PhaseFunction::sample_cosines`] for a model `$ty` whose `$any(&self, xi, out)`
+/// (`#[inline(always)]`) takes many samples at once: that loop compiled for AVX-512 (F, DQ and
+/// VL) and for AVX2, picked at run time, else as built. No fused multiply–add is formed in
+/// any copy, so all give the one-at-a-time samples' bits.
+macro_rules! sample_cosines_on_cpu {
+    ($ty:ty, $any:ident) => {
+        fn sample_cosines(&self, xi: &[F], out: &mut [Cosine<F>]) {
+            #[cfg(all(feature = "std", target_arch = "x86_64"))]
+            {
+                #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2")]
+                fn avx512<F: Real>(model: &$ty, xi: &[F], out: &mut [Cosine<F>]) {
+                    model.$any(xi, out)
+                }
+                #[target_feature(enable = "avx2")]
+                fn avx2<F: Real>(model: &$ty, xi: &[F], out: &mut [Cosine<F>]) {
+                    model.$any(xi, out)
+                }
+                if std::is_x86_feature_detected!("avx512f")
+                    && std::is_x86_feature_detected!("avx512dq")
+                    && std::is_x86_feature_detected!("avx512vl")
+                {
+                    // SAFETY: the CPU has AVX-512 F, DQ and VL (and so AVX2), checked above.
+                    return unsafe { avx512(self, xi, out) };
+                }
+                if std::is_x86_feature_detected!("avx2") {
+                    // SAFETY: the CPU has AVX2, checked just above.
+                    return unsafe { avx2(self, xi, out) };
+                }
+            }
+            self.$any(xi, out);
+        }
+    };
+}
+
 mod draine;
 mod hg;
 mod mixture;
