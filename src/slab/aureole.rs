@@ -13,6 +13,7 @@
 //! lies in [Θ_b, Θ_{b+1}): T = μ_L Σ w/|μ| / (N ΔΩ_b), ΔΩ_b = 2π (cos Θ_b − cos Θ_{b+1}), the
 //! view bins' estimator over a cone instead of a bin (no mirror fold: the cone is whole).
 
+use super::lanes::{count_edges, Lane};
 use anyhow::{bail, Result};
 use nephele_runtime::phase::Cosine;
 use nephele_runtime::transport::{scattering_cosine, SlabPoint};
@@ -63,6 +64,15 @@ impl Aureole {
             return None;
         }
         Some(self.cos_edges[1..].partition_point(|c| *c >= cos_theta))
+    }
+
+    /// [`Self::bin`] of every lane side by side, [`Self::n_bins`] standing for none (a cosine
+    /// at or below the last edge's is at or below every edge's, so the count says it).
+    #[inline(always)]
+    pub fn bins(&self, cos_theta: &Lane<f64>) -> Lane<usize> {
+        count_edges(self.cos_edges.get(1..).unwrap_or(&[]), |c, l| {
+            c >= cos_theta[l]
+        })
     }
 
     /// Solid angle (sr) of annulus `b`.
@@ -143,6 +153,34 @@ pub fn bin_extent(mu_l: f64, mu: (f64, f64), psi: (f64, f64)) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::slab::lanes::LANES;
+
+    /// The annuli of lanes side by side are each cosine's own, none where `bin` says none: at
+    /// every edge ±1 ulp, both ends, beyond them, NaN and a sweep, with and without annuli.
+    #[test]
+    fn lane_annuli_are_each_cosines_own() {
+        for edges in [DEFAULT_AUREOLE_DEG.to_vec(), vec![0.0, 90.0], vec![]] {
+            let a = Aureole::new(edges).unwrap();
+            let mut cos = vec![1.0, 1.0f64.next_down(), 0.0, -0.0, -1.0, 2.0, f64::NAN];
+            for &c in &a.cos_edges {
+                cos.extend([c, c.next_up(), c.next_down()]);
+            }
+            cos.extend((0..1000).map(|i| 1.0 - 0.2 * i as f64 / 999.0));
+            for chunk in cos.chunks(LANES) {
+                let mut lanes = [0.5; LANES];
+                lanes[..chunk.len()].copy_from_slice(chunk);
+                let got = a.bins(&lanes);
+                for l in 0..LANES {
+                    assert_eq!(
+                        got[l],
+                        a.bin(lanes[l]).unwrap_or(a.n_bins()),
+                        "{}",
+                        lanes[l]
+                    );
+                }
+            }
+        }
+    }
 
     #[test]
     fn annuli_and_views_near_the_beam() {

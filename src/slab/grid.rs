@@ -11,6 +11,7 @@
 //!   constants, and its inverse for the tables' lookups), as are the default order groups.
 
 use super::aureole::Aureole;
+use super::lanes::{count_edges, Lane};
 use anyhow::{bail, Result};
 use nephele_runtime::fitting::{STRETCH_EXPONENT, STRETCH_SCALE};
 
@@ -177,6 +178,18 @@ impl SlabGrid {
         }
     }
 
+    /// [`Self::mu_bin`] of every lane, side by side (the same bins).
+    #[inline(always)]
+    pub fn mu_bins(&self, mu: &Lane<f64>) -> Lane<usize> {
+        let last = self.n_mu() - 1;
+        match self.mu_uniform {
+            Some(per_unit) => {
+                std::array::from_fn(|l| (((mu[l] + 1.0) * per_unit) as usize).min(last))
+            }
+            None => count_edges(&self.mu_edges[1..=last], |e, l| e <= mu[l]),
+        }
+    }
+
     /// The ψ_V bin of `psi` ∈ [0, π].
     #[inline]
     pub fn psi_bin(&self, psi: f64) -> usize {
@@ -267,6 +280,16 @@ impl SlabGrid {
         let inner = &self.psi_cos[1..self.psi_cos.len() - 1];
         inner.iter().map(|e| (*e * r >= z) as usize).sum()
     }
+
+    /// [`Self::psi_bin_of`] of every lane's (x, z), side by side (the same bins; 0 where
+    /// x² + z² = 0).
+    #[inline(always)]
+    pub fn psi_bins_of(&self, x: &Lane<f64>, z: &Lane<f64>) -> Lane<usize> {
+        let r: Lane<f64> = std::array::from_fn(|l| (x[l] * x[l] + z[l] * z[l]).sqrt());
+        let inner = &self.psi_cos[1..self.psi_cos.len() - 1];
+        let n = count_edges(inner, |e, l| e * r[l] >= z[l]);
+        std::array::from_fn(|l| if r[l] == 0.0 { 0 } else { n[l] })
+    }
 }
 
 /// The bin of `x` among increasing `edges` (edges belong to the bin above), counted without a
@@ -300,6 +323,69 @@ pub fn stretched_depth(t: f64, u: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::slab::lanes::LANES;
+
+    /// Each of `values` against `one` of it, bit for bit, through `lanes` of sets of lanes.
+    fn lanes_match<T: Copy + std::fmt::Debug>(
+        values: &[T],
+        fill: T,
+        lanes: impl Fn(&[T; LANES]) -> [usize; LANES],
+        one: impl Fn(T) -> usize,
+    ) {
+        for chunk in values.chunks(LANES) {
+            let mut v = [fill; LANES];
+            v[..chunk.len()].copy_from_slice(chunk);
+            let got = lanes(&v);
+            for l in 0..LANES {
+                assert_eq!(got[l], one(v[l]), "{:?}", v[l]);
+            }
+        }
+    }
+
+    /// The lanes' μ_V bins (equal and unequal edges) and ψ_V bins are each direction's own:
+    /// at every edge ±1 ulp, ±1, ±0, the axes, (0, 0), vanishing r and sweeps.
+    #[test]
+    fn lane_bins_are_each_directions_own() {
+        let equal = SlabGrid::default_for(8.0).unwrap();
+        let unequal = SlabGrid::new(
+            equal.depths.clone(),
+            vec![-1.0, -0.6, -0.1, 0.0, 0.05, 0.3, 0.9, 1.0],
+            vec![0.0, 0.2, 1.0, 1.6, 3.0, std::f64::consts::PI],
+            DEFAULT_GROUPS.to_vec(),
+        )
+        .unwrap();
+        for g in [&equal, &unequal] {
+            let mut mu = vec![
+                -1.0,
+                1.0,
+                0.0,
+                -0.0,
+                1.0f64.next_down(),
+                (-1.0f64).next_up(),
+            ];
+            for &e in &g.mu_edges {
+                mu.extend([e, e.next_up(), e.next_down()]);
+            }
+            mu.extend((0..3001).map(|i| -1.0 + 2.0 * i as f64 / 3000.0));
+            lanes_match(&mu, 0.0, |v| g.mu_bins(v), |m| g.mu_bin(m));
+            let mut xz = vec![(0.0, 0.0), (0.0, 1.0), (0.0, -1.0), (1.0, 0.0), (-1.0, 0.0)];
+            xz.extend([
+                (1e-300, 0.0),
+                (0.0, 1e-300),
+                (-1e-200, 1e-200),
+                (5e-324, -5e-324),
+            ]);
+            for &c in &g.psi_cos {
+                let s = (1.0 - c * c).max(0.0).sqrt();
+                for (x, z) in [(s, c), (-s, c), (s, c.next_up()), (s, c.next_down())] {
+                    xz.extend([(x, z), (x * 1e-3, z * 1e-3)]);
+                }
+            }
+            xz.extend((0..2000).map(|i| (i as f64 * 0.0031).sin_cos()));
+            let lanes = |v: &[(f64, f64); LANES]| g.psi_bins_of(&v.map(|p| p.0), &v.map(|p| p.1));
+            lanes_match(&xz, (0.0, 1.0), lanes, |(x, z)| g.psi_bin_of(x, z));
+        }
+    }
 
     #[test]
     fn bins_groups_and_planes() {

@@ -91,6 +91,20 @@ pub fn free_path(xi: f64) -> f64 {
     -(e * LN2_HI + (e * LN2_LO + 2.0 * s * series))
 }
 
+/// For each lane, how many of `edges` satisfy `holds(edge, lane)`: counted over the edges with
+/// the lanes innermost, so that the lanes take every comparison together (a binary search's
+/// branches go either way at random, a mispredicted jump each).
+#[inline(always)]
+pub fn count_edges(edges: &[f64], holds: impl Fn(f64, usize) -> bool) -> Lane<usize> {
+    let mut n = [0usize; LANES];
+    for &e in edges {
+        for (l, n) in n.iter_mut().enumerate() {
+            *n += holds(e, l) as usize;
+        }
+    }
+    n
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

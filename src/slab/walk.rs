@@ -63,13 +63,15 @@ struct Photons {
 }
 
 /// A flight's frame for the tally: its μ_V and ψ_V bins, 1/ω_d, the projection of (x, z) onto
-/// its cells' two coordinates (row-major 2 × 2) and the weight w/|μ| of each crossing.
+/// its cells' two coordinates (row-major 2 × 2), the weight w/|μ| of each crossing, and its
+/// aureole annulus if it goes down (the number of annuli: none).
 struct FlightFrame {
     m: Lane<usize>,
     k: Lane<usize>,
     inv_dz: Lane<f64>,
     proj: [Lane<f64>; 4],
     inv_mu: Lane<f64>,
+    annulus: Lane<usize>,
 }
 
 impl Slice<'_> {
@@ -244,29 +246,39 @@ impl Slice<'_> {
     #[inline(always)]
     fn flight_frames(&self, p: &Photons) -> FlightFrame {
         let g = self.grid;
+        let [dx, dy, dz] = &p.dir;
+        let mu_v: Lane<f64> = std::array::from_fn(|l| -dz[l]);
         let mut f = FlightFrame {
-            m: [0; LANES],
+            m: g.mu_bins(&mu_v),
             k: [0; LANES],
             inv_dz: [0.0; LANES],
             proj: [[0.0; LANES]; 4],
             inv_mu: [0.0; LANES],
+            annulus: [0; LANES],
         };
-        for l in 0..LANES {
-            let dir = [p.dir[0][l], p.dir[1][l], p.dir[2][l]];
-            f.m[l] = g.mu_bin(-dir[2]);
-            let (inv_dz, proj) = if self.mu_l == 1.0 {
-                pooled_frame(dir)
-            } else {
-                let mirror = if dir[0] < 0.0 { -1.0 } else { 1.0 };
-                f.k[l] = g.psi_bin_of(dir[0], dir[1]);
-                (1.0 / dir[2], [mirror, 0.0, 0.0, 1.0])
-            };
-            f.inv_dz[l] = inv_dz;
-            for (i, v) in proj.into_iter().enumerate() {
-                f.proj[i][l] = v;
+        if self.mu_l == 1.0 {
+            for l in 0..LANES {
+                let (inv_dz, proj) = pooled_frame([dx[l], dy[l], dz[l]]);
+                f.inv_dz[l] = inv_dz;
+                for (i, v) in proj.into_iter().enumerate() {
+                    f.proj[i][l] = v;
+                }
             }
-            f.inv_mu[l] = g.crossing_weight(p.weight[l], inv_dz.abs());
+        } else {
+            f.k = g.psi_bins_of(dx, dy);
+            for l in 0..LANES {
+                f.inv_dz[l] = 1.0 / dz[l];
+                f.proj[0][l] = if dx[l] < 0.0 { -1.0 } else { 1.0 };
+                f.proj[3][l] = 1.0;
+            }
         }
+        for l in 0..LANES {
+            f.inv_mu[l] = g.crossing_weight(p.weight[l], f.inv_dz[l].abs());
+        }
+        // The angle from the beam, for the aureole's annuli (used by flights going down).
+        let sin_l = (1.0 - self.mu_l * self.mu_l).max(0.0).sqrt();
+        let cos_beam: Lane<f64> = std::array::from_fn(|l| dy[l] * sin_l + dz[l] * self.mu_l);
+        f.annulus = g.aureole.bins(&cos_beam);
         f
     }
 
@@ -281,12 +293,13 @@ impl Slice<'_> {
         f: &FlightFrame,
         tally: &mut BatchTally,
     ) -> usize {
-        let (depths, above, weight) = (&self.grid.depths, p.above[l], p.weight[l]);
+        let (depths, above, weight) = (&self.grid.depths[..], p.above[l], p.weight[l]);
+        let planes = depths.len();
         let pos = [p.pos[0][l], p.pos[1][l], p.pos[2][l]];
         let dir = [p.dir[0][l], p.dir[1][l], p.dir[2][l]];
         let down = dir[2] > 0.0;
         let crosses = if down {
-            above < depths.len() && depths[above] <= d1
+            above < planes && depths[above] <= d1
         } else {
             above > 0 && depths[above - 1] >= d1
         };
@@ -297,16 +310,17 @@ impl Slice<'_> {
         if order == 0 {
             return visit_planes(depths, above, d1, down, |j| tally.direct[j] += weight);
         }
-        let first = self.grid.cell(self.grid.group(order), 0, f.m[l], f.k[l]);
+        let group = self.grid.group(order);
+        let first = self.grid.cell(group, 0, f.m[l], f.k[l]);
         let (inv_dz, inv_mu) = (f.inv_dz[l], f.inv_mu[l]);
         let proj = [f.proj[0][l], f.proj[1][l], f.proj[2][l], f.proj[3][l]];
-        let halo = if down {
-            self.aureole_cell(&dir, order)
-        } else {
-            None
-        };
-        let flux = if down { &mut tally.down } else { &mut tally.up };
-        let cells = &mut tally.cells;
+        let n_annuli = self.grid.aureole.n_bins();
+        let halo = (down && f.annulus[l] < n_annuli)
+            .then(|| self.grid.aureole_cell(group, 0, f.annulus[l]));
+        // The flight's cells and fluxes as slices of one entry per plane, so that the crossing
+        // loop's own test on the plane bounds every access (no check per access).
+        let flux = &mut if down { &mut tally.down } else { &mut tally.up }[..planes];
+        let cells = &mut tally.cells[first..first + planes];
         let aureole = &mut tally.aureole;
         // The loop of `visit_planes` written out: a closure would be compiled apart from the
         // vector variants of the walk, without their instructions.
@@ -314,12 +328,12 @@ impl Slice<'_> {
             ($j:expr) => {{
                 let j = $j;
                 flux[j] += weight;
-                if let Some((first, stride)) = halo {
-                    aureole[first + j * stride] += inv_mu;
+                if let Some(first) = halo {
+                    aureole[first + j * n_annuli] += inv_mu;
                 }
                 let along = (depths[j] - pos[2]) * inv_dz;
                 let (x, z) = (pos[0] + along * dir[0], pos[1] + along * dir[1]);
-                let cell = &mut cells[first + j];
+                let cell = &mut cells[j];
                 cell[0] += inv_mu;
                 cell[1] += inv_mu * (proj[0] * x + proj[1] * z);
                 cell[2] += inv_mu * (proj[2] * x + proj[3] * z);
@@ -328,7 +342,7 @@ impl Slice<'_> {
         }
         let mut end = above;
         if down {
-            while end < depths.len() && depths[end] <= d1 {
+            while end < planes && depths[end] <= d1 {
                 visit!(end);
                 end += 1;
             }
@@ -339,19 +353,6 @@ impl Slice<'_> {
             }
         }
         end
-    }
-
-    /// For a flight going down within the aureole's widest cone around the beam: its cell at
-    /// plane 0 and the stride from plane to plane ([`SlabGrid::aureole_cell`]).
-    #[inline]
-    fn aureole_cell(&self, dir: &[f64; 3], order: u32) -> Option<(usize, usize)> {
-        let g = self.grid;
-        if g.aureole.n_bins() == 0 {
-            return None;
-        }
-        let sin_l = (1.0 - self.mu_l * self.mu_l).max(0.0).sqrt();
-        let b = g.aureole.bin(dir[1] * sin_l + dir[2] * self.mu_l)?;
-        Some((g.aureole_cell(g.group(order), 0, b), g.aureole.n_bins()))
     }
 }
 
@@ -369,15 +370,15 @@ impl Slice<'_> {
 #[inline(always)]
 fn pooled_frame(dir: [f64; 3]) -> (f64, [f64; 4]) {
     let r = (dir[0] * dir[0] + dir[1] * dir[1]).sqrt();
-    // 1/dz and the (sin, cos) of the flight's own azimuth from one division (any azimuth for a
-    // vertical flight).
-    let (inv_dz, s_c, c_c) = if r > 0.0 {
-        let inv = 1.0 / (dir[2] * r);
-        (inv * r, dir[0] * inv * dir[2], dir[1] * inv * dir[2])
-    } else {
-        (1.0 / dir[2], 0.0, 1.0)
-    };
-    (inv_dz, [s_c, c_c, c_c, -s_c])
+    // 1/dz and the (sin, cos) of the flight's own azimuth from one division; a vertical flight
+    // (r = 0) takes r = 1 in the division, which gives 1/dz exactly, and the azimuth 0. Both
+    // sides computed, then chosen: a select that lanes take together, not a branch.
+    let vertical = !(r > 0.0);
+    let r1 = if vertical { 1.0 } else { r };
+    let inv = 1.0 / (dir[2] * r1);
+    let s_c = if vertical { 0.0 } else { dir[0] * inv * dir[2] };
+    let c_c = if vertical { 1.0 } else { dir[1] * inv * dir[2] };
+    (inv * r1, [s_c, c_c, c_c, -s_c])
 }
 
 /// Calls `f` for every plane a flight to depth `d1` crosses, from the `above` planes at or above
@@ -563,6 +564,37 @@ mod tests {
                 }
             }
             assert!(same(&slice.run_batch(3000, &mut batch_rng(9, 1, 2))));
+        }
+    }
+
+    /// The pooled frame without a branch is the frame with one (1/dz and the flight's own
+    /// azimuth from one division, any azimuth for a vertical flight), bit for bit: vertical
+    /// flights up and down, nearly vertical ones down to the least r that is not 0, r = 0 from
+    /// components whose squares vanish, and directions all round.
+    #[test]
+    fn pooled_frame_is_the_branchy_frame() {
+        let branchy = |dir: [f64; 3]| {
+            let r = (dir[0] * dir[0] + dir[1] * dir[1]).sqrt();
+            let (inv_dz, s_c, c_c) = if r > 0.0 {
+                let inv = 1.0 / (dir[2] * r);
+                (inv * r, dir[0] * inv * dir[2], dir[1] * inv * dir[2])
+            } else {
+                (1.0 / dir[2], 0.0, 1.0)
+            };
+            (inv_dz, [s_c, c_c, c_c, -s_c])
+        };
+        let mut dirs = vec![[0.0, 0.0, 1.0], [0.0, 0.0, -1.0], [-0.0, 0.0, 1.0]];
+        for tiny in [1e-300, 1e-160, 1e-154, 1.5e-154, 5e-324, f64::MIN_POSITIVE] {
+            dirs.extend([[tiny, 0.0, 1.0], [0.0, -tiny, -1.0], [tiny, tiny, 1.0]]);
+        }
+        for i in 0..5000 {
+            let (s, c) = (i as f64 * 0.0137).sin_cos();
+            let (sz, cz) = (i as f64 * 0.00071).sin_cos();
+            dirs.push([sz * s, sz * c, cz]);
+        }
+        let bits = |(d, p): (f64, [f64; 4])| (d.to_bits(), p.map(f64::to_bits));
+        for dir in dirs {
+            assert_eq!(bits(pooled_frame(dir)), bits(branchy(dir)), "{dir:?}");
         }
     }
 
