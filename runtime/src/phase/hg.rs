@@ -9,7 +9,7 @@
 //! which in turn cancels in the far tail when |g| → 1 (its numerator tends to (1 + g μ₀)²), so
 //! the textbook form serves |g| > 1/2. Both stay accurate in f32 (chi-square test at g = 0.998).
 
-use super::{inv_four_pi, Cosine, PhaseFunction};
+use super::{inv_four_pi, Cosine, PhaseFunction, Simd};
 use crate::real::Real;
 
 /// Henyey–Greenstein with asymmetry g ∈ (−1, 1).
@@ -94,11 +94,16 @@ impl<F: Real> PhaseFunction<F> for HenyeyGreenstein<F> {
         Some(self.g)
     }
 
-    // Many samples at once, compiled for the CPU's vector units ([`sample_cosines_on_cpu`]).
-    sample_cosines_on_cpu!(HenyeyGreenstein<F>, sample_cosines_any);
+    /// Many samples at once, on the CPU's best vector units ([`sample_cosines_on_cpu`]).
+    fn sample_cosines(&self, xi: &[F], out: &mut [Cosine<F>]) {
+        // SAFETY: the level the CPU has.
+        unsafe { self.sample_cosines_with(Simd::detected(), xi, out) }
+    }
 }
 
 impl<F: Real> HenyeyGreenstein<F> {
+    sample_cosines_on_cpu!(HenyeyGreenstein<F>, sample_cosines_any);
+
     /// `sample_cosine` of each ξ, in a loop the compiler vectorises.
     #[inline(always)]
     fn sample_cosines_any(&self, xi: &[F], out: &mut [Cosine<F>]) {
@@ -112,8 +117,9 @@ impl<F: Real> HenyeyGreenstein<F> {
 mod tests {
     use super::*;
 
-    /// Many samples at once (the CPU's vector variant) are each one-at-a-time sample's bits,
-    /// in f64 and f32, for forward, backward and weak lobes, at ξ's ends included.
+    /// Many samples at once are each one-at-a-time sample's bits on every vector level the
+    /// CPU can run (AVX-512, AVX2, baseline), in f64 and f32, for forward, backward and weak
+    /// lobes, at ξ's ends included.
     #[test]
     fn many_samples_are_each_samples_bits() {
         let xi: Vec<f64> = (0..4099)
@@ -127,16 +133,20 @@ mod tests {
         }
     }
 
-    /// `sample_cosines` of `xi` against `sample_cosine` of each, bit for bit (f32 values are
-    /// compared as their exact f64 widening).
+    /// Many samples of `xi` on each vector level against `sample_cosine` of each, bit for bit
+    /// (f32 values are compared as their exact f64 widening).
     fn same_as_one_at_a_time<F: Real>(g: F, xi: &[F]) {
         let hg = HenyeyGreenstein::new(g);
-        let mut many = vec![Cosine::from_mu(F::of(0.0)); xi.len()];
-        hg.sample_cosines(xi, &mut many);
         let bits = |c: Cosine<F>| (c.mu.f64().to_bits(), c.one_minus_mu.f64().to_bits());
-        for (&c, &x) in many.iter().zip(xi) {
-            let (g, x) = (g.f64(), x.f64());
-            assert_eq!(bits(c), bits(hg.sample_cosine(F::of(x))), "g {g}, xi {x}");
+        for simd in Simd::available() {
+            let mut many = vec![Cosine::from_mu(F::of(0.0)); xi.len()];
+            // SAFETY: a level the CPU has.
+            unsafe { hg.sample_cosines_with(simd, xi, &mut many) };
+            for (&c, &x) in many.iter().zip(xi) {
+                let (g, x) = (g.f64(), x.f64());
+                let one = bits(hg.sample_cosine(F::of(x)));
+                assert_eq!(bits(c), one, "{simd:?}, g {g}, xi {x}");
+            }
         }
     }
 }

@@ -5,13 +5,61 @@
 //! to a cosine distributed as p; for single-lobe models it is the inverse CDF (monotone in ξ),
 //! for mixtures it picks a lobe with ξ and reuses the rescaled ξ within it.
 
-/// The body of [`PhaseFunction::sample_cosines`] for a model `$ty` whose `$any(&self, xi, out)`
-/// (`#[inline(always)]`) takes many samples at once: that loop compiled for AVX-512 (F, DQ and
-/// VL) and for AVX2, picked at run time, else as built. No fused multiply–add is formed in
-/// any copy, so all give the one-at-a-time samples' bits.
+/// The vector units a model's many-samples loop runs on ([`sample_cosines_on_cpu`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+// Without std (no feature detection) or off x86-64 only the baseline is ever picked.
+#[cfg_attr(not(all(feature = "std", target_arch = "x86_64")), allow(dead_code))]
+pub(crate) enum Simd {
+    /// AVX-512 F, DQ and VL (and so AVX2).
+    Avx512,
+    /// AVX2.
+    Avx2,
+    /// What the crate was built for.
+    Baseline,
+}
+
+impl Simd {
+    /// The best level the CPU has (the baseline without `std` or off x86-64).
+    #[inline]
+    pub(crate) fn detected() -> Self {
+        #[cfg(all(feature = "std", target_arch = "x86_64"))]
+        {
+            if std::is_x86_feature_detected!("avx512f")
+                && std::is_x86_feature_detected!("avx512dq")
+                && std::is_x86_feature_detected!("avx512vl")
+            {
+                return Self::Avx512;
+            }
+            if std::is_x86_feature_detected!("avx2") {
+                return Self::Avx2;
+            }
+        }
+        Self::Baseline
+    }
+
+    /// Every level the CPU can run, the best first (tests run each).
+    #[cfg(test)]
+    pub(crate) fn available() -> impl Iterator<Item = Self> {
+        let best = Self::detected();
+        [Self::Avx512, Self::Avx2, Self::Baseline]
+            .into_iter()
+            .skip_while(move |s| *s != best)
+    }
+}
+
+/// `unsafe fn sample_cosines_with(&self, simd, xi, out)` for a model `$ty` whose
+/// `$any(&self, xi, out)` (`#[inline(always)]`) takes many samples at once: that loop compiled
+/// for AVX-512 (F, DQ and VL), for AVX2 or as built, as `simd` says. No fused multiply–add is
+/// formed in any copy, so all give the one-at-a-time samples' bits. The model's
+/// `sample_cosines` calls it with [`Simd::detected`].
 macro_rules! sample_cosines_on_cpu {
     ($ty:ty, $any:ident) => {
-        fn sample_cosines(&self, xi: &[F], out: &mut [Cosine<F>]) {
+        /// [`PhaseFunction::sample_cosines`] on the vector units `simd`.
+        ///
+        /// # Safety
+        /// The CPU has what `simd` names ([`Simd::detected`] or a level below it).
+        #[inline]
+        unsafe fn sample_cosines_with(&self, simd: Simd, xi: &[F], out: &mut [Cosine<F>]) {
             #[cfg(all(feature = "std", target_arch = "x86_64"))]
             {
                 #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2")]
@@ -22,18 +70,15 @@ macro_rules! sample_cosines_on_cpu {
                 fn avx2<F: Real>(model: &$ty, xi: &[F], out: &mut [Cosine<F>]) {
                     model.$any(xi, out)
                 }
-                if std::is_x86_feature_detected!("avx512f")
-                    && std::is_x86_feature_detected!("avx512dq")
-                    && std::is_x86_feature_detected!("avx512vl")
-                {
-                    // SAFETY: the CPU has AVX-512 F, DQ and VL (and so AVX2), checked above.
-                    return unsafe { avx512(self, xi, out) };
-                }
-                if std::is_x86_feature_detected!("avx2") {
-                    // SAFETY: the CPU has AVX2, checked just above.
-                    return unsafe { avx2(self, xi, out) };
+                match simd {
+                    // SAFETY: the caller's promise.
+                    Simd::Avx512 => return unsafe { avx512(self, xi, out) },
+                    // SAFETY: the caller's promise.
+                    Simd::Avx2 => return unsafe { avx2(self, xi, out) },
+                    Simd::Baseline => {}
                 }
             }
+            let _ = simd;
             self.$any(xi, out);
         }
     };

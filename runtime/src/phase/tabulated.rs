@@ -9,7 +9,7 @@
 //! Working in θ rather than μ resolves forward peaks far narrower than f32's resolution in μ
 //! near 1 (50 µm droplets: 0.01° nodes, 1 − cos 0.01° = 1.5e-8).
 
-use super::{Cosine, PhaseFunction};
+use super::{Cosine, PhaseFunction, Simd};
 use crate::frame::sin_cos_small;
 use crate::real::Real;
 
@@ -212,8 +212,11 @@ impl<F: Real> PhaseFunction<F> for Tabulated<'_, F> {
         }
     }
 
-    // Many samples at once, compiled for the CPU's vector units ([`sample_cosines_on_cpu`]).
-    sample_cosines_on_cpu!(Tabulated<'_, F>, sample_cosines_any);
+    /// Many samples at once, on the CPU's best vector units ([`sample_cosines_on_cpu`]).
+    fn sample_cosines(&self, xi: &[F], out: &mut [Cosine<F>]) {
+        // SAFETY: the level the CPU has.
+        unsafe { self.sample_cosines_with(Simd::detected(), xi, out) }
+    }
 
     fn mean_cosine(&self) -> Option<F> {
         None
@@ -224,6 +227,8 @@ impl<F: Real> PhaseFunction<F> for Tabulated<'_, F> {
 const SAMPLE_LANES: usize = 8;
 
 impl<F: Real> Tabulated<'_, F> {
+    sample_cosines_on_cpu!(Tabulated<'_, F>, sample_cosines_any);
+
     /// `sample_cosine` of each ξ: for an f64 table with a guide and half-angle sines (the slab
     /// walk's Mie tables), [`SAMPLE_LANES`] at a time side by side; else one at a time.
     #[inline(always)]
@@ -542,8 +547,8 @@ mod tests {
         }
     }
 
-    /// Many samples at once (side by side, in the CPU's vector variant) are each one-at-a-time
-    /// sample's bits: on two grids (the reference grid with a forward peak, and equal half
+    /// Many samples at once (side by side) are each one-at-a-time sample's bits on every
+    /// vector level the CPU can run (AVX-512, AVX2, baseline): on two grids (the reference grid with a forward peak, and equal half
     /// degrees), at every node's CDF and its neighbours, both ends of ξ and 10⁵ ξ between,
     /// with a remainder past the last full set of lanes.
     #[test]
@@ -566,12 +571,22 @@ mod tests {
                 xi.extend([x, x.next_up(), x.next_down()].map(|v| v.clamp(0.0, 1.0)));
             }
             xi.extend((0..100_003).map(|k| (k as f64 + 0.5) / 100_003.0));
+            let bits = |c: Cosine<f64>| (c.mu.to_bits(), c.one_minus_mu.to_bits());
+            for simd in Simd::available() {
+                let mut many = vec![Cosine::from_mu(0.0); xi.len()];
+                // SAFETY: a level the CPU has.
+                unsafe { table.view().sample_cosines_with(simd, &xi, &mut many) };
+                for (&c, &x) in many.iter().zip(&xi) {
+                    assert_eq!(bits(c), bits(table.sample_cosine(x)), "{simd:?}, ξ = {x}");
+                }
+            }
+            // And through the trait, as the slab walk calls it.
             let mut many = vec![Cosine::from_mu(0.0); xi.len()];
             table.sample_cosines(&xi, &mut many);
-            let bits = |c: Cosine<f64>| (c.mu.to_bits(), c.one_minus_mu.to_bits());
-            for (&c, &x) in many.iter().zip(&xi) {
-                assert_eq!(bits(c), bits(table.sample_cosine(x)), "ξ = {x}");
-            }
+            assert!(many
+                .iter()
+                .zip(&xi)
+                .all(|(&c, &x)| bits(c) == bits(table.sample_cosine(x))));
         }
     }
 
