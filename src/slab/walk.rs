@@ -113,6 +113,9 @@ impl Slice<'_> {
     #[inline(always)]
     fn run_lanes(&self, photons: u64, rng: &mut Xoshiro256PlusPlus) -> BatchTally {
         let mut tally = BatchTally::new(self.grid);
+        // The unscattered flights by the number of planes at or above their end (see
+        // `cross_planes`); the direct beam's fluxes follow from them after the walk.
+        let mut direct_ends = vec![0.0; self.grid.depths.len() + 1];
         let mut lanes = LaneRng::new(rng);
         let mut p = Photons {
             pos: [[0.0; LANES]; 3],
@@ -142,7 +145,8 @@ impl Slice<'_> {
                 if !p.alive[l] {
                     continue;
                 }
-                p.above[l] = self.cross_planes(&p, l, d1[l], &frame, &mut tally);
+                let sums = (&mut tally, &mut direct_ends[..]);
+                p.above[l] = self.cross_planes(&p, l, d1[l], &frame, sums);
                 if d1[l] <= 0.0 {
                     tally.escaped_top += p.weight[l];
                     left[l] = true;
@@ -183,6 +187,7 @@ impl Slice<'_> {
                 }
             }
         }
+        direct_fluxes(&direct_ends, &mut tally.direct);
         if self.mu_l == 1.0 {
             expand_pooled(self.grid, &mut tally);
         }
@@ -291,7 +296,7 @@ impl Slice<'_> {
         l: usize,
         d1: f64,
         f: &FlightFrame,
-        tally: &mut BatchTally,
+        (tally, direct_ends): (&mut BatchTally, &mut [f64]),
     ) -> usize {
         let (depths, above, weight) = (&self.grid.depths[..], p.above[l], p.weight[l]);
         let planes = depths.len();
@@ -308,7 +313,14 @@ impl Slice<'_> {
         }
         let order = p.order[l];
         if order == 0 {
-            return visit_planes(depths, above, d1, down, |j| tally.direct[j] += weight);
+            // The unscattered flight goes down from the lit face (plane 0 above it) and adds its
+            // weight to the direct flux of every plane it crosses: only where it ends matters.
+            // It is counted without a loop whose exit the predictor cannot know, and
+            // [`direct_fluxes`] spreads the counts over the planes after the walk.
+            debug_assert!(down && above == 1 && weight == 1.0);
+            let end = above + depths[above..].iter().filter(|&&d| d <= d1).count();
+            direct_ends[end] += weight;
+            return end;
         }
         let group = self.grid.group(order);
         let first = self.grid.cell(group, 0, f.m[l], f.k[l]);
@@ -322,8 +334,9 @@ impl Slice<'_> {
         let flux = &mut if down { &mut tally.down } else { &mut tally.up }[..planes];
         let cells = &mut tally.cells[first..first + planes];
         let aureole = &mut tally.aureole;
-        // The loop of `visit_planes` written out: a closure would be compiled apart from the
-        // vector variants of the walk, without their instructions.
+        // The crossed planes found and visited in one loop (one mispredicted exit per flight,
+        // not two), written out: a closure would be compiled apart from the vector variants of
+        // the walk, without their instructions.
         macro_rules! visit {
             ($j:expr) => {{
                 let j = $j;
@@ -381,30 +394,17 @@ fn pooled_frame(dir: [f64; 3]) -> (f64, [f64; 4]) {
     (inv * r1, [s_c, c_c, c_c, -s_c])
 }
 
-/// Calls `f` for every plane a flight to depth `d1` crosses, from the `above` planes at or above
-/// its start, going down (`down`) or up; returns the number of planes at or above its end. One
-/// loop both finds and visits the planes (one mispredicted exit per flight, not two).
-#[inline(always)]
-fn visit_planes(
-    depths: &[f64],
-    above: usize,
-    d1: f64,
-    down: bool,
-    mut f: impl FnMut(usize),
-) -> usize {
-    let mut end = above;
-    if down {
-        while end < depths.len() && depths[end] <= d1 {
-            f(end);
-            end += 1;
-        }
-    } else {
-        while end > 0 && depths[end - 1] >= d1 {
-            end -= 1;
-            f(end);
-        }
+/// The direct beam's flux at every plane from the unscattered flights counted by where they
+/// ended (`ends[e]`: the flights from the lit face that crossed planes 1 … e − 1): plane j ≥ 1
+/// is crossed by every flight with e > j. Their weights are 1 (nothing has scattered or been
+/// absorbed yet), so the sums are whole numbers, exact in any order: the same bits as adding
+/// each flight's weight at each plane it crosses.
+fn direct_fluxes(ends: &[f64], direct: &mut [f64]) {
+    let mut beyond = 0.0;
+    for j in (1..direct.len()).rev() {
+        beyond += ends[j + 1];
+        direct[j] += beyond;
     }
-    end
 }
 
 /// Spreads the normal-incidence sums w/|μ| · (1, a, b, a² + b²) of the ψ_V = 0 cells (see
