@@ -522,22 +522,41 @@ fn normalised(v: [f64; 3]) -> [f64; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use nephele_runtime::phase::HenyeyGreenstein;
+    use crate::slab::aureole::{Aureole, DEFAULT_AUREOLE_DEG};
+    use nephele_runtime::phase::{HenyeyGreenstein, TabulatedTable};
 
     /// The walk compiled for AVX-512, AVX2 and baseline x86-64 gives the same sums, bit for
-    /// bit (no fused multiply–add anywhere), at normal and oblique incidence, with absorption.
+    /// bit (no fused multiply–add anywhere), at normal and oblique incidence, with absorption,
+    /// with HG and a tabulated phase function, the aureole's annuli tallied.
     #[test]
     fn every_variant_walks_the_same_bits() {
-        let grid = SlabGrid::default_for(2.0).unwrap();
+        let mut grid = SlabGrid::default_for(2.0).unwrap();
+        grid.aureole = Aureole::new(DEFAULT_AUREOLE_DEG.to_vec()).unwrap();
         let hg = HenyeyGreenstein::new(0.8);
-        for (mu_l, albedo) in [(1.0, 1.0), (0.6, 0.9)] {
+        // A tabulated phase function with a forward peak on the reference grid (it keeps its
+        // guide and half-angle sines, so the walk samples 8 of its cosines side by side).
+        let theta_deg: Vec<f64> = (0..=500)
+            .map(|k| k as f64 * 0.01)
+            .chain((1..=1750).map(|k| 5.0 + k as f64 * 0.1))
+            .collect();
+        let peak: Vec<f64> = theta_deg
+            .iter()
+            .map(|t| 1e3 / (1.0 + t * t) + 0.1)
+            .collect();
+        let table = TabulatedTable::<f64>::from_phase(&theta_deg, &peak).unwrap();
+        let phases: [&(dyn PhaseFunction<f64> + Sync); 2] = [&hg, &table];
+        for ((mu_l, albedo), phase) in [(1.0, 1.0), (0.6, 0.9)]
+            .into_iter()
+            .flat_map(|c| phases.map(|p| (c, p)))
+        {
             let slice = Slice {
                 grid: &grid,
                 mu_l,
                 albedo,
-                phase: &hg,
+                phase,
             };
             let base = slice.run_lanes(3000, &mut batch_rng(9, 1, 2));
+            assert!(base.aureole.iter().any(|&v| v > 0.0), "the annuli hold light");
             let same = |t: &BatchTally| {
                 t.cells == base.cells
                     && t.up == base.up
@@ -545,7 +564,9 @@ mod tests {
                     && t.direct == base.direct
                     && t.events == base.events
                     && t.escaped_top == base.escaped_top
+                    && t.escaped_bottom == base.escaped_bottom
                     && t.absorbed == base.absorbed
+                    && t.aureole == base.aureole
             };
             #[cfg(target_arch = "x86_64")]
             {
