@@ -556,7 +556,10 @@ mod tests {
                 phase,
             };
             let base = slice.run_lanes(3000, &mut batch_rng(9, 1, 2));
-            assert!(base.aureole.iter().any(|&v| v > 0.0), "the annuli hold light");
+            assert!(
+                base.aureole.iter().any(|&v| v > 0.0),
+                "the annuli hold light"
+            );
             let same = |t: &BatchTally| {
                 t.cells == base.cells
                     && t.up == base.up
