@@ -1,11 +1,13 @@
 //! Mie benchmarks (criterion): one sphere's coefficients, the product-rule job of issue 2
 //! (d = 5 µm, σ = 0.25, 41 sizes × 31 wavelengths, 2251 angles), and the matrix product at
-//! its shapes through the GEMM nephele uses (matrixmultiply) against the `gemm` crate (faer's
-//! kernels), both dispatching to the CPU's SIMD level at run time: which one a build should
-//! take, measured in one run on the machine at hand (issue 30; docs/mie.md). The comparison
+//! its shapes through the GEMM nephele uses (the `gemm` crate, faer's kernels) against
+//! matrixmultiply (its GEMM until 6 Dec 2026), both dispatching to the CPU's SIMD level at run
+//! time: which one a build should take, measured in one run on the machine at hand (issue 30;
+//! docs/mie.md). The comparison
 //! against miepython and numpy's DGEMM lives in scripts/bench_mie.py (same machine, same run).
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use nephele::mie::batch::{gemm_strided, Gemm};
 use nephele::mie::{MieCoefficients, MieJob, SizeRule};
 use num_complex::Complex64;
 use std::hint::black_box;
@@ -44,13 +46,17 @@ fn simd_level() -> &'static str {
     "not x86-64"
 }
 
-/// C (m × 2251) = A (m × k) B (k × 2251), the block product of `mie::batch` (m = 2 × its
-/// `BLOCK` spheres, re and im rows; k Mie orders: 40 ≈ d = 5 µm at 700 nm, 170 ≈ 20 µm at
-/// 400 nm, 500 the size tail); throughput in flops (2 m k n per product).
+/// C (m × n) = A (m × k) B (k × n), the block product of `mie::batch` (m = 2 × its `BLOCK`
+/// spheres, re and im rows; k Mie orders: 40 ≈ d = 5 µm at 700 nm, 170 ≈ 20 µm at 400 nm, 500
+/// the size tail; n = 128, the panel of angles the job multiplies, or all 2251 angles);
+/// throughput in flops (2 m k n per product).
 fn gemm_shapes(c: &mut Criterion) {
     eprintln!("CPU SIMD level: {}", simd_level());
-    let (m, n) = (2 * nephele::mie::batch::BLOCK, 2251usize);
-    for k in [40usize, 170, 500] {
+    let m = 2 * nephele::mie::batch::BLOCK;
+    let shapes = [128usize, 2251]
+        .into_iter()
+        .flat_map(|n| [40usize, 170, 500].map(|k| (k, n)));
+    for (k, n) in shapes {
         let a: Vec<f64> = (0..m * k)
             .map(|i| ((i * 7919) % 1000) as f64 / 1e3)
             .collect();
@@ -58,39 +64,16 @@ fn gemm_shapes(c: &mut Criterion) {
             .map(|i| ((i * 104729) % 1000) as f64 / 1e3)
             .collect();
         let mut out = vec![0.0; m * n];
-        let mut group = c.benchmark_group(format!("gemm {m}x{k}x2251"));
+        let mut group = c.benchmark_group(format!("gemm {m}x{k}x{n}"));
         group.throughput(Throughput::Elements(2 * (m * k * n) as u64));
-        group.bench_function("matrixmultiply", |bench| {
-            bench.iter(|| nephele::mie::batch::gemm_strided(m, k, n, &a, &b, n, &mut out))
-        });
-        group.bench_function("gemm crate", |bench| {
-            bench.iter(|| {
-                // SAFETY: as above; gemm's strides are (column, row).
-                unsafe {
-                    gemm::gemm(
-                        m,
-                        n,
-                        k,
-                        out.as_mut_ptr(),
-                        1,
-                        n as isize,
-                        false,
-                        a.as_ptr(),
-                        1,
-                        k as isize,
-                        b.as_ptr(),
-                        1,
-                        n as isize,
-                        0.0,
-                        1.0,
-                        false,
-                        false,
-                        false,
-                        gemm::Parallelism::None,
-                    )
-                }
-            })
-        });
+        for (name, which) in [
+            ("matrixmultiply", Gemm::MatrixMultiply),
+            ("gemm crate", Gemm::Faer),
+        ] {
+            group.bench_function(name, |bench| {
+                bench.iter(|| gemm_strided(which, m, k, n, &a, &b, n, &mut out))
+            });
+        }
         group.finish();
     }
 }

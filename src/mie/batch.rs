@@ -396,13 +396,14 @@ impl ChunkWeights {
     /// c = W · I on one panel by a matrix product: `intensity` is kc × `width` (the chunk's
     /// spheres in order), `c` active × `width`.
     fn apply_dense(&self, intensity: &[f64], width: usize, c: &mut [f64]) {
-        gemm_strided(
+        let w = Strided::new(&self.w, self.kc);
+        gemm(
             self.active.len(),
             self.kc,
             width,
-            &self.w,
-            intensity,
-            width,
+            w,
+            Strided::new(intensity, width),
+            0.0,
             c,
         );
     }
@@ -443,40 +444,126 @@ impl<'a> Strided<'a> {
     }
 }
 
-/// C (m × n, contiguous) = A (m × k) · B (k × n) + β C, through matrixmultiply's dgemm (its
-/// kernels are picked at run time: AVX-512, AVX2/FMA, SSE2).
+/// Which GEMM runs the products: the `gemm` crate (faer's kernels, AVX-512 included through its
+/// `x86-v4` feature), or matrixmultiply when `NEPHELE_GEMM=matrixmultiply` (the GEMM of
+/// nephele until 6 Dec 2026, kept so that both can be timed in one run on any CPU: on an Intel
+/// Xeon with two 512-bit FMA units the `gemm` crate's kernels are 1.3–1.5× faster, docs/mie.md).
+/// Both pick their kernels at run time (AVX-512, AVX2/FMA, SSE2) from one baseline build.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub enum Gemm {
+    /// The `gemm` crate (the default).
+    Faer,
+    /// matrixmultiply 0.3.
+    MatrixMultiply,
+}
+
+impl Gemm {
+    /// The GEMM of this process: `NEPHELE_GEMM` read once (`matrixmultiply`, else the default).
+    pub fn current() -> Self {
+        static CHOICE: std::sync::LazyLock<Gemm> =
+            std::sync::LazyLock::new(|| match std::env::var("NEPHELE_GEMM").as_deref() {
+                Ok("matrixmultiply") => Gemm::MatrixMultiply,
+                _ => Gemm::Faer,
+            });
+        *CHOICE
+    }
+}
+
+/// C (m × n, contiguous) = A (m × k) · B (k × n) + β C (β is 0 or 1), through [`Gemm::current`].
 fn gemm(m: usize, k: usize, n: usize, a: Strided, b: Strided, beta: f64, c: &mut [f64]) {
+    gemm_with(Gemm::current(), m, k, n, a, b, beta, c)
+}
+
+/// [`gemm`] through the given GEMM.
+#[allow(clippy::too_many_arguments)]
+fn gemm_with(
+    which: Gemm,
+    m: usize,
+    k: usize,
+    n: usize,
+    a: Strided,
+    b: Strided,
+    beta: f64,
+    c: &mut [f64],
+) {
     if m == 0 || n == 0 || k == 0 {
         return;
     }
     assert!(a.data.len() >= (m - 1) * a.stride + k && c.len() >= m * n);
     assert!(b.data.len() >= (k - 1) * b.stride + n);
-    // SAFETY: bounds checked just above.
-    unsafe {
-        matrixmultiply::dgemm(
-            m,
-            k,
-            n,
-            1.0,
-            a.data.as_ptr(),
-            a.stride as isize,
-            1,
-            b.data.as_ptr(),
-            b.stride as isize,
-            1,
-            beta,
-            c.as_mut_ptr(),
-            n as isize,
-            1,
-        );
+    assert!(beta == 0.0 || beta == 1.0);
+    match which {
+        // SAFETY: bounds checked just above; gemm's strides are (column, row), and it reads C
+        // only when asked to (β = 1), so β = 0 overwrites whatever C held.
+        Gemm::Faer => unsafe {
+            gemm::gemm(
+                m,
+                n,
+                k,
+                c.as_mut_ptr(),
+                1,
+                n as isize,
+                beta != 0.0,
+                a.data.as_ptr(),
+                1,
+                a.stride as isize,
+                b.data.as_ptr(),
+                1,
+                b.stride as isize,
+                beta,
+                1.0,
+                false,
+                false,
+                false,
+                gemm::Parallelism::None,
+            )
+        },
+        // SAFETY: bounds checked just above.
+        Gemm::MatrixMultiply => unsafe {
+            matrixmultiply::dgemm(
+                m,
+                k,
+                n,
+                1.0,
+                a.data.as_ptr(),
+                a.stride as isize,
+                1,
+                b.data.as_ptr(),
+                b.stride as isize,
+                1,
+                beta,
+                c.as_mut_ptr(),
+                n as isize,
+                1,
+            );
+        },
     }
 }
 
-/// C (m × n, contiguous) = A (m × k, contiguous) · B (k × n with row stride `ldb`): the call
-/// the products make. Public for the GEMM benchmark (benches/mie.rs), which times it against
-/// the `gemm` crate.
-pub fn gemm_strided(m: usize, k: usize, n: usize, a: &[f64], b: &[f64], ldb: usize, c: &mut [f64]) {
-    gemm(m, k, n, Strided::new(a, k), Strided::new(b, ldb), 0.0, c);
+/// C (m × n, contiguous) = A (m × k, contiguous) · B (k × n with row stride `ldb`) through
+/// `which`: the call the products make. Public for the GEMM benchmark (benches/mie.rs), which
+/// times the two GEMMs at the products' shapes.
+#[allow(clippy::too_many_arguments)]
+pub fn gemm_strided(
+    which: Gemm,
+    m: usize,
+    k: usize,
+    n: usize,
+    a: &[f64],
+    b: &[f64],
+    ldb: usize,
+    c: &mut [f64],
+) {
+    gemm_with(
+        which,
+        m,
+        k,
+        n,
+        Strided::new(a, k),
+        Strided::new(b, ldb),
+        0.0,
+        c,
+    );
 }
 
 #[cfg(test)]

@@ -20,7 +20,7 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 /// Bumped whenever the Mie computation's values change, so that older entries miss.
-pub const REVISION: u32 = 1;
+pub const REVISION: u32 = 2;
 
 /// What a cached job keeps: the angles and, per table, the mono and linear-sRGB phase functions.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -59,8 +59,9 @@ pub fn first_table(
     compute: impl FnOnce() -> Result<CachedPhase>,
 ) -> Result<CachedPhase> {
     let key = format!(
-        "nephele {} mie revision {REVISION} {}",
+        "nephele {} mie revision {REVISION} gemm {:?} {}",
         crate::VERSION,
+        super::batch::Gemm::current(),
         serde_json::to_string(job)?
     );
     let Some(dir) = dir else {
