@@ -235,8 +235,7 @@ impl<F: Real> Draine<F> {
 
     /// The normalisation N = 1 + α(1 + 2g²)/3.
     fn norm(&self) -> F {
-        let g = self.g;
-        F::of(1.0) + self.alpha * (F::of(1.0) + F::of(2.0) * g * g) / F::of(3.0)
+        norm(self.g, self.alpha)
     }
 
     /// The CDF F(μ) = ∫_{−1}^{μ} 2π p dμ′, in f64.
@@ -335,12 +334,20 @@ fn one_step(g: f64, alpha: f64, xi: f64, mu0: f64) -> Result<f64, f64> {
 }
 
 /// Draine's p(μ) (sr⁻¹) without building the sampler's table: for callers that only evaluate
-/// at ever-changing (g, α), such as the fits of `nephele fit`.
+/// at ever-changing (g, α), such as the fits of `nephele fit`. One division: Draine's factor
+/// and normalisation ride on HG's ([`HenyeyGreenstein::from_d_over`]).
 #[inline]
 pub fn phase_draine<F: Real>(g: F, alpha: F, mu: F) -> F {
+    let hg = HenyeyGreenstein::new(g);
     let one = F::of(1.0);
-    let norm = one + alpha * (one + F::of(2.0) * g * g) / F::of(3.0);
-    HenyeyGreenstein::new(g).eval(mu) * (one + alpha * mu * mu) / norm
+    hg.from_d_over(hg.d_of(mu), one + alpha * mu * mu, norm(g, alpha))
+}
+
+/// Draine's normalisation 1 + α(1 + 2g²)/3 (the mean of 1 + αμ² under HG(g)).
+#[inline]
+fn norm<F: Real>(g: F, alpha: F) -> F {
+    let one = F::of(1.0);
+    one + alpha * (one + F::of(2.0) * g * g) / F::of(3.0)
 }
 
 impl<F: Real> PhaseFunction<F> for Draine<F> {
@@ -351,9 +358,9 @@ impl<F: Real> PhaseFunction<F> for Draine<F> {
 
     #[inline]
     fn pdf_cosine(&self, c: Cosine<F>) -> F {
-        let mu = c.mu;
-        HenyeyGreenstein::new(self.g).pdf_cosine(c) * (F::of(1.0) + self.alpha * mu * mu)
-            / self.norm()
+        let (hg, mu) = (HenyeyGreenstein::new(self.g), c.mu);
+        let num = F::of(1.0) + self.alpha * mu * mu;
+        hg.from_d_over(hg.d_of_cosine(c), num, self.norm())
     }
 
     fn sample_cosine(&self, xi: F) -> Cosine<F> {

@@ -25,13 +25,38 @@ impl<F: Real> HenyeyGreenstein<F> {
         Self { g }
     }
 
-    /// p from d = 1 + g² − 2gμ, written by the caller as (1 − g)² + 2g(1 − μ) for g ≥ 0 and
-    /// (1 + g)² − 2g(1 + μ) for g < 0, so that the peak's small d keeps its digits (the branch
-    /// is on g, not μ: free in a loop).
+    /// p from d = 1 + g² − 2gμ ([`Self::d_of`]) times num/den:
+    /// (1 − g²) num / (4π den d^{3/2}) in one division. A model built on HG (Draine's) folds its
+    /// own factor and normalisation in here instead of dividing again: the divider is what
+    /// bounds a loop of evaluations. With num = den = 1 it is HG's p, bit for bit.
     #[inline]
-    fn from_d(&self, d: F) -> F {
+    pub(crate) fn from_d_over(&self, d: F, num: F, den: F) -> F {
         let one = F::of(1.0);
-        inv_four_pi::<F>() * (one - self.g) * (one + self.g) / (d * d.sqrt())
+        inv_four_pi::<F>() * (one - self.g) * (one + self.g) * num / (den * (d * d.sqrt()))
+    }
+
+    /// d = 1 + g² − 2gμ, written as (1 − g)² + 2g(1 − μ) for g ≥ 0 and (1 + g)² − 2g(1 + μ)
+    /// for g < 0, so that the peak's small d keeps its digits (the branch is on g, not μ: free
+    /// in a loop).
+    #[inline]
+    pub(crate) fn d_of(&self, mu: F) -> F {
+        let (one, two) = (F::of(1.0), F::of(2.0));
+        if self.g >= F::of(0.0) {
+            (one - self.g) * (one - self.g) + two * self.g * (one - mu)
+        } else {
+            (one + self.g) * (one + self.g) - two * self.g * (one + mu)
+        }
+    }
+
+    /// [`Self::d_of`] with 1 − μ taken from the cosine (exact near the forward peak).
+    #[inline]
+    pub(crate) fn d_of_cosine(&self, c: Cosine<F>) -> F {
+        if self.g >= F::of(0.0) {
+            let one = F::of(1.0);
+            (one - self.g) * (one - self.g) + F::of(2.0) * self.g * c.one_minus_mu
+        } else {
+            self.d_of(c.mu)
+        }
     }
 
     /// The CDF F(μ) = ∫_{−1}^{μ} 2π p dμ′.
@@ -46,23 +71,13 @@ impl<F: Real> HenyeyGreenstein<F> {
 impl<F: Real> PhaseFunction<F> for HenyeyGreenstein<F> {
     #[inline]
     fn eval(&self, mu: F) -> F {
-        let (one, two) = (F::of(1.0), F::of(2.0));
-        self.from_d(if self.g >= F::of(0.0) {
-            (one - self.g) * (one - self.g) + two * self.g * (one - mu)
-        } else {
-            (one + self.g) * (one + self.g) - two * self.g * (one + mu)
-        })
+        self.from_d_over(self.d_of(mu), F::of(1.0), F::of(1.0))
     }
 
     /// As `eval`, with 1 − μ taken from the cosine (exact near the forward peak).
     #[inline]
     fn pdf_cosine(&self, c: Cosine<F>) -> F {
-        if self.g >= F::of(0.0) {
-            let one = F::of(1.0);
-            self.from_d((one - self.g) * (one - self.g) + F::of(2.0) * self.g * c.one_minus_mu)
-        } else {
-            self.eval(c.mu)
-        }
+        self.from_d_over(self.d_of_cosine(c), F::of(1.0), F::of(1.0))
     }
 
     #[inline]
