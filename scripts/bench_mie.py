@@ -13,8 +13,10 @@ p_lambda(theta) = sum_i w_i (|S1|^2 + |S2|^2)/2 / sum_i w_i pi x_i^2 Q_sca,i at 
   nephele's GFLOP/s.
 * wall times of the converged default at d = 20 um and of the 46-diameter paper range.
 
-Speed targets (issue): >= 20x miepython on one thread, >= 35x on two, nephele's one-thread
-GFLOP/s >= 50% of DGEMM. They are reported as PASS/MISS and never fail the script.
+Speed targets (issue 30): >= 30x miepython on one thread (>= 35x on two, the earlier issue's),
+nephele's one-thread GFLOP/s >= 70% of DGEMM. They are reported as PASS/MISS and never fail
+the script. On a VM whose clock drifts, scripts/bench_mie_gemm.py gives the steadier DGEMM
+fraction (the two interleaved, best of N each).
 
 Usage: scripts/bench_mie.py [--bin PATH] [--repeats N] [--json PATH] [--skip-range]
 """
@@ -46,9 +48,9 @@ import check_mie  # noqa: E402  (shared product rule and miepython reference tab
 REPO = Path(__file__).resolve().parent.parent
 DIAMETERS = (5.0, 20.0)
 WAVELENGTHS = "400:700:31"
-TARGET_1T = 20.0
+TARGET_1T = 30.0
 TARGET_2T = 35.0
-TARGET_DGEMM_FRACTION = 0.5
+TARGET_DGEMM_FRACTION = 0.7
 
 
 def cpu_name() -> str:
