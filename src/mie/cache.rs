@@ -161,7 +161,14 @@ mod tests {
         let mut phase: Vec<f64> = (0..100_000)
             .map(|_| 10f64.powf(rng.random_range(-300.0..300.0)) * rng.random_range(1.0..10.0))
             .collect();
-        phase.extend([f64::MIN_POSITIVE, f64::MAX, 5e-324, 1.0 - f64::EPSILON, 0.1, 0.0]);
+        phase.extend([
+            f64::MIN_POSITIVE,
+            f64::MAX,
+            5e-324,
+            1.0 - f64::EPSILON,
+            0.1,
+            0.0,
+        ]);
         let n = phase.len();
         let v = CachedPhase {
             theta_deg: (0..n).map(|i| 180.0 * i as f64 / (n - 1) as f64).collect(),

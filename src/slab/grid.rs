@@ -183,9 +183,11 @@ impl SlabGrid {
     pub fn mu_bins(&self, mu: &Lane<f64>) -> Lane<usize> {
         let last = self.n_mu() - 1;
         match self.mu_uniform {
-            Some(per_unit) => {
-                std::array::from_fn(|l| (((mu[l] + 1.0) * per_unit) as usize).min(last))
-            }
+            // Through i32, not usize: AVX2 converts doubles to 32-bit integers side by side but
+            // has no instruction for 64-bit ones (the same bins: the product is small).
+            Some(per_unit) => std::array::from_fn(|l| {
+                (((mu[l] + 1.0) * per_unit) as i32).clamp(0, last as i32) as usize
+            }),
             None => count_edges(&self.mu_edges[1..=last], |e, l| e <= mu[l]),
         }
     }

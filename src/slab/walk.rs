@@ -504,7 +504,9 @@ pub fn unit_circle(xi: f64) -> (f64, f64) {
 #[inline(always)]
 fn unit_circle_in(table: &[(f64, f64); AZIMUTHS], xi: f64) -> (f64, f64) {
     let scaled = xi * AZIMUTHS as f64;
-    let k = (scaled as usize).min(AZIMUTHS - 1);
+    // Through i32, not usize: AVX2 converts doubles to 32-bit integers side by side but has no
+    // instruction for 64-bit ones (the same k: 0 ≤ scaled < 256).
+    let k = (scaled as i32).clamp(0, AZIMUTHS as i32 - 1) as usize;
     let (sin_d, cos_d) = sin_cos_small((scaled - k as f64) * (2.0 * PI / AZIMUTHS as f64));
     let (c, s) = table[k];
     (c * cos_d - s * sin_d, s * cos_d + c * sin_d)
