@@ -386,11 +386,16 @@ fn pooled_frame(dir: [f64; 3]) -> (f64, [f64; 4]) {
     // 1/dz and the (sin, cos) of the flight's own azimuth from one division; a vertical flight
     // (r = 0) takes r = 1 in the division, which gives 1/dz exactly, and the azimuth 0. Both
     // sides computed, then chosen: a select that lanes take together, not a branch.
-    let vertical = !(r > 0.0);
-    let r1 = if vertical { 1.0 } else { r };
+    // The choice as a bit mask: written as `if`, the AVX2 copy of the walk branched on it, and
+    // a vertical flight (every photon's first at μ_L = 1) cost a mispredicted branch.
+    let vertical = (!(r > 0.0) as u64).wrapping_neg();
+    let pick = |if_vertical: f64, otherwise: f64| {
+        f64::from_bits((if_vertical.to_bits() & vertical) | (otherwise.to_bits() & !vertical))
+    };
+    let r1 = pick(1.0, r);
     let inv = 1.0 / (dir[2] * r1);
-    let s_c = if vertical { 0.0 } else { dir[0] * inv * dir[2] };
-    let c_c = if vertical { 1.0 } else { dir[1] * inv * dir[2] };
+    let s_c = pick(0.0, dir[0] * inv * dir[2]);
+    let c_c = pick(1.0, dir[1] * inv * dir[2]);
     (inv * r1, [s_c, c_c, c_c, -s_c])
 }
 
