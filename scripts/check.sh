@@ -13,6 +13,9 @@ set -euo pipefail
 
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 ROOT=$(pwd)
+start=$(date +%s)
+# Prints a step with the seconds since the start, so a slow step shows in the log.
+step() { echo "== [$(( $(date +%s) - start )) s] $*"; }
 
 # Check scripts, run in this order; add new ones here (e.g. check_mitsuba.py).
 CHECKS=(
@@ -42,7 +45,7 @@ REQ="$ROOT/scripts/requirements.txt"
 STAMP="$VENV/.req-hash"
 
 if [[ ! -x "$PY" ]]; then
-    echo "== creating $VENV"
+    step "creating $VENV"
     python3 -m venv "$VENV"
 fi
 
@@ -67,13 +70,13 @@ elif freeze_satisfies; then
     echo "== python requirements already satisfied"
     echo "$req_hash" >"$STAMP"
 else
-    echo "== installing python requirements"
+    step "installing python requirements"
     "$PY" -m pip install --quiet --disable-pip-version-check -r "$REQ"
     echo "$req_hash" >"$STAMP"
 fi
 
 if [[ $BUILD == 1 ]]; then
-    echo "== cargo build --release --locked"
+    step "cargo build --release --locked"
     cargo build --release --locked
 fi
 BIN="$ROOT/target/release/nephele"
@@ -86,7 +89,7 @@ failed=()
 # The Python module (python/, PyO3): built into the venv by maturin, then its tests, which
 # compare it with the CLI above and with closed forms.
 echo
-echo "== python module: maturin develop --release, python/tests/test_nephele.py"
+step "python module: maturin develop --release, python/tests/test_nephele.py"
 if ! (VIRTUAL_ENV="$VENV" PATH="$VENV/bin:$PATH" "$VENV/bin/maturin" develop --release --locked \
         -m "$ROOT/python/Cargo.toml" --quiet \
       && "$PY" "$ROOT/python/tests/test_nephele.py" --bin "$BIN"); then
@@ -94,7 +97,7 @@ if ! (VIRTUAL_ENV="$VENV" PATH="$VENV/bin:$PATH" "$VENV/bin/maturin" develop --r
 fi
 for check in "${CHECKS[@]}"; do
     echo
-    echo "== scripts/$check"
+    step "scripts/$check"
     if ! "$PY" "$ROOT/scripts/$check" --bin "$BIN" ${ARGS[@]+"${ARGS[@]}"}; then
         failed+=("$check")
     fi
@@ -105,4 +108,4 @@ if (( ${#failed[@]} )); then
     echo "check.sh: FAILED: ${failed[*]}"
     exit 1
 fi
-echo "check.sh: the python module and all ${#CHECKS[@]} check(s) passed"
+echo "check.sh: the python module and all ${#CHECKS[@]} check(s) passed in $(( $(date +%s) - start )) s"
