@@ -7,8 +7,9 @@ moves by 20 points from run to run. Here every round runs one 2048 x 2048 DGEMM 
 d = 20 and 5 um product-rule jobs (41 sizes x 31 wavelengths, as bench_mie.py), so the bests
 of each are taken over the same minutes.
 
-nephele's rate is the useful GFLOP/s over its whole compute time that phase.json reports (the
-count bench_mie.py checks independently). Set NEPHELE_GEMM=matrixmultiply to time the old GEMM,
+nephele's rates are the two that phase.json reports: the GEMM part's own (the flops its GEMM
+calls do over the seconds spent inside them, issue 30's "GEMM part"), and the whole job's
+useful GFLOP/s over its whole compute time (the count bench_mie.py checks independently). Set NEPHELE_GEMM=matrixmultiply to time the old GEMM,
 OPENBLAS_CORETYPE=Haswell to hold numpy to AVX2 kernels (with a nephele built for them).
 
 Usage: scripts/bench_mie_gemm.py [--bin PATH] [--rounds N]
@@ -41,7 +42,7 @@ def main() -> int:
     n = 2048
     a, b = np.random.rand(n, n), np.random.rand(n, n)
     c = np.empty_like(a)
-    best = {"dgemm": 0.0, "20": 0.0, "5": 0.0}
+    best = {"dgemm": 0.0, "20": 0.0, "5": 0.0, "gemm20": 0.0, "gemm5": 0.0}
     with tempfile.TemporaryDirectory() as out:
         for _ in range(args.rounds):
             t = time.perf_counter()
@@ -51,14 +52,17 @@ def main() -> int:
                 subprocess.run([args.bin, "--threads", "1", "mie", "--diameter", d, "--sizes", "41",
                                 "--wavelengths", "400:700:31", "--out", out, "--no-plot"],
                                check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-                rate = json.loads(Path(out, "phase.json").read_text())["timings"]["gflop_per_s"]
-                best[d] = max(best[d], rate)
+                timings = json.loads(Path(out, "phase.json").read_text())["timings"]
+                best[d] = max(best[d], timings["gflop_per_s"])
+                best["gemm" + d] = max(best["gemm" + d], timings["gemm_gflop_per_s"])
     print(f"GEMM: {os.environ.get('NEPHELE_GEMM', 'default')}; numpy kernels: "
           f"{os.environ.get('OPENBLAS_CORETYPE', 'the CPU own')}; best of {args.rounds} rounds")
     print(f"  numpy DGEMM 2048^2, 1 thread: {best['dgemm']:.1f} GFLOP/s")
     for d in ("20", "5"):
-        print(f"  nephele d = {d:>2} um, 1 thread: {best[d]:.1f} GFLOP/s = "
-              f"{100 * best[d] / best['dgemm']:.0f} % of DGEMM (issue 30: >= 70 %)")
+        g = best["gemm" + d]
+        print(f"  nephele d = {d:>2} um, 1 thread: GEMM part {g:.1f} GFLOP/s = "
+              f"{100 * g / best['dgemm']:.0f} % of DGEMM (issue 30: >= 70 %); whole job "
+              f"{best[d]:.1f} GFLOP/s = {100 * best[d] / best['dgemm']:.0f} %")
     return 0
 
 

@@ -379,6 +379,9 @@ pub(super) fn write_outputs(
             "gflop_per_s": stats.useful_flops * 1e-9 / compute_s,
             "gflop_with_padding": stats.flops * 1e-9,
             "flops_note": "matrix-product flops without the zero padding of short series (8 N n_theta per sphere + accumulation), over the whole compute time",
+            "gemm_seconds": stats.gemm_seconds,
+            "gemm_gflop_per_s": stats.gemm_flops * 1e-9 / stats.gemm_seconds.max(1e-12),
+            "gemm_note": "the GEMM part alone: the flops the GEMM calls do (padding included) over the seconds spent inside them, summed over threads (a rate per thread)",
             "note": "one computation for all tables of this run"
         }
     });

@@ -492,6 +492,7 @@ fn gemm_with(
     assert!(a.data.len() >= (m - 1) * a.stride + k && c.len() >= m * n);
     assert!(b.data.len() >= (k - 1) * b.stride + n);
     assert!(beta == 0.0 || beta == 1.0);
+    let start = std::time::Instant::now();
     match which {
         // SAFETY: bounds checked just above; gemm's strides are (column, row), and it reads C
         // only when asked to (β = 1), so β = 0 overwrites whatever C held.
@@ -538,6 +539,36 @@ fn gemm_with(
             );
         },
     }
+    GEMM_CLOCK.add(2.0 * (m * k * n) as f64, start.elapsed());
+}
+
+/// The flops and the seconds spent inside the GEMM calls of this process, summed over threads:
+/// the GEMM part's own rate (issue 30's "GEMM part", against numpy's DGEMM), beside the whole
+/// job's. Two clock reads per call, against the ~10⁵–10⁷ flops of a call.
+pub struct GemmClock {
+    flops: std::sync::atomic::AtomicU64,
+    nanos: std::sync::atomic::AtomicU64,
+}
+
+/// The process's [`GemmClock`].
+pub static GEMM_CLOCK: GemmClock = GemmClock {
+    flops: std::sync::atomic::AtomicU64::new(0),
+    nanos: std::sync::atomic::AtomicU64::new(0),
+};
+
+impl GemmClock {
+    fn add(&self, flops: f64, time: std::time::Duration) {
+        use std::sync::atomic::Ordering::Relaxed;
+        self.flops.fetch_add(flops as u64, Relaxed);
+        self.nanos.fetch_add(time.as_nanos() as u64, Relaxed);
+    }
+
+    /// (flops, seconds) so far; the difference of two readings times the calls between them.
+    pub fn read(&self) -> (f64, f64) {
+        use std::sync::atomic::Ordering::Relaxed;
+        let (f, n) = (self.flops.load(Relaxed), self.nanos.load(Relaxed));
+        (f as f64, n as f64 * 1e-9)
+    }
 }
 
 /// C (m × n, contiguous) = A (m × k, contiguous) · B (k × n with row stride `ldb`) through
@@ -569,6 +600,23 @@ pub fn gemm_strided(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The GEMM clock counts a call's 2 m k n flops (at least: tests running beside this one
+    /// may add theirs) and some time, through either GEMM.
+    #[test]
+    fn the_gemm_clock_counts_every_call() {
+        let (m, k, n) = (4, 3, 5);
+        let (a, b) = (vec![1.0; m * k], vec![2.0; k * n]);
+        for which in [Gemm::Faer, Gemm::MatrixMultiply] {
+            let mut c = vec![0.0; m * n];
+            let before = GEMM_CLOCK.read();
+            gemm_strided(which, m, k, n, &a, &b, n, &mut c);
+            let after = GEMM_CLOCK.read();
+            assert!(after.0 - before.0 >= (2 * m * k * n) as f64, "{which:?}");
+            assert!(after.1 > before.1, "{which:?}");
+            assert!(c.iter().all(|&v| v == 6.0));
+        }
+    }
 
     /// Every sphere's own terms lie within the orders its steps give it, the steps' orders
     /// grow, and the last step reaches the block's largest term count.

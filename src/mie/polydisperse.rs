@@ -165,6 +165,12 @@ pub struct JobStats {
     pub flops: f64,
     /// The same without the padding of short series.
     pub useful_flops: f64,
+    /// Flops done inside the GEMM calls (padding included) and the seconds spent in them,
+    /// summed over threads: the GEMM part's own rate. Read from the process-wide
+    /// [`super::batch::GEMM_CLOCK`], so jobs run at the same time in one process share them.
+    pub gemm_flops: f64,
+    /// See [`Self::gemm_flops`].
+    pub gemm_seconds: f64,
 }
 
 /// One output row: a (distribution, wavelength) pair, its wavelength and its (unnormalised)
@@ -434,8 +440,10 @@ impl MieJob {
         let total: usize = particles.iter().map(|p| n_terms(p.x)).sum();
         progress(0, total);
         let basis = super::angular::AngleBasis::new(&mu, max_terms);
+        let gemm_before = super::batch::GEMM_CLOCK.read();
         let (mut out, eff, work) =
             weighted_intensity(&particles, &rows, &basis, &|done| progress(done, total));
+        let gemm_after = super::batch::GEMM_CLOCK.read();
         let eff: Vec<(f64, f64)> = eff.iter().map(|e| (e.q_sca, e.g)).collect();
         let integrals: Vec<RowIntegrals> = rows
             .iter()
@@ -473,6 +481,8 @@ impl MieJob {
                 max_terms,
                 flops: work.flops,
                 useful_flops: work.useful_flops,
+                gemm_flops: gemm_after.0 - gemm_before.0,
+                gemm_seconds: gemm_after.1 - gemm_before.1,
             },
         ))
     }
