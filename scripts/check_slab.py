@@ -89,10 +89,13 @@ def disort(t, mu_l, chi, nquad):
     return fp, fm, subroutines.interpolate(u, NT_cor="eval" if delta_m else None)
 
 
-def bin_average(ui, depth, mu_a, mu_b, psi_a, psi_b, n=6, theta_pieces=16, psi_pieces=4):
-    """DISORT's intensity averaged over a (mu, psi) bin by composite Gauss-Legendre in theta =
-    arccos mu (so a peak at mu = -1, the sun's direction at normal incidence, is resolved) and psi:
-    the single-scattering peak is ~0.01 wide in mu for HG 0.9, a few degrees for Mie."""
+def bin_averages(ui, depth, mu_e, psi_e, n=6, theta_pieces=16, psi_pieces=4):
+    """DISORT's intensity at one depth averaged over every (mu, psi) bin of the edges mu_e, psi_e,
+    by composite Gauss-Legendre in theta = arccos mu (so a peak at mu = -1, the sun's direction at
+    normal incidence, is resolved) and psi: the single-scattering peak is ~0.01 wide in mu for HG
+    0.9, a few degrees for Mie. One call of `ui` takes every bin's nodes at once: its cost is
+    mostly per psi node and per call (the intensity at all streams, then interpolated in mu), so
+    one call per depth instead of one per bin is ~10x faster."""
     x, w = np.polynomial.legendre.leggauss(n)
 
     def nodes(a, b, pieces):
@@ -102,12 +105,21 @@ def bin_average(ui, depth, mu_a, mu_b, psi_a, psi_b, n=6, theta_pieces=16, psi_p
         wts = (0.5 * h[:, None] * w[None, :]).ravel()
         return pts, wts
 
-    theta, wt = nodes(np.arccos(mu_b), np.arccos(mu_a), theta_pieces)
-    psi, wp = nodes(psi_a, psi_b, psi_pieces)
+    thetas = [nodes(np.arccos(b), np.arccos(a), theta_pieces) for a, b in zip(mu_e[:-1], mu_e[1:])]
+    psis = [nodes(a, b, psi_pieces) for a, b in zip(psi_e[:-1], psi_e[1:])]
+    theta = np.concatenate([t for t, _ in thetas])
+    psi = np.concatenate([p for p, _ in psis])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         vals = np.asarray(ui(np.cos(theta), float(depth), psi)).reshape(len(theta), len(psi))
-    return float(np.einsum("i,j,ij->", wt * np.sin(theta), wp, vals) / ((mu_b - mu_a) * (psi_b - psi_a)))
+    nt, npsi = len(thetas[0][0]), len(psis[0][0])
+    out = np.zeros((len(thetas), len(psis)))
+    for m, (th, wt) in enumerate(thetas):
+        for k, (_, wp) in enumerate(psis):
+            block = vals[m * nt:(m + 1) * nt, k * npsi:(k + 1) * npsi]
+            out[m, k] = np.einsum("i,j,ij->", wt * np.sin(th), wp, block) / (
+                (mu_e[m + 1] - mu_e[m]) * (psi_e[k + 1] - psi_e[k]))
+    return out
 
 
 def compare_slice(name, z, doc, it, il, chi, nquad, verbose, failures):
@@ -131,9 +143,7 @@ def compare_slice(name, z, doc, it, il, chi, nquad, verbose, failures):
     # b. radiances.
     ref = np.zeros_like(z["T"][0, it, il])
     for j, d in enumerate(depths):
-        for m in range(len(mu_e) - 1):
-            for k in range(len(psi_e) - 1):
-                ref[j, m, k] = bin_average(ui, d, mu_e[m], mu_e[m + 1], psi_e[k], psi_e[k + 1])
+        ref[j] = bin_averages(ui, d, mu_e, psi_e)
     mc, s = z["T"][0, it, il], z["T_se"][0, it, il]
     mask = ref >= 0.01 * ref.max()
     if mu_l == 1.0:
