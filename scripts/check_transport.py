@@ -55,10 +55,13 @@ def main(argv=None) -> int:
             for mu_l in [0.5, 1.0]:
                 _, _, ui = disort(t, mu_l, chi, NQUAD_MIE)
                 worst = (0.0, None)
+                mu_vs, psis = [-0.1, -0.05, -0.01, 0.01, 0.05, 0.1], [10.0, 60.0, 120.0, 170.0]
                 for d in [0.1 * t, 0.35 * t, 0.65 * t, 0.9 * t]:
-                    for mu_v in [-0.1, -0.05, -0.01, 0.01, 0.05, 0.1]:
-                        for psi in [10.0, 60.0, 120.0, 170.0]:
-                            ref = float(np.asarray(ui(np.array([mu_v]), d, np.radians(psi))).ravel()[0])
+                    # One call for the depth's 24 points: DISORT's cost is per call and azimuth.
+                    refs = np.asarray(ui(np.array(mu_vs), d, np.radians(psis))).reshape(len(mu_vs), len(psis))
+                    for i, mu_v in enumerate(mu_vs):
+                        for k, psi in enumerate(psis):
+                            ref = float(refs[i, k])
                             got = tables_at(args.bin, t, mu_l, d, mu_v, psi)
                             if ref <= 0:
                                 continue
