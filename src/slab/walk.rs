@@ -216,12 +216,7 @@ impl Slice<'_> {
     /// exact sampler in one call for all lanes (`sample_cosines`), then the azimuth, the frame
     /// and the turn side by side.
     #[inline(always)]
-    fn scatter_lanes(
-        &self,
-        p: &mut Photons,
-        lanes: &mut LaneRng,
-        table: &[(f64, f64); AZIMUTHS],
-    ) {
+    fn scatter_lanes(&self, p: &mut Photons, lanes: &mut LaneRng, table: &[(f64, f64); AZIMUTHS]) {
         let xi = lanes.uniforms();
         let phi = lanes.uniforms();
         let mut cosine = [Cosine::from_mu(1.0); LANES];
