@@ -9,8 +9,9 @@ of each are taken over the same minutes.
 
 nephele's rates are the two that phase.json reports: the GEMM part's own (the flops its GEMM
 calls do over the seconds spent inside them, issue 30's "GEMM part"), and the whole job's
-useful GFLOP/s over its whole compute time (the count bench_mie.py checks independently). Set NEPHELE_GEMM=matrixmultiply to time the old GEMM,
-OPENBLAS_CORETYPE=Haswell to hold numpy to AVX2 kernels (with a nephele built for them).
+useful GFLOP/s over its whole compute time (the count bench_mie.py checks independently).
+Set NEPHELE_GEMM=matrixmultiply to time the old GEMM, OPENBLAS_CORETYPE=Haswell to hold numpy
+to AVX2 kernels (with a nephele built for them).
 
 Usage: scripts/bench_mie_gemm.py [--bin PATH] [--rounds N]
 """

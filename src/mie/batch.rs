@@ -544,7 +544,7 @@ fn gemm_with(
 
 /// The flops and the seconds spent inside the GEMM calls of this process, summed over threads:
 /// the GEMM part's own rate (issue 30's "GEMM part", against numpy's DGEMM), beside the whole
-/// job's. Two clock reads per call, against the ~10⁵–10⁷ flops of a call.
+/// job's. Two clock reads per call, against the 10⁵–10⁸ flops of a call.
 pub struct GemmClock {
     flops: std::sync::atomic::AtomicU64,
     nanos: std::sync::atomic::AtomicU64,
