@@ -572,7 +572,7 @@ impl GemmClock {
 }
 
 /// C (m × n, contiguous) = A (m × k, contiguous) · B (k × n with row stride `ldb`) through
-/// `which`: the call the products make. Public for the GEMM benchmark (benches/mie.rs), which
+/// `which`, as the products call it. Public for the GEMM benchmark (benches/mie.rs), which
 /// times the two GEMMs at the products' shapes.
 #[allow(clippy::too_many_arguments)]
 pub fn gemm_strided(

@@ -40,22 +40,24 @@ impl<F: Real> HenyeyGreenstein<F> {
     /// in a loop).
     #[inline]
     pub(crate) fn d_of(&self, mu: F) -> F {
-        let (one, two) = (F::of(1.0), F::of(2.0));
-        if self.g >= F::of(0.0) {
-            (one - self.g) * (one - self.g) + two * self.g * (one - mu)
-        } else {
-            (one + self.g) * (one + self.g) - two * self.g * (one + mu)
-        }
+        let one = F::of(1.0);
+        self.d_from(one - mu, one + mu)
     }
 
     /// [`Self::d_of`] with 1 − μ taken from the cosine (exact near the forward peak).
     #[inline]
     pub(crate) fn d_of_cosine(&self, c: Cosine<F>) -> F {
-        if self.g >= F::of(0.0) {
-            let one = F::of(1.0);
-            (one - self.g) * (one - self.g) + F::of(2.0) * self.g * c.one_minus_mu
+        self.d_from(c.one_minus_mu, F::of(1.0) + c.mu)
+    }
+
+    /// [`Self::d_of`] from 1 − μ and 1 + μ.
+    #[inline]
+    fn d_from(&self, one_minus_mu: F, one_plus_mu: F) -> F {
+        let (one, two, g) = (F::of(1.0), F::of(2.0), self.g);
+        if g >= F::of(0.0) {
+            (one - g) * (one - g) + two * g * one_minus_mu
         } else {
-            self.d_of(c.mu)
+            (one + g) * (one + g) - two * g * one_plus_mu
         }
     }
 
