@@ -11,7 +11,7 @@
 //!   constants, and its inverse for the tables' lookups), as are the default order groups.
 
 use super::aureole::Aureole;
-use super::lanes::{count_edges, Lane};
+use super::lanes::{count_edges, Lane, LANES};
 use anyhow::{bail, Result};
 use nephele_runtime::fitting::{STRETCH_EXPONENT, STRETCH_SCALE};
 
@@ -184,10 +184,16 @@ impl SlabGrid {
         let last = self.n_mu() - 1;
         match self.mu_uniform {
             // Through i32, not usize: AVX2 converts doubles to 32-bit integers side by side but
-            // has no instruction for 64-bit ones (the same bins: the product is small).
-            Some(per_unit) => std::array::from_fn(|l| {
-                (((mu[l] + 1.0) * per_unit) as i32).clamp(0, last as i32) as usize
-            }),
+            // has no instruction for 64-bit ones (the same bins: the product is small). A plain
+            // loop, not `array::from_fn`: LLVM compiled that apart from the walk's vector
+            // variants, in baseline scalar code, and called it at every step.
+            Some(per_unit) => {
+                let mut m = [0; LANES];
+                for l in 0..LANES {
+                    m[l] = (((mu[l] + 1.0) * per_unit) as i32).clamp(0, last as i32) as usize;
+                }
+                m
+            }
             None => count_edges(&self.mu_edges[1..=last], |e, l| e <= mu[l]),
         }
     }
