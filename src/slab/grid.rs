@@ -11,7 +11,7 @@
 //!   constants, and its inverse for the tables' lookups), as are the default order groups.
 
 use super::aureole::Aureole;
-use super::lanes::{count_edges, Lane, LANES};
+use super::lanes::{count_edges, floor_index, Lane, LANES};
 use anyhow::{bail, Result};
 use nephele_runtime::fitting::{STRETCH_EXPONENT, STRETCH_SCALE};
 
@@ -183,14 +183,13 @@ impl SlabGrid {
     pub fn mu_bins(&self, mu: &Lane<f64>) -> Lane<usize> {
         let last = self.n_mu() - 1;
         match self.mu_uniform {
-            // Through i32, not usize: AVX2 converts doubles to 32-bit integers side by side but
-            // has no instruction for 64-bit ones (the same bins: the product is small). A plain
-            // loop, not `array::from_fn`: LLVM compiled that apart from the walk's vector
-            // variants, in baseline scalar code, and called it at every step.
+            // Converted side by side ([`floor_index`]). A plain loop, not `array::from_fn`:
+            // LLVM compiled that apart from the walk's vector variants, in baseline scalar
+            // code, and called it at every step.
             Some(per_unit) => {
                 let mut m = [0; LANES];
                 for l in 0..LANES {
-                    m[l] = (((mu[l] + 1.0) * per_unit) as i32).clamp(0, last as i32) as usize;
+                    m[l] = floor_index((mu[l] + 1.0) * per_unit, last);
                 }
                 m
             }

@@ -91,6 +91,18 @@ pub fn free_path(xi: f64) -> f64 {
     -(e * LN2_HI + (e * LN2_LO + 2.0 * s * series))
 }
 
+/// ⌊x⌋ held to 0 … `last` (NaN to 0), for bin and table indices: the same index as
+/// `(x as i32).clamp(0, last)`, but the lanes convert together. Rust's saturating `as` is
+/// compiled lane by lane, each with its NaN test (AVX2 has no such conversion); clamped as a
+/// float first (`max` ignores a NaN), the value cannot overflow, and the conversion is one
+/// vector instruction.
+#[inline(always)]
+pub fn floor_index(x: f64, last: usize) -> usize {
+    let x = x.max(0.0).min(last.min(i32::MAX as usize) as f64);
+    // SAFETY: x is neither NaN nor infinite, and lies in [0, i32::MAX].
+    (unsafe { x.to_int_unchecked::<i32>() }) as usize
+}
+
 /// For each lane, how many of `edges` satisfy `holds(edge, lane)`: counted over the edges with
 /// the lanes innermost, so that the lanes take every comparison together (a binary search's
 /// branches go either way at random, a mispredicted jump each).
@@ -132,6 +144,37 @@ mod tests {
             worst = worst.max((got - want).abs() / ulp);
         }
         assert!(worst <= 2.0, "worst {worst} ulp");
+    }
+
+    /// The index is Rust's saturating conversion, held to the bins: inside, at the edges,
+    /// beyond them both ways, at ±0, ±∞ and NaN.
+    #[test]
+    fn floor_index_is_the_saturating_conversion() {
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(11);
+        let special = [
+            0.0,
+            -0.0,
+            -0.5,
+            -1.0,
+            15.0,
+            15.999,
+            16.0,
+            1e300,
+            -1e300,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            f64::MIN_POSITIVE,
+            255.99999999999997,
+            256.0,
+        ];
+        let points = (0..100_000).map(|_| rng.random::<f64>() * 300.0 - 20.0);
+        for x in points.chain(special) {
+            for last in [0usize, 1, 15, 255] {
+                let want = (x as i32).clamp(0, last as i32) as usize;
+                assert_eq!(floor_index(x, last), want, "{x} {last}");
+            }
+        }
     }
 
     #[test]
