@@ -44,8 +44,20 @@ impl LaneRng {
     /// conversion, which AVX2 lacks for 64-bit integers).
     #[inline(always)]
     pub fn uniforms(&mut self) -> Lane<f64> {
+        // A loop, not `array::map`, which LLVM may compile apart from the walk's vector copies.
+        let r = self.outputs();
+        let mut u = [0.0; LANES];
+        for l in 0..LANES {
+            u[l] = uniform_of(r[l]);
+        }
+        u
+    }
+
+    /// Each stream's next output.
+    #[inline(always)]
+    pub fn outputs(&mut self) -> Lane<u64> {
         let [s0, s1, s2, s3] = &mut self.s;
-        let mut out = [0.0; LANES];
+        let mut out = [0; LANES];
         for l in 0..LANES {
             let r = s0[l]
                 .wrapping_add(s3[l])
@@ -58,10 +70,17 @@ impl LaneRng {
             s0[l] ^= s3[l];
             s2[l] ^= t;
             s3[l] = s3[l].rotate_left(45);
-            out[l] = f64::from_bits((r >> 12) | 0x3FF0_0000_0000_0000) - 1.0;
+            out[l] = r;
         }
         out
     }
+}
+
+/// The uniform number in [0, 1) of a stream's output `r` ([`LaneRng::uniforms`]): its top 52
+/// bits over 2⁵².
+#[inline(always)]
+pub fn uniform_of(r: u64) -> f64 {
+    f64::from_bits((r >> 12) | 0x3FF0_0000_0000_0000) - 1.0
 }
 
 /// A free path in mean free paths, −ln(1 − ξ) for ξ ∈ [0, 1), without a library call, so that

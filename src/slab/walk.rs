@@ -218,12 +218,13 @@ impl Slice<'_> {
     #[inline(always)]
     fn scatter_lanes(&self, p: &mut Photons, lanes: &mut LaneRng, table: &[(f64, f64); AZIMUTHS]) {
         let xi = lanes.uniforms();
-        let phi = lanes.uniforms();
+        let phi = lanes.outputs();
         let mut cosine = [Cosine::from_mu(1.0); LANES];
         self.phase.sample_cosines(&xi, &mut cosine);
         for l in 0..LANES {
             let dir = [p.dir[0][l], p.dir[1][l], p.dir[2][l]];
-            let turn = turn_of(table, cosine[l].mu, cosine[l].one_minus_mu, phi[l]);
+            let azimuth = unit_circle_of_output(table, phi[l]);
+            let turn = turn_of(cosine[l].mu, cosine[l].one_minus_mu, azimuth);
             let new = turn_direction(dir, turn);
             for i in 0..3 {
                 p.dir[i][l] = new[i];
@@ -457,15 +458,18 @@ pub fn scatter(
     let table = &*AZIMUTH_TABLE;
     turn_direction(
         dir,
-        turn_of(table, c.mu, c.one_minus_mu, rng.random::<f64>()),
+        turn_of(
+            c.mu,
+            c.one_minus_mu,
+            unit_circle_in(table, rng.random::<f64>()),
+        ),
     )
 }
 
 /// A scattering apart from the direction it turns, (cos θ, sin θ cos φ, sin θ sin φ), from its
-/// cosine μ (and 1 − μ, exact near the forward peak) and the azimuth's uniform `xi`.
+/// cosine μ (and 1 − μ, exact near the forward peak) and the azimuth's (cos φ, sin φ).
 #[inline(always)]
-fn turn_of(table: &[(f64, f64); AZIMUTHS], mu: f64, one_minus_mu: f64, xi: f64) -> [f64; 3] {
-    let (cos_phi, sin_phi) = unit_circle_in(table, xi);
+fn turn_of(mu: f64, one_minus_mu: f64, (cos_phi, sin_phi): (f64, f64)) -> [f64; 3] {
     let sin2 = if mu > 0.0 {
         one_minus_mu * (2.0 - one_minus_mu)
     } else {
@@ -519,6 +523,21 @@ fn unit_circle_in(table: &[(f64, f64); AZIMUTHS], xi: f64) -> (f64, f64) {
     (c * cos_d - s * sin_d, s * cos_d + c * sin_d)
 }
 
+/// [`unit_circle_in`] of the uniform number of a stream's output `r` ([`uniform_of`]), bit
+/// for bit, with its table index and remainder read from r's bits: ξ = m/2⁵² with m = r >> 12,
+/// so 256ξ has the integer part r >> 56 and the fraction (m mod 2⁴⁴)/2⁴⁴, both exact. A
+/// double's conversion to an integer would take each lane apart (Rust's saturating `as`).
+#[inline(always)]
+fn unit_circle_of_output(table: &[(f64, f64); AZIMUTHS], r: u64) -> (f64, f64) {
+    const _: () = assert!(AZIMUTHS == 1 << 8);
+    let k = (r >> 56) as usize;
+    // The fraction as the mantissa of a number in [1, 2), less one (exact).
+    let fraction = f64::from_bits((((r >> 12) << 20) >> 12) | 0x3FF0_0000_0000_0000) - 1.0;
+    let (sin_d, cos_d) = sin_cos_small(fraction * (2.0 * PI / AZIMUTHS as f64));
+    let (c, s) = table[k];
+    (c * cos_d - s * sin_d, s * cos_d + c * sin_d)
+}
+
 /// The direction rescaled to unit length, so that rounding does not drift over thousands of
 /// scatterings. |v|² is within ~1e-15 of 1, so one Newton step for 1/√|v|² (1.5 − |v|²/2) is
 /// exact to f64 without a square root or a division.
@@ -532,6 +551,7 @@ fn normalised(v: [f64; 3]) -> [f64; 3] {
 mod tests {
     use super::*;
     use crate::slab::aureole::{Aureole, DEFAULT_AUREOLE_DEG};
+    use crate::slab::lanes::uniform_of;
     use nephele_runtime::phase::{HenyeyGreenstein, TabulatedTable};
 
     /// The walk compiled for AVX-512, AVX2 and baseline x86-64 gives the same sums, bit for
@@ -628,6 +648,33 @@ mod tests {
         let bits = |(d, p): (f64, [f64; 4])| (d.to_bits(), p.map(f64::to_bits));
         for dir in dirs {
             assert_eq!(bits(pooled_frame(dir)), bits(branchy(dir)), "{dir:?}");
+        }
+    }
+
+    /// The azimuth read from a stream's output bits is the one of its uniform number, bit for
+    /// bit: random outputs, the ends, and every table index with the least and largest
+    /// remainders.
+    #[test]
+    fn unit_circle_of_an_output_is_that_of_its_uniform() {
+        let table = &*AZIMUTH_TABLE;
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(13);
+        let edges = (0..256u64).flat_map(|k| {
+            let top = k << 56;
+            [
+                top,
+                top | (1 << 12),
+                top | ((1 << 56) - 1),
+                top | ((1 << 56) - (1 << 12)),
+            ]
+        });
+        let outputs = (0..200_000).map(|_| rng.random::<u64>()).chain(edges);
+        for r in outputs.chain([0, u64::MAX, 4095, 1 << 12]) {
+            let bits = |(c, s): (f64, f64)| (c.to_bits(), s.to_bits());
+            assert_eq!(
+                bits(unit_circle_of_output(table, r)),
+                bits(unit_circle_in(table, uniform_of(r))),
+                "{r:#x}"
+            );
         }
     }
 
