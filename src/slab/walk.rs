@@ -340,11 +340,14 @@ impl Slice<'_> {
         // The crossed planes found and visited in one loop (one mispredicted exit per flight,
         // not two), written out: a closure would be compiled apart from the vector variants of
         // the walk, without their instructions.
+        // The aureole's test is taken once per flight, not at every crossing: a loop for the
+        // flights down in a cone around the beam, one for the others down, one for those up
+        // (never in a cone).
         macro_rules! visit {
-            ($j:expr) => {{
+            ($j:expr, $halo:expr) => {{
                 let j = $j;
                 flux[j] += weight;
-                if let Some(first) = halo {
+                if let Some(first) = $halo {
                     aureole[first + j * n_annuli] += inv_mu;
                 }
                 let along = (depths[j] - pos[2]) * inv_dz;
@@ -357,15 +360,24 @@ impl Slice<'_> {
             }};
         }
         let mut end = above;
-        if down {
-            while end < planes && depths[end] <= d1 {
-                visit!(end);
-                end += 1;
+        match halo {
+            Some(first) => {
+                while end < planes && depths[end] <= d1 {
+                    visit!(end, Some(first));
+                    end += 1;
+                }
             }
-        } else {
-            while end > 0 && depths[end - 1] >= d1 {
-                end -= 1;
-                visit!(end);
+            None if down => {
+                while end < planes && depths[end] <= d1 {
+                    visit!(end, None::<usize>);
+                    end += 1;
+                }
+            }
+            None => {
+                while end > 0 && depths[end - 1] >= d1 {
+                    end -= 1;
+                    visit!(end, None::<usize>);
+                }
             }
         }
         end
