@@ -169,15 +169,18 @@ impl Slice<'_> {
             } else {
                 None
             };
+            // A photon still in the slab has scattered (an event, even if absorption then ends
+            // it): counted for all lanes side by side, without a branch.
+            let mut events = 0;
+            for l in 0..LANES {
+                let scattered = p.alive[l] && !left[l];
+                p.order[l] = p.order[l].saturating_add(u32::from(scattered));
+                events += u64::from(scattered);
+            }
+            tally.events += events;
             for l in 0..LANES {
                 if !p.alive[l] {
                     continue;
-                }
-                // A photon still in the slab has scattered (an event, even if absorption
-                // then ends it).
-                if !left[l] {
-                    p.order[l] = p.order[l].saturating_add(1);
-                    tally.events += 1;
                 }
                 let absorbed =
                     !left[l] && survive.is_some_and(|u| self.absorb(&mut p, l, u[l], &mut tally));
