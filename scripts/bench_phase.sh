@@ -2,9 +2,10 @@
 # Phase-model speed: nephele-runtime (examples/bench_phase.rs) next to the renderer-style f32
 # closed forms of benches/baselines/phase_ref.c, built with cc -O3 -march=native, in one run.
 # First one full run of each; then, for issue 30's comparisons, the two binaries alternately
-# ROUNDS times (default 30) on N/5 calls each (nephele's f32 models only), the order swapped every round: on a VM whose clock
-# drifts within a minute the ratio of two runs a fraction of a second apart is what holds, and
-# the median of many such ratios (with its quartiles) is the figure to quote.
+# ROUNDS times (default 30) on N/5 calls each (nephele's f32 models only), the order swapped
+# every round: on a VM whose clock drifts within a minute the ratio of two runs a fraction of a
+# second apart is what holds, and the median of many such ratios (with its quartiles) is the
+# figure to quote.
 # Usage: scripts/bench_phase.sh [N [ROUNDS]]
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
