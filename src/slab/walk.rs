@@ -533,7 +533,13 @@ fn unit_circle_in(table: &[(f64, f64); AZIMUTHS], xi: f64) -> (f64, f64) {
     // Through i32, not usize: AVX2 converts doubles to 32-bit integers side by side but has no
     // instruction for 64-bit ones (the same k: 0 ≤ scaled < 256).
     let k = (scaled as i32).clamp(0, AZIMUTHS as i32 - 1) as usize;
-    let (sin_d, cos_d) = sin_cos_small((scaled - k as f64) * (2.0 * PI / AZIMUTHS as f64));
+    table_entry_turned(table, k, scaled - k as f64)
+}
+
+/// (cos φ, sin φ) of φ = 2π(k + f)/AZIMUTHS, f ∈ [0, 1): table entry k turned by the remainder.
+#[inline(always)]
+fn table_entry_turned(table: &[(f64, f64); AZIMUTHS], k: usize, f: f64) -> (f64, f64) {
+    let (sin_d, cos_d) = sin_cos_small(f * (2.0 * PI / AZIMUTHS as f64));
     let (c, s) = table[k];
     (c * cos_d - s * sin_d, s * cos_d + c * sin_d)
 }
@@ -548,9 +554,7 @@ fn unit_circle_of_output(table: &[(f64, f64); AZIMUTHS], r: u64) -> (f64, f64) {
     let k = (r >> 56) as usize;
     // The fraction as the mantissa of a number in [1, 2), less one (exact).
     let fraction = f64::from_bits((((r >> 12) << 20) >> 12) | 0x3FF0_0000_0000_0000) - 1.0;
-    let (sin_d, cos_d) = sin_cos_small(fraction * (2.0 * PI / AZIMUTHS as f64));
-    let (c, s) = table[k];
-    (c * cos_d - s * sin_d, s * cos_d + c * sin_d)
+    table_entry_turned(table, k, fraction)
 }
 
 /// The direction rescaled to unit length, so that rounding does not drift over thousands of
