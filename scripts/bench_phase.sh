@@ -25,35 +25,11 @@ target/release/examples/bench_phase "$n"
 echo
 short=$(( n / 5 ))
 echo "== $rounds rounds, the two binaries alternately ($short calls each)"
-for r in $(seq "$rounds"); do
-    if (( r % 2 )); then
-        "$tmp/phase_ref" "$short" > "$tmp/c_$r"
-        target/release/examples/bench_phase "$short" f32 > "$tmp/ours_$r"
-    else
-        target/release/examples/bench_phase "$short" f32 > "$tmp/ours_$r"
-        "$tmp/phase_ref" "$short" > "$tmp/c_$r"
-    fi
-done
-python3 - "$tmp" "$rounds" <<'PY'
-import re, statistics, sys
-tmp, rounds = sys.argv[1], int(sys.argv[2])
-def ns(path):
-    out = {}
-    for line in open(path):
-        m = re.match(r"(.*?)\s+([0-9.]+) ns$", line.strip())
-        if m:
-            out[m.group(1).strip()] = float(m.group(2))
-    return out
-pairs = [
-    ("HG eval", "f32 hg eval (static)", "hg eval"),
-    ("HG+Draine eval", "f32 hg+draine (d = 20 µm) eval (static)", "hg+draine eval"),
-    ("HG+Draine sample", "f32 hg+draine (d = 20 µm) sample (static)", "hg+draine sample"),
-    ("Draine sample (lobe, trait object)", "f32 draine (d = 20 µm lobe) sample", "draine sample"),
-]
-runs = [(ns(f"{tmp}/ours_{r}"), ns(f"{tmp}/c_{r}")) for r in range(1, rounds + 1)]
-print("   nephele / C, time per call (≤ 1: nephele as fast or faster; issue 30's target for each):")
-for name, ours, c in pairs:
-    r = sorted(o[ours] / k[c] for o, k in runs)
-    q = lambda f: r[min(len(r) - 1, int(f * len(r)))]
-    print(f"   {name:36s} median {statistics.median(r):.3f}, quartiles {q(0.25):.3f}–{q(0.75):.3f}")
-PY
+ns='\s+([0-9.]+) ns'
+python3 scripts/alternate.py --rounds "$rounds" --a "$tmp/phase_ref $short" \
+    --b "target/release/examples/bench_phase $short f32" \
+    --quantity "HG eval" "^hg eval$ns" "^f32 hg eval \(static\)$ns" \
+    --quantity "HG+Draine eval" "^hg\+draine eval$ns" "^f32 hg\+draine \(d = 20 µm\) eval \(static\)$ns" \
+    --quantity "HG+Draine sample" "^hg\+draine sample$ns" "^f32 hg\+draine \(d = 20 µm\) sample \(static\)$ns" \
+    --quantity "Draine sample (lobe, trait object)" "^draine sample$ns" "^f32 draine \(d = 20 µm lobe\) sample$ns" \
+    --label "nephele / C, time per call (issue 30: ≤ 1.0 each)"

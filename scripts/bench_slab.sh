@@ -20,34 +20,15 @@ trap 'rm -rf "$tmp"' EXIT
 bash scripts/simd_level.sh
 cc -O3 -march=native -o "$tmp/slab_ref" benches/baselines/slab_ref.c -lm
 cargo build --release --quiet --example bench_slab
-rate() { grep -o '[0-9.]* M events/s' | head -1 | cut -d' ' -f1; }
 echo "== benches/baselines/slab_ref.c (analog walk, totals and 10 μ bins), once:"
 "$tmp/slab_ref" 4 0.9 "$n" | head -2
 echo "== nephele slab walk (16 planes × 16 μ_V × 12 ψ_V × 9 groups, collector moments, 9 aureole annuli), once:"
 target/release/examples/bench_slab "$n"
 echo "== $rounds rounds, the two walks alternately ($n photons each)"
-pairs=()
-for r in $(seq "$rounds"); do
-    if (( r % 2 )); then
-        c=$("$tmp/slab_ref" 4 0.9 "$n" | rate)
-        ours=$(target/release/examples/bench_slab "$n" | rate)
-    else
-        ours=$(target/release/examples/bench_slab "$n" | rate)
-        c=$("$tmp/slab_ref" 4 0.9 "$n" | rate)
-    fi
-    pairs+=("$c:$ours")
-done
-python3 - "${pairs[@]}" <<'PY'
-import statistics, sys
-pairs = [tuple(map(float, p.split(":"))) for p in sys.argv[1:]]
-r = sorted(o / c for c, o in pairs)
-n = len(r)
-q = lambda f: r[min(n - 1, int(f * n))]
-print(f"   C walk {min(c for c, _ in pairs):.1f}–{max(c for c, _ in pairs):.1f} M events/s, "
-      f"nephele {min(o for _, o in pairs):.1f}–{max(o for _, o in pairs):.1f} (the clock's drift)")
-print(f"== nephele / C walk, μ_L = 1, over {n} rounds: median {statistics.median(r):.3f}, "
-      f"quartiles {q(0.25):.3f}–{q(0.75):.3f}, range {r[0]:.3f}–{r[-1]:.3f} (issue 30: ≥ 1.0)")
-PY
+rate='([0-9.]+) M events/s'
+python3 scripts/alternate.py --rounds "$rounds" --a "$tmp/slab_ref 4 0.9 $n" \
+    --b "target/release/examples/bench_slab $n" --quantity "events/s, μ_L = 1" "$rate" "$rate" \
+    --label "nephele / C walk, scattering events per second (issue 30: ≥ 1.0)"
 echo
 echo "== the same at mu_L = 0.5 (the plain tally; slab_ref.c has normal incidence only)"
 target/release/examples/bench_slab "$n" 0.5
