@@ -5,8 +5,9 @@
 # made from a config tallies: the cells' collector moments and the 9 aureole annuli around the
 # beam. Last, the walk with the Mie phase function of 10 µm droplets (what the default tables
 # walk with) at mu_L = 0.5.
-# The C walk and nephele's run alternately ROUNDS times (default 40) on PHOTONS photons each
-# (default 500 000, about 0.1 s a walk), the order swapped every round: on a VM whose clock
+# For the ratio, refbench/ (nephele-refbench) compiles slab_ref.c unchanged into one process
+# with nephele's walk and runs the two alternately ROUNDS times (default 40) on PHOTONS photons
+# each (default 500 000, about 0.1 s a walk), the order swapped every round: on a VM whose clock
 # drifts by ±25 % within a minute, the ratio of two walks a tenth of a second apart is what
 # holds, and the median of many such ratios (with its quartiles) is the figure to quote.
 # (Rounds of 4·10⁶ photons, 1.5 s apart, gave medians 0.93 and 0.99 from the same binaries.)
@@ -24,11 +25,8 @@ echo "== benches/baselines/slab_ref.c (analog walk, totals and 10 μ bins), once
 "$tmp/slab_ref" 4 0.9 "$n" | head -2
 echo "== nephele slab walk (16 planes × 16 μ_V × 12 ψ_V × 9 groups, collector moments, 9 aureole annuli), once:"
 target/release/examples/bench_slab "$n"
-echo "== $rounds rounds, the two walks alternately ($n photons each)"
-rate='([0-9.]+) M events/s'
-python3 scripts/alternate.py --rounds "$rounds" --a "$tmp/slab_ref 4 0.9 $n" \
-    --b "target/release/examples/bench_slab $n" --quantity "events/s, μ_L = 1" "$rate" "$rate" \
-    --label "nephele / C walk, scattering events per second (issue 30: ≥ 1.0)"
+echo "== $rounds rounds in one process: slab_ref.c (compiled unchanged) and nephele's walk alternately"
+cargo run --release --quiet -p nephele-refbench -- slab "$n" "$rounds"
 echo
 echo "== the same at mu_L = 0.5 (the plain tally; slab_ref.c has normal incidence only)"
 target/release/examples/bench_slab "$n" 0.5
