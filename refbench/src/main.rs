@@ -4,19 +4,21 @@
 //!     cargo run --release -p nephele-refbench -- phase [CALLS [ROUNDS]]
 //!     cargo run --release -p nephele-refbench -- slab [PHOTONS [ROUNDS]]
 //!
-//! Each round runs the baseline's own `main` (compiled unchanged, `cc -O3 -march=native`, its
-//! output captured) and nephele's same loop, one right after the other, the order swapped every
-//! round, and takes the ratio of the two: a few milliseconds apart, both see the same clock.
-//! Printed per comparison: the median ratio over the rounds with its quartiles and range, and
-//! the medians of each side's own figure.
+//! The baselines are compiled as their headers say (`cc -O3 -march=native`, build.rs), their
+//! sources unchanged. Each round runs a C loop and nephele's same loop one right after the
+//! other, the order swapped every round, and takes the ratio of the two: milliseconds apart,
+//! both see the same clock. Printed per comparison: the median ratio over the rounds with its
+//! quartiles and range, and the medians of each side's own figure.
 //!
-//! - `phase`: ns per call, nephele / C, of the f32 loops of phase_ref.c (xorshift numbers
-//!   converted as there, an accumulated sum), the models called directly as the C forms are:
-//!   HG evaluation, the HG + Draine blend of d = 20 µm evaluated and sampled, and its Draine
-//!   lobe sampled. nephele samples exactly; the C forms do not at high α.
+//! - `phase`: ns per call, nephele / C, of the f32 loops of phase_ref.c's main (xorshift
+//!   numbers converted as there, an accumulated sum; c/phase.c has each loop as a function of
+//!   its own), the models called directly as the C forms are: HG evaluated and sampled, the
+//!   HG + Draine blend of d = 20 µm evaluated and sampled, its Draine lobe sampled. nephele
+//!   samples exactly (1 − μ too); the C forms do not.
 //! - `slab`: scattering events per second, nephele / C, of the walk on slab_ref.c's problem
-//!   (τ = 4, HG g = 0.9, normal incidence): the C walk tallies totals and 10 μ bins, nephele's
-//!   every table's tallies (examples/bench_slab.rs).
+//!   (τ = 4, HG g = 0.9, normal incidence): slab_ref.c's own main (its output captured by
+//!   c/capture.c, its events read from it), which tallies totals and 10 μ bins, against
+//!   nephele's walk with every table's tallies (examples/bench_slab.rs).
 
 use nephele::slab::aureole::{Aureole, DEFAULT_AUREOLE_DEG};
 use nephele::slab::walk::batch_rng;
@@ -24,38 +26,39 @@ use nephele::slab::{SlabGrid, Slice};
 use nephele_runtime::phase::{Draine, HenyeyGreenstein};
 use nephele_runtime::presets::jendersie_deon;
 use nephele_runtime::PhaseFunction;
-use std::ffi::{c_char, c_int, CStr, CString};
+use std::ffi::{c_char, c_int, c_long, CStr, CString};
 use std::hint::black_box;
 use std::process::ExitCode;
 use std::time::Instant;
 
 extern "C" {
-    fn phase_ref_main(argc: c_int, argv: *const *const c_char) -> c_int;
+    fn ref_hg_eval(n: c_long) -> f64;
+    fn ref_hg_sample(n: c_long) -> f64;
+    fn ref_draine_sample(n: c_long) -> f64;
+    fn ref_blend_eval(n: c_long) -> f64;
+    fn ref_blend_sample(n: c_long) -> f64;
     fn slab_ref_main(argc: c_int, argv: *const *const c_char) -> c_int;
     fn ref_output() -> *const c_char;
     fn ref_clear();
 }
 
-/// Runs a baseline's `main` with `args` and returns what it printed.
-fn run_baseline(
-    main: unsafe extern "C" fn(c_int, *const *const c_char) -> c_int,
-    args: &[&str],
-) -> String {
+/// Runs slab_ref.c's `main` with `args` and returns what it printed.
+fn run_slab_ref(args: &[&str]) -> String {
     let owned: Vec<CString> = args
         .iter()
         .map(|a| CString::new(*a).expect("no NUL"))
         .collect();
     let argv: Vec<*const c_char> = owned.iter().map(|a| a.as_ptr()).collect();
-    // SAFETY: argv holds argc valid C strings that outlive the call; the baselines read their
-    // arguments and print into the capture buffer (bounded), nothing else.
+    // SAFETY: argv holds argc valid C strings that outlive the call; the baseline reads its
+    // arguments and prints into the capture buffer (bounded), nothing else.
     unsafe {
         ref_clear();
-        main(argv.len() as c_int, argv.as_ptr());
+        slab_ref_main(argv.len() as c_int, argv.as_ptr());
         CStr::from_ptr(ref_output()).to_string_lossy().into_owned()
     }
 }
 
-/// The number after `key` in `text` (e.g. "events=" → 2879623), or after a line's label.
+/// The number after `key` in `text` (e.g. "events=" → 2879623).
 fn number_after(text: &str, key: &str) -> f64 {
     let at = text
         .find(key)
@@ -93,24 +96,32 @@ fn ns_per_call(n: usize, rng: &mut Xorshift, mut op: impl FnMut(&mut Xorshift) -
     t0.elapsed().as_secs_f64() / n as f64 * 1e9
 }
 
-/// One comparison: its name, the baseline's line label, and nephele's loop.
-type PhaseCase = (&'static str, &'static str, fn(usize, &mut Xorshift) -> f64);
+/// One comparison: its name, the C loop, and nephele's loop (ns per call each).
+type PhaseCase = (
+    &'static str,
+    unsafe extern "C" fn(c_long) -> f64,
+    fn(usize, &mut Xorshift) -> f64,
+);
 
 fn phase_cases() -> Vec<PhaseCase> {
     vec![
-        ("HG eval", "hg eval", |n, r| {
+        ("HG eval", ref_hg_eval, |n, r| {
             let hg = HenyeyGreenstein::new(0.85f32);
             ns_per_call(n, r, |r| hg.eval(2.0 * r.next() - 1.0))
         }),
-        ("HG+Draine eval", "hg+draine eval", |n, r| {
+        ("HG sample (exact 1 − μ)", ref_hg_sample, |n, r| {
+            let hg = HenyeyGreenstein::new(0.85f32);
+            ns_per_call(n, r, |r| hg.sample_mu(r.next()))
+        }),
+        ("HG+Draine eval", ref_blend_eval, |n, r| {
             let blend = jendersie_deon(20.0).phase::<f32>();
             ns_per_call(n, r, |r| blend.eval(2.0 * r.next() - 1.0))
         }),
-        ("HG+Draine sample (exact)", "hg+draine sample", |n, r| {
+        ("HG+Draine sample (exact)", ref_blend_sample, |n, r| {
             let blend = jendersie_deon(20.0).phase::<f32>();
             ns_per_call(n, r, |r| blend.sample_mu(r.next()))
         }),
-        ("Draine sample, lobe (exact)", "draine sample", |n, r| {
+        ("Draine sample, lobe (exact)", ref_draine_sample, |n, r| {
             let b = jendersie_deon(20.0);
             let draine = Draine::new(b.g_d as f32, b.alpha as f32);
             ns_per_call(n, r, |r| draine.sample_mu(r.next()))
@@ -143,29 +154,22 @@ fn phase(calls: usize, rounds: usize) {
     let cases = phase_cases();
     let mut rng = Xorshift(0x853c49e6748fea9b);
     let (mut ours, mut theirs) = (vec![vec![]; cases.len()], vec![vec![]; cases.len()]);
-    let n = calls.to_string();
     for round in 0..rounds {
-        let mut run_c = || {
-            let out = run_baseline(phase_ref_main, &["phase_ref", &n]);
-            for (k, (_, label, _)) in cases.iter().enumerate() {
-                theirs[k].push(number_after(&out, label));
+        for (k, &(_, c_loop, our_loop)) in cases.iter().enumerate() {
+            // SAFETY: the C loop reads and writes only its own statics.
+            let mut run_c = || theirs[k].push(unsafe { c_loop(calls as c_long) });
+            if round % 2 == 0 {
+                run_c();
+                ours[k].push(our_loop(calls, &mut rng));
+            } else {
+                ours[k].push(our_loop(calls, &mut rng));
+                run_c();
             }
-        };
-        let mut run_ours = |ours: &mut Vec<Vec<f64>>| {
-            for (k, (_, _, run)) in cases.iter().enumerate() {
-                ours[k].push(run(calls, &mut rng));
-            }
-        };
-        if round % 2 == 0 {
-            run_c();
-            run_ours(&mut ours);
-        } else {
-            run_ours(&mut ours);
-            run_c();
         }
     }
     println!(
-        "   nephele / C, ns per call (issue 30: ≤ 1.0 each), {rounds} rounds of {calls} calls:"
+        "   nephele / C, ns per call (issue 30: ≤ 1.0 for evaluation and the blend's and Draine's \
+         sampling), {rounds} rounds of {calls} calls:"
     );
     for (k, (name, _, _)) in cases.iter().enumerate() {
         let mut ratios: Vec<f64> = ours[k].iter().zip(&theirs[k]).map(|(a, b)| a / b).collect();
@@ -189,7 +193,7 @@ fn slab(photons: u64, rounds: usize) {
     for round in 0..rounds {
         let run_c = || {
             let t0 = Instant::now();
-            let out = run_baseline(slab_ref_main, &["slab_ref", "4", "0.9", &n]);
+            let out = run_slab_ref(&["slab_ref", "4", "0.9", &n]);
             number_after(&out, "events=") / t0.elapsed().as_secs_f64() / 1e6
         };
         let run_ours = || {
