@@ -224,34 +224,29 @@ fn slab(photons: u64, rounds: usize) {
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
+    // The count (calls or photons) and the rounds, each a positive integer or its default.
     let number = |i: usize, default: u64| -> Option<u64> {
         args.get(i)
             .map_or(Some(default), |s| s.parse().ok().filter(|&v| v > 0))
     };
-    match (
-        args.first().map(String::as_str),
-        number(1, 0),
-        number(2, 30),
-    ) {
-        (Some("phase"), Some(calls), Some(rounds)) => phase(
-            if calls == 0 {
-                2_000_000
-            } else {
-                calls as usize
-            },
-            rounds as usize,
-        ),
-        (Some("slab"), Some(photons), Some(rounds)) => slab(
-            if photons == 0 { 500_000 } else { photons },
-            rounds as usize,
-        ),
-        _ => {
-            eprintln!(
-                "usage: nephele-refbench phase [CALLS [ROUNDS]] | slab [PHOTONS [ROUNDS]] \
-                 (positive integers; defaults 2000000 calls, 500000 photons, 30 rounds)"
-            );
-            return ExitCode::FAILURE;
+    match args.first().map(String::as_str) {
+        Some("phase") => {
+            if let (Some(calls), Some(rounds)) = (number(1, 10_000_000), number(2, 30)) {
+                phase(calls as usize, rounds as usize);
+                return ExitCode::SUCCESS;
+            }
         }
+        Some("slab") => {
+            if let (Some(photons), Some(rounds)) = (number(1, 500_000), number(2, 40)) {
+                slab(photons, rounds as usize);
+                return ExitCode::SUCCESS;
+            }
+        }
+        _ => {}
     }
-    ExitCode::SUCCESS
+    eprintln!(
+        "usage: nephele-refbench phase [CALLS [ROUNDS]] | slab [PHOTONS [ROUNDS]]\n\
+         (positive integers; defaults: 10000000 calls and 30 rounds, 500000 photons and 40 rounds)"
+    );
+    ExitCode::FAILURE
 }
