@@ -222,6 +222,33 @@ fn slab(photons: u64, rounds: usize) {
     );
 }
 
+/// The CPU's model (Linux) and the SIMD level nephele's run-time dispatch reaches on it.
+fn cpu() -> String {
+    let model = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|info| {
+            info.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|m| m.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown".into());
+    #[cfg(target_arch = "x86_64")]
+    let level = if std::arch::is_x86_feature_detected!("avx512f")
+        && std::arch::is_x86_feature_detected!("avx512dq")
+        && std::arch::is_x86_feature_detected!("avx512vl")
+    {
+        "AVX-512 (F, DQ, VL)"
+    } else if std::arch::is_x86_feature_detected!("avx2") {
+        "AVX2"
+    } else {
+        "baseline x86-64"
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let level = "the target's baseline";
+    format!("CPU: {model}; nephele's dispatch: {level}; the C baselines: -march=native")
+}
+
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     // The count (calls or photons) and the rounds, each a positive integer or its default.
@@ -232,12 +259,14 @@ fn main() -> ExitCode {
     match args.first().map(String::as_str) {
         Some("phase") => {
             if let (Some(calls), Some(rounds)) = (number(1, 10_000_000), number(2, 30)) {
+                println!("   {}", cpu());
                 phase(calls as usize, rounds as usize);
                 return ExitCode::SUCCESS;
             }
         }
         Some("slab") => {
             if let (Some(photons), Some(rounds)) = (number(1, 500_000), number(2, 40)) {
+                println!("   {}", cpu());
                 slab(photons, rounds as usize);
                 return ExitCode::SUCCESS;
             }
