@@ -2,10 +2,7 @@
 //! loop shape as benches/baselines/phase_ref.c (xorshift numbers, an accumulated sum), so that
 //! scripts/bench_phase.sh can print both side by side.
 //!
-//!     cargo run --release --example bench_phase [-- N [f32]]
-//!
-//! With `f32` only the f32 models run (no f64, no Mie table): the short runs that
-//! scripts/bench_phase.sh alternates with the C baseline.
+//!     cargo run --release --example bench_phase [-- N]
 
 use nephele_runtime::phase::{
     Draine, HenyeyGreenstein, Rayleigh, Schlick, TabulatedTable, TwoTermHg, VonMisesFisher,
@@ -92,9 +89,6 @@ fn main() {
         n,
     );
     models::<f32>(n, "f32");
-    if std::env::args().nth(2).as_deref() == Some("f32") {
-        return;
-    }
     models::<f64>(n, "f64");
     // The 50 µm Mie table of stage 1 (product rule 41 × 16: the peak is what matters here).
     let job = nephele::mie::MieJob::paper(50.0, nephele::mie::SizeRule::Product { sizes: 41 }, 16);

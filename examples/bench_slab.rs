@@ -10,7 +10,6 @@
 //! of 10 µm droplets the default tables walk with, sampled exactly).
 
 use nephele::phase::{Phase, PhaseSpec};
-use nephele::slab::aureole::{Aureole, DEFAULT_AUREOLE_DEG};
 use nephele::slab::walk::batch_rng;
 use nephele::slab::{SlabGrid, Slice};
 use nephele_runtime::phase::HenyeyGreenstein;
@@ -39,9 +38,7 @@ fn main() {
         Some(other) => panic!("phase {other}: expected hg or mie10"),
     };
     let hg = HenyeyGreenstein::new(0.9);
-    let mut grid = SlabGrid::default_for(4.0).expect("default grid");
-    // The annuli of every config's grid (`aureole_deg`'s default): `default_for` has none.
-    grid.aureole = Aureole::new(DEFAULT_AUREOLE_DEG.to_vec()).expect("the default annuli");
+    let grid = SlabGrid::default_with_annuli(4.0).expect("the default grid and annuli");
     let walk = |phase: &(dyn PhaseFunction<f64> + Sync)| {
         let slice = Slice {
             grid: &grid,

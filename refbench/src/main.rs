@@ -20,7 +20,6 @@
 //!   c/capture.c, its events read from it), which tallies totals and 10 μ bins, against
 //!   nephele's walk with every table's tallies (examples/bench_slab.rs).
 
-use nephele::slab::aureole::{Aureole, DEFAULT_AUREOLE_DEG};
 use nephele::slab::walk::batch_rng;
 use nephele::slab::{SlabGrid, Slice};
 use nephele_runtime::phase::{Draine, HenyeyGreenstein};
@@ -179,9 +178,7 @@ fn phase(calls: usize, rounds: usize) {
 
 fn slab(photons: u64, rounds: usize) {
     let hg = HenyeyGreenstein::new(0.9);
-    let mut grid = SlabGrid::default_for(4.0).expect("default grid");
-    // The annuli of every config's grid (`aureole_deg`'s default): `default_for` has none.
-    grid.aureole = Aureole::new(DEFAULT_AUREOLE_DEG.to_vec()).expect("the default annuli");
+    let grid = SlabGrid::default_with_annuli(4.0).expect("the default grid and annuli");
     let slice = Slice {
         grid: &grid,
         mu_l: 1.0,

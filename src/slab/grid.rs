@@ -142,6 +142,15 @@ impl SlabGrid {
         )
     }
 
+    /// [`Self::default_for`] with the aureole annuli every config's grid tallies
+    /// ([`super::aureole::DEFAULT_AUREOLE_DEG`], `aureole_deg`'s default): the grid a walk with
+    /// all of a table's tallies runs on.
+    pub fn default_with_annuli(t: f64) -> Result<Self> {
+        let mut grid = Self::default_for(t)?;
+        grid.aureole = Aureole::new(super::aureole::DEFAULT_AUREOLE_DEG.to_vec())?;
+        Ok(grid)
+    }
+
     /// The slab thickness (mfp).
     pub fn thickness(&self) -> f64 {
         self.depths[self.depths.len() - 1]

@@ -569,7 +569,6 @@ fn normalised(v: [f64; 3]) -> [f64; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::slab::aureole::{Aureole, DEFAULT_AUREOLE_DEG};
     use crate::slab::lanes::uniform_of;
     use nephele_runtime::phase::{HenyeyGreenstein, TabulatedTable};
 
@@ -578,8 +577,7 @@ mod tests {
     /// with HG and a tabulated phase function, the aureole's annuli tallied.
     #[test]
     fn every_variant_walks_the_same_bits() {
-        let mut grid = SlabGrid::default_for(2.0).unwrap();
-        grid.aureole = Aureole::new(DEFAULT_AUREOLE_DEG.to_vec()).unwrap();
+        let grid = SlabGrid::default_with_annuli(2.0).unwrap();
         let hg = HenyeyGreenstein::new(0.8);
         // A tabulated phase function with a forward peak on the reference grid (it keeps its
         // guide and half-angle sines, so the walk samples 8 of its cosines side by side).
