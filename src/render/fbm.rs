@@ -93,21 +93,21 @@ impl Fbm {
 
     /// The fBm at p (its input units: the cloud scales p by its frequency first).
     pub fn get(&self, p: [f64; 3]) -> f64 {
-        match self.get_or_settle(p, |_, _| None::<std::convert::Infallible>) {
+        match self.get_or_settle(p, |_, _, _| None::<std::convert::Infallible>) {
             Ok(value) => value,
             Err(never) => match never {},
         }
     }
 
-    /// The fBm at p, or what `settled(lo, hi)` returns as soon as it returns something: it is
-    /// asked after each octave but the last, with [lo, hi] holding the final value whatever
-    /// the octaves left add. A caller that needs only which side of a threshold the value
-    /// falls on skips the octaves that cannot change it.
+    /// The fBm at p, or what `settled(k, lo, hi)` returns as soon as it returns something: it
+    /// is asked after each octave k but the last, with [lo, hi] holding the final value
+    /// whatever the octaves left add. A caller that needs only which side of a threshold the
+    /// value falls on skips the octaves that cannot change it.
     #[inline(always)]
     pub fn get_or_settle<T>(
         &self,
         p: [f64; 3],
-        settled: impl Fn(f64, f64) -> Option<T>,
+        mut settled: impl FnMut(usize, f64, f64) -> Option<T>,
     ) -> Result<f64, T> {
         let mut point = p.map(|x| x * self.frequency);
         let (mut result, mut attenuation) = (0.0, self.persistence);
@@ -116,7 +116,7 @@ impl Fbm {
             result += perlin(table, point) * attenuation;
             if k < last {
                 let so_far = result * self.scale_factor;
-                if let Some(answer) = settled(so_far - self.rest[k], so_far + self.rest[k]) {
+                if let Some(answer) = settled(k, so_far - self.rest[k], so_far + self.rest[k]) {
                     return Err(answer);
                 }
             }
@@ -124,6 +124,23 @@ impl Fbm {
             point = point.map(|x| x * self.lacunarity);
         }
         Ok(result * self.scale_factor)
+    }
+
+    /// Per octave k, a bound on the slope of the sum of octaves 0 … k (the part of the value
+    /// `get_or_settle` knows after octave k, scaled as the value is) per unit of its input,
+    /// given `perlin_slope`, a bound on one octave's slope per unit of the octave's own input:
+    /// octave j contributes πʲ⁺¹ λʲ f times the scale factor. Within a distance r of p the
+    /// value then lies within [lo − Lₖ r, hi + Lₖ r] of the [lo, hi] known after octave k
+    /// (the octaves left are bounded everywhere by the same `rest`).
+    pub fn partial_slopes(&self, perlin_slope: f64) -> Vec<f64> {
+        let (mut slope, mut each) = (0.0, perlin_slope * self.frequency * self.persistence);
+        (0..self.tables.len())
+            .map(|_| {
+                slope += each * self.scale_factor;
+                each *= self.lacunarity * self.persistence;
+                slope * (1.0 + REST_SLACK.0)
+            })
+            .collect()
     }
 }
 
