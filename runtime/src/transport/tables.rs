@@ -813,33 +813,74 @@ impl<const N: usize> Sums<N> {
 
     /// [`Self::add_row`] for feature-major β of `W` = groups × Q: each run of consecutive
     /// features of one depth degree is summed in registers (a fixed-size copy of its
-    /// accumulators) and stored once, rather than each feature's sums going through memory and
-    /// waiting on the previous one's. The same products reach each accumulator in the same
-    /// order.
+    /// accumulators, loaded where the degree changes and stored where it changes again),
+    /// rather than each feature's sums going through memory and waiting on the previous one's.
+    /// The row's columns are checked against β once, not feature by feature. The same
+    /// products reach each accumulator in the same order, so the same bits.
     #[inline(always)]
     fn add_runs<const W: usize>(&mut self, beta: &[u8], row: &[(u32, f32)]) {
-        let mut rest = row;
-        while let Some(&(first, _)) = rest.first() {
-            let degree = first >> DEGREE_SHIFT;
-            let len = rest
-                .iter()
-                .position(|&(key, _)| key >> DEGREE_SHIFT != degree)
-                .unwrap_or(rest.len());
-            let (run, tail) = rest.split_at(len);
-            rest = tail;
-            let j = degree as usize;
-            let Some(acc) = self.acc.get_mut(j * W..(j + 1) * W) else {
-                continue;
-            };
-            let mut sums = [0.0f32; W];
-            sums.copy_from_slice(acc);
-            for &(key, v) in run {
-                let start = 4 * self.strides.at(self.first, (key & COL) as usize);
-                if let Some(params) = beta.get(start..start + 4 * W) {
-                    multiply_add(&mut sums, v, params);
-                }
+        let (base, param) = (self.strides.at(self.first, 0), self.strides.param);
+        let last_col = row.iter().map(|&(k, _)| k & COL).max().unwrap_or(0) as usize;
+        // Every feature's W parameters lie within β: checked once for the row (else feature by
+        // feature, below).
+        let fits = (base + last_col * param + W) * 4 <= beta.len();
+        if !fits {
+            return self.add_runs_checked::<W>(beta, row);
+        }
+        // The accumulators of the current degree, in registers; those of a degree beyond the
+        // sums start at 0 and are dropped (as `add` drops its features).
+        let Some(&(first, _)) = row.first() else {
+            return;
+        };
+        let mut degree = first >> DEGREE_SHIFT;
+        let mut sums = self.load_degree::<W>(degree);
+        for &(key, v) in row {
+            if key >> DEGREE_SHIFT != degree {
+                self.store_degree::<W>(degree, &sums);
+                degree = key >> DEGREE_SHIFT;
+                sums = self.load_degree::<W>(degree);
             }
-            acc.copy_from_slice(&sums);
+            let start = 4 * (base + (key & COL) as usize * param);
+            // SAFETY: start + 4 W ≤ beta.len() for every key of the row (`fits`: the largest
+            // column's parameters end within β).
+            let params = unsafe { beta.get_unchecked(start..start + 4 * W) };
+            multiply_add(&mut sums, v, params);
+        }
+        self.store_degree::<W>(degree, &sums);
+    }
+
+    /// The accumulators of depth degree `j` (zeros for a degree beyond the sums).
+    #[inline(always)]
+    fn load_degree<const W: usize>(&self, j: u32) -> [f32; W] {
+        let j = j as usize;
+        let mut sums = [0.0f32; W];
+        if let Some(acc) = self.acc.get(j * W..(j + 1) * W) {
+            sums.copy_from_slice(acc);
+        }
+        sums
+    }
+
+    /// Stores the accumulators of depth degree `j` (nothing for a degree beyond the sums).
+    #[inline(always)]
+    fn store_degree<const W: usize>(&mut self, j: u32, sums: &[f32; W]) {
+        let j = j as usize;
+        if let Some(acc) = self.acc.get_mut(j * W..(j + 1) * W) {
+            acc.copy_from_slice(sums);
+        }
+    }
+
+    /// [`Self::add_runs`] where some column's parameters would end beyond β: each feature's
+    /// checked (and skipped if so, as [`Self::add`] skips it).
+    fn add_runs_checked<const W: usize>(&mut self, beta: &[u8], row: &[(u32, f32)]) {
+        for &(key, v) in row {
+            let j = (key >> DEGREE_SHIFT) as usize;
+            let start = 4 * self.strides.at(self.first, (key & COL) as usize);
+            if let (Some(acc), Some(params)) = (
+                self.acc.get_mut(j * W..(j + 1) * W),
+                beta.get(start..start + 4 * W),
+            ) {
+                multiply_add(acc, v, params);
+            }
         }
     }
 
