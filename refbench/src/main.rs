@@ -24,6 +24,7 @@ use nephele::slab::walk::batch_rng;
 use nephele::slab::{SlabGrid, Slice};
 use nephele_runtime::phase::{Draine, HenyeyGreenstein};
 use nephele_runtime::presets::jendersie_deon;
+use nephele_runtime::simd::Simd;
 use nephele_runtime::PhaseFunction;
 use std::ffi::{c_char, c_int, c_long, CStr, CString};
 use std::hint::black_box;
@@ -230,19 +231,7 @@ fn cpu() -> String {
                 .map(|m| m.trim().to_string())
         })
         .unwrap_or_else(|| "unknown".into());
-    #[cfg(target_arch = "x86_64")]
-    let level = if std::arch::is_x86_feature_detected!("avx512f")
-        && std::arch::is_x86_feature_detected!("avx512dq")
-        && std::arch::is_x86_feature_detected!("avx512vl")
-    {
-        "AVX-512 (F, DQ, VL)"
-    } else if std::arch::is_x86_feature_detected!("avx2") {
-        "AVX2"
-    } else {
-        "baseline x86-64"
-    };
-    #[cfg(not(target_arch = "x86_64"))]
-    let level = "the target's baseline";
+    let level = Simd::detected().name();
     format!("CPU: {model}; nephele's dispatch: {level}; the C baselines: -march=native")
 }
 

@@ -20,6 +20,7 @@ mod legendre;
 pub mod phase;
 pub mod presets;
 pub mod real;
+pub mod simd;
 // The math of a bare no_std build; compiled (and unit-tested) with std too.
 #[cfg_attr(any(feature = "std", feature = "libm"), allow(dead_code))]
 mod soft_math;

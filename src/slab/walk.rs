@@ -12,6 +12,8 @@ use super::lanes::{free_path as free_path_of, Lane, LaneRng, LANES};
 use super::tally::BatchTally;
 use nephele_runtime::frame::{orthonormal_basis, sin_cos_small};
 use nephele_runtime::phase::Cosine;
+#[cfg(target_arch = "x86_64")]
+use nephele_runtime::simd::Simd;
 use nephele_runtime::PhaseFunction;
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
@@ -81,18 +83,12 @@ impl Slice<'_> {
     /// the same bits.
     pub fn run_batch(&self, photons: u64, rng: &mut Xoshiro256PlusPlus) -> BatchTally {
         #[cfg(target_arch = "x86_64")]
-        {
-            if std::arch::is_x86_feature_detected!("avx512f")
-                && std::arch::is_x86_feature_detected!("avx512dq")
-                && std::arch::is_x86_feature_detected!("avx512vl")
-            {
-                // SAFETY: the CPU has the features the function is compiled for.
-                return unsafe { self.run_batch_avx512(photons, rng) };
-            }
-            if std::arch::is_x86_feature_detected!("avx2") {
-                // SAFETY: as above.
-                return unsafe { self.run_batch_avx2(photons, rng) };
-            }
+        match Simd::detected() {
+            // SAFETY: the CPU has the features the function is compiled for.
+            Simd::Avx512 => return unsafe { self.run_batch_avx512(photons, rng) },
+            // SAFETY: as above.
+            Simd::Avx2 => return unsafe { self.run_batch_avx2(photons, rng) },
+            Simd::Baseline => {}
         }
         self.run_lanes(photons, rng)
     }

@@ -5,47 +5,7 @@
 //! to a cosine distributed as p; for single-lobe models it is the inverse CDF (monotone in ξ),
 //! for mixtures it picks a lobe with ξ and reuses the rescaled ξ within it.
 
-/// The vector units a model's many-samples loop runs on ([`sample_cosines_on_cpu`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-// Without std (no feature detection) or off x86-64 only the baseline is ever picked.
-#[cfg_attr(not(all(feature = "std", target_arch = "x86_64")), allow(dead_code))]
-pub(crate) enum Simd {
-    /// AVX-512 F, DQ and VL (and so AVX2).
-    Avx512,
-    /// AVX2.
-    Avx2,
-    /// What the crate was built for.
-    Baseline,
-}
-
-impl Simd {
-    /// The best level the CPU has (the baseline without `std` or off x86-64).
-    #[inline]
-    pub(crate) fn detected() -> Self {
-        #[cfg(all(feature = "std", target_arch = "x86_64"))]
-        {
-            if std::is_x86_feature_detected!("avx512f")
-                && std::is_x86_feature_detected!("avx512dq")
-                && std::is_x86_feature_detected!("avx512vl")
-            {
-                return Self::Avx512;
-            }
-            if std::is_x86_feature_detected!("avx2") {
-                return Self::Avx2;
-            }
-        }
-        Self::Baseline
-    }
-
-    /// Every level the CPU can run, the best first (tests run each).
-    #[cfg(test)]
-    pub(crate) fn available() -> impl Iterator<Item = Self> {
-        let best = Self::detected();
-        [Self::Avx512, Self::Avx2, Self::Baseline]
-            .into_iter()
-            .skip_while(move |s| *s != best)
-    }
-}
+pub(crate) use crate::simd::Simd;
 
 /// `unsafe fn sample_cosines_with(&self, simd, xi, out)` for a model `$ty` whose
 /// `$any(&self, xi, out)` (`#[inline(always)]`) takes many samples at once: that loop compiled
