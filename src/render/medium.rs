@@ -350,22 +350,20 @@ impl Cloud {
         let (a, edge) = (self.amplitude, self.edge);
         // Rounding of inside + A n: the settled octaves' margin below; twice it for the reach.
         let margin = 1e-9 * (inside.abs() + a + edge);
+        // The reach of a depth known `beyond` 0 or the edge, at slope `slope` (none unasked).
+        let reach_of = |beyond: f64, slope: f64| {
+            if REACH {
+                reach(beyond - 2.0 * margin, slope)
+            } else {
+                0.0
+            }
+        };
         // Where the noise cannot change the answer, it is not evaluated (most of the interior).
         if inside < -1.2 * a {
-            let r = if REACH {
-                reach(-(inside + 1.2 * a) - 2.0 * margin, 1.0)
-            } else {
-                0.0
-            };
-            return (0.0, r);
+            return (0.0, reach_of(-(inside + 1.2 * a), 1.0));
         }
         if inside >= edge + 1.2 * a {
-            let r = if REACH {
-                reach(inside - 1.2 * a - edge - 2.0 * margin, 1.0)
-            } else {
-                0.0
-            };
-            return (1.0, r);
+            return (1.0, reach_of(inside - 1.2 * a - edge, 1.0));
         }
         let f = self.frequency;
         // Nor the octaves that cannot: once the ones left cannot take the depth out of
@@ -377,23 +375,9 @@ impl Cloud {
                 inside + a * lo.clamp(-1.2, 1.2),
             );
             if high < -margin {
-                Some((
-                    0.0,
-                    if REACH {
-                        reach(-high - 2.0 * margin, self.reach_slopes[k])
-                    } else {
-                        0.0
-                    },
-                ))
+                Some((0.0, reach_of(-high, self.reach_slopes[k])))
             } else if low > edge + margin {
-                Some((
-                    1.0,
-                    if REACH {
-                        reach(low - edge - 2.0 * margin, self.reach_slopes[k])
-                    } else {
-                        0.0
-                    },
-                ))
+                Some((1.0, reach_of(low - edge, self.reach_slopes[k])))
             } else {
                 None
             }
@@ -404,19 +388,15 @@ impl Cloud {
         {
             Ok(n) => {
                 let s = inside + a * n.clamp(-1.2, 1.2);
-                let density = (s / edge).clamp(0.0, 1.0);
-                if !REACH {
-                    return (density, 0.0);
-                }
                 let all = self.reach_slopes.last().copied().unwrap_or(1.0);
                 let r = if s < -margin {
-                    reach(-s - 2.0 * margin, all)
+                    reach_of(-s, all)
                 } else if s > edge + margin {
-                    reach(s - edge - 2.0 * margin, all)
+                    reach_of(s - edge, all)
                 } else {
                     0.0
                 };
-                (density, r)
+                ((s / edge).clamp(0.0, 1.0), r)
             }
             Err(settled) => settled,
         }

@@ -801,6 +801,12 @@ impl<const N: usize> Sums<N> {
                 _ => {}
             }
         }
+        self.add_each(beta, row);
+    }
+
+    /// Adds the features of `row` one by one ([`Self::add`]: each feature's parameters
+    /// checked, and skipped where they would end beyond β).
+    fn add_each(&mut self, beta: &[u8], row: &[(u32, f32)]) {
         for &(key, v) in row {
             self.add(
                 beta,
@@ -822,10 +828,10 @@ impl<const N: usize> Sums<N> {
         let (base, param) = (self.strides.at(self.first, 0), self.strides.param);
         let last_col = row.iter().map(|&(k, _)| k & COL).max().unwrap_or(0) as usize;
         // Every feature's W parameters lie within β: checked once for the row (else feature by
-        // feature, below).
+        // feature).
         let fits = (base + last_col * param + W) * 4 <= beta.len();
         if !fits {
-            return self.add_runs_checked::<W>(beta, row);
+            return self.add_each(beta, row);
         }
         // The accumulators of the current degree, in registers; those of a degree beyond the
         // sums start at 0 and are dropped (as `add` drops its features).
@@ -866,21 +872,6 @@ impl<const N: usize> Sums<N> {
         let j = j as usize;
         if let Some(acc) = self.acc.get_mut(j * W..(j + 1) * W) {
             acc.copy_from_slice(sums);
-        }
-    }
-
-    /// [`Self::add_runs`] where some column's parameters would end beyond β: each feature's
-    /// checked (and skipped if so, as [`Self::add`] skips it).
-    fn add_runs_checked<const W: usize>(&mut self, beta: &[u8], row: &[(u32, f32)]) {
-        for &(key, v) in row {
-            let j = (key >> DEGREE_SHIFT) as usize;
-            let start = 4 * self.strides.at(self.first, (key & COL) as usize);
-            if let (Some(acc), Some(params)) = (
-                self.acc.get_mut(j * W..(j + 1) * W),
-                beta.get(start..start + 4 * W),
-            ) {
-                multiply_add(acc, v, params);
-            }
         }
     }
 
