@@ -478,20 +478,31 @@ impl<'a> TransportTables<'a> {
         let depth_terms = self.form.depth_terms();
         let u = pt.cell.u;
         let mut faces = FaceDistances::new(pt.stretch, u);
+        // In a run, depth_polynomial's own sum at the point's depth, on its P_j computed once,
+        // for every lane at once (from 0.0, as depth_polynomial starts).
+        let at_u = if L > 1 {
+            lane_sums(&d, &pt.p_u, depth_terms, 0.0)
+        } else {
+            [0.0; L]
+        };
         let mut t = [0.0f32; L];
         for i in 0..n {
             let Some(range) = &ranges[i] else {
                 continue;
             };
-            let d_i: [f32; MAX_LEGENDRE] = core::array::from_fn(|j| d[j][i]);
-            let depth = if range.held(u) == u {
-                // depth_polynomial's own sum, on the point's P_j computed once.
-                d_i.iter()
-                    .take(depth_terms)
-                    .zip(&pt.p_u)
-                    .fold(0.0, |s, (a, b)| s + *a * *b)
+            let within = range.held(u) == u;
+            let depth = if within && L > 1 {
+                at_u[i]
             } else {
-                depth_polynomial_in(&d_i, depth_terms, u, &mut faces, range)
+                let d_i: [f32; MAX_LEGENDRE] = core::array::from_fn(|j| d[j][i]);
+                if within {
+                    d_i.iter()
+                        .take(depth_terms)
+                        .zip(&pt.p_u)
+                        .fold(0.0, |s, (a, b)| s + *a * *b)
+                } else {
+                    depth_polynomial_in(&d_i, depth_terms, u, &mut faces, range)
+                }
             };
             let v = range.share * Real::exp(pt.offset + depth);
             t[i] = match top[i] {
@@ -607,6 +618,14 @@ impl<'a> TransportTables<'a> {
             sums.depth_lanes(g0, &lq, d);
         }
         let depth = cp.form.depth_terms().min(MAX_COLLECTOR_LEGENDRE);
+        // In a run, each part's sum at the point's own depth for every lane at once (`dot`'s
+        // arithmetic below, from −0.0 as `sum` starts).
+        let mut at_u = [[-0.0f32; L]; 4];
+        if L > 1 {
+            for (s, d) in at_u.iter_mut().zip(&parts) {
+                *s = lane_sums(d, &pt.p_u, depth, -0.0);
+            }
+        }
         for (i, slot) in out.iter_mut().enumerate() {
             *slot = Transport {
                 t: t[i],
@@ -623,6 +642,9 @@ impl<'a> TransportTables<'a> {
                 legendre(2.0 * u - 1.0, depth)
             };
             let dot = |part: usize| -> f32 {
+                if L > 1 && u == pt.cell.u {
+                    return at_u[part][i];
+                }
                 let d = &parts[part];
                 d.iter().zip(&p_x).take(depth).map(|(d, p)| d[i] * p).sum()
             };
@@ -883,12 +905,31 @@ impl<const N: usize> Sums<N> {
     fn depth_lanes<const L: usize>(&self, g0: usize, lq: &[[f32; L]; MAX_Q], d: &mut [[f32; L]]) {
         let width = self.groups * self.q;
         let lanes = (self.first + self.groups).saturating_sub(g0).min(L);
-        let base = (g0 - self.first) * self.q;
+        let (base, q) = ((g0 - self.first) * self.q, self.q);
         for (j, d) in d.iter_mut().enumerate().take(self.depth) {
-            for (i, slot) in d.iter_mut().enumerate().take(lanes) {
-                let at = j * width + base + i * self.q;
-                if let Some(run) = self.acc.get(at..at + self.q) {
-                    *slot = run.iter().zip(lq).map(|(a, l)| a * l[i]).sum();
+            let at = j * width + base;
+            match self.acc.get(at..at + L * q) {
+                // A full run: every lane's sum in one register, each lane's products added in
+                // the same order as below, from −0.0 as `sum` starts (the same bits).
+                Some(block) if L > 1 && lanes == L && q <= MAX_Q => {
+                    let mut s = [-0.0f32; L];
+                    for (k, l) in lq.iter().enumerate().take(q) {
+                        // SAFETY: i < L and k < q, so i q + k < L q = block.len().
+                        let a: [f32; L] =
+                            core::array::from_fn(|i| unsafe { *block.get_unchecked(i * q + k) });
+                        for i in 0..L {
+                            s[i] += a[i] * l[i];
+                        }
+                    }
+                    *d = s;
+                }
+                _ => {
+                    for (i, slot) in d.iter_mut().enumerate().take(lanes) {
+                        let at = at + i * q;
+                        if let Some(run) = self.acc.get(at..at + q) {
+                            *slot = run.iter().zip(lq).map(|(a, l)| a * l[i]).sum();
+                        }
+                    }
                 }
             }
         }
@@ -967,6 +1008,20 @@ fn legendre_lanes<const L: usize>(x: &[f32; L], n: usize) -> [[f32; L]; MAX_Q] {
         }
     }
     p
+}
+
+/// Σ_{j<n} d[j][i] p[j] for every lane i, added in j order from `zero` (0.0 as
+/// [`depth_polynomial`](super::log_additive::depth_polynomial) starts, −0.0 as `sum` does): one
+/// lane's arithmetic in each, so the lanes share a register.
+#[inline(always)]
+fn lane_sums<const L: usize>(d: &[[f32; L]], p: &[f32], n: usize, zero: f32) -> [f32; L] {
+    let mut s = [zero; L];
+    for (d, &p) in d.iter().zip(p).take(n) {
+        for i in 0..L {
+            s[i] = s[i] + d[i] * p;
+        }
+    }
+    s
 }
 
 /// Where x sits among the values of `a` (held at the ends).
