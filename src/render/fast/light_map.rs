@@ -21,6 +21,7 @@
 use super::march::substeps;
 use crate::render::geometry::{cross, dot, normalize, Vec3};
 use crate::render::medium::Medium;
+use nephele_runtime::simd::Simd;
 use nephele_runtime::transport::{FilteredSurface, Lateral, LitSurface};
 use rayon::prelude::*;
 use std::ops::ControlFlow;
@@ -93,6 +94,7 @@ impl LightFrame {
     }
 
     /// (u, v, s) of a world point.
+    #[inline(always)]
     fn to_light(&self, p: Vec3) -> (f64, f64, f64) {
         let r: Vec3 = std::array::from_fn(|k| p[k] - self.origin[k]);
         (
@@ -136,6 +138,8 @@ pub struct LightMaps {
     /// s₀ + (s_max − s₀)(k/planes)², [row][column][plane].
     shadow: Vec<f32>,
     planes: usize,
+    /// The CPU has AVX2: [`LightMaps::sun_optical_depth`] takes its AVX2 copy.
+    avx2: bool,
 }
 
 /// What one light column holds besides its optical depths (written in place).
@@ -200,6 +204,7 @@ impl LightMaps {
             first,
             shadow,
             planes: o.planes,
+            avx2: Simd::detected() != Simd::Baseline,
         }
     }
 
@@ -210,6 +215,24 @@ impl LightMaps {
     /// where blending τ at one depth would mix a column still above the surface with one
     /// already deep inside it.
     pub fn sun_optical_depth(&self, p: Vec3) -> f64 {
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: the CPU has AVX2 (checked when the maps were built).
+            return unsafe { self.sun_optical_depth_avx2(p) };
+        }
+        self.sun_optical_depth_any(p)
+    }
+
+    /// [`Self::sun_optical_depth`] compiled for AVX2 (its floors and square roots inline, a
+    /// tenth of a frame's samples). No FMA: the same bits.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn sun_optical_depth_avx2(&self, p: Vec3) -> f64 {
+        self.sun_optical_depth_any(p)
+    }
+
+    #[inline(always)]
+    fn sun_optical_depth_any(&self, p: Vec3) -> f64 {
         let f = &self.frame;
         let (u, v, s) = f.to_light(p);
         let (x, y) = ((u - f.u0) / f.texel - 0.5, (v - f.v0) / f.texel - 0.5);
@@ -535,6 +558,7 @@ fn lower_envelope(g: &[f64]) -> Vec<f64> {
 
 /// Calls `f(texel index, weight)` for the texels of an m × m map around the continuous texel
 /// coordinates (x, y) (texel centres at integers): bilinear, zero outside the map.
+#[inline(always)]
 fn bilinear(m: usize, x: f64, y: f64, mut f: impl FnMut(usize, f64)) {
     let (fx, fy) = (x.floor(), y.floor());
     let (wx, wy) = (x - fx, y - fy);
@@ -552,6 +576,7 @@ fn bilinear(m: usize, x: f64, y: f64, mut f: impl FnMut(usize, f64)) {
 /// The real plane index of depth s in a column whose medium starts at `first`: planes at
 /// first + (depth − first)(k/planes)², crowded where the sun's optical depth changes fastest
 /// (near the lit surface, where order 1 comes from).
+#[inline(always)]
 fn plane_index(s: f64, first: f64, depth: f64, planes: usize) -> f64 {
     ((s - first) / (depth - first).max(1e-9))
         .clamp(0.0, 1.0)
