@@ -746,12 +746,12 @@ impl<const N: usize> Sums<N> {
     /// Empty sums of the groups `first .. first + groups` (at most [`Self::capacity`]).
     fn new(strides: Strides, (first, groups): (usize, usize), q: usize, depth: usize) -> Self {
         Self {
+            acc: [0.0; N],
             strides,
             first,
             groups: groups.min(Self::capacity(q, depth)),
             q,
             depth: depth.min(MAX_LEGENDRE),
-            ..Self::EMPTY
         }
     }
 
