@@ -43,6 +43,12 @@ impl Simd {
             .skip_while(move |s| *s != best)
     }
 
+    /// Whether this level has AVX2 (what the single-copy dispatches, the cloud's density and
+    /// the light maps' lookup, compile for).
+    pub fn has_avx2(self) -> bool {
+        matches!(self, Self::Avx512 | Self::Avx2)
+    }
+
     /// The level's name, for reports.
     pub fn name(self) -> &'static str {
         match self {

@@ -19,6 +19,13 @@ pub fn normalize(a: Vec3) -> Vec3 {
     a.map(|x| x / n)
 }
 
+/// Whether p lies outside the closed box [lo, hi] (a NaN coordinate counts as inside, as
+/// the comparisons have it).
+#[inline]
+pub fn outside_box(p: Vec3, lo: Vec3, hi: Vec3) -> bool {
+    (0..3).any(|k| p[k] < lo[k] || p[k] > hi[k])
+}
+
 /// The parameter range where o + t w lies in the box [lo, hi], t ≥ 0.
 pub fn box_clip(o: Vec3, w: Vec3, lo: Vec3, hi: Vec3) -> Option<(f64, f64)> {
     let (mut t0, mut t1) = (0.0f64, f64::INFINITY);

@@ -3,9 +3,10 @@
 //! media, see `majorant.rs`).
 
 use super::fbm::Fbm;
-use super::geometry::{box_clip, slab_clip, Affine, Vec3};
+use super::geometry::{box_clip, outside_box, slab_clip, Affine, Vec3};
 use super::majorant::{Bounds, MajorantGrid, Majorants};
 use super::mesh::TriangleMesh;
+use nephele_runtime::simd::Simd;
 
 /// The medium as the integrator sees it.
 pub trait Medium: Sync {
@@ -245,10 +246,7 @@ impl Cloud {
             .collect();
         Self {
             chunks: BlobChunk::chunks(&blobs),
-            #[cfg(target_arch = "x86_64")]
-            avx2: std::is_x86_feature_detected!("avx2"),
-            #[cfg(not(target_arch = "x86_64"))]
-            avx2: false,
+            avx2: Simd::detected().has_avx2(),
             edge,
             amplitude,
             frequency,
@@ -412,14 +410,14 @@ fn reach(margin: f64, slope: f64) -> f64 {
 
 impl Medium for Cloud {
     fn sigma_t(&self, p: Vec3) -> f64 {
-        if (0..3).any(|k| p[k] < self.lo[k] || p[k] > self.hi[k]) {
+        if outside_box(p, self.lo, self.hi) {
             return 0.0;
         }
         self.sigma_t * self.density(p)
     }
 
     fn sigma_t_reach(&self, p: Vec3) -> (f64, f64) {
-        if (0..3).any(|k| p[k] < self.lo[k] || p[k] > self.hi[k]) {
+        if outside_box(p, self.lo, self.hi) {
             return (0.0, 0.0);
         }
         let (density, r) = self.density_reach(p);
@@ -671,7 +669,7 @@ impl Fog {
 
 impl Medium for Fog {
     fn sigma_t(&self, p: Vec3) -> f64 {
-        if (0..3).any(|k| p[k] < self.lo[k] || p[k] > self.hi[k]) {
+        if outside_box(p, self.lo, self.hi) {
             return 0.0;
         }
         if self.mesh.as_ref().is_some_and(|m| !m.contains(p)) {

@@ -11,7 +11,7 @@
 //! ray's direction is fixed and irrational to the axes, so that it meets edges and vertices of
 //! a mesh built on a grid with probability 0.
 
-use super::geometry::{box_clip, cross, dot, normalize, self_hit_distance, Vec3};
+use super::geometry::{box_clip, cross, dot, normalize, outside_box, self_hit_distance, Vec3};
 use anyhow::{ensure, Context, Result};
 use bvh::aabb::{Aabb, Bounded};
 use bvh::bounding_hierarchy::BHShape;
@@ -204,7 +204,7 @@ impl TriangleMesh {
 
     /// Whether `p` lies inside the (closed) mesh: an odd number of crossings along a fixed ray.
     pub fn contains(&self, p: Vec3) -> bool {
-        if (0..3).any(|k| p[k] < self.lo[k] || p[k] > self.hi[k]) {
+        if outside_box(p, self.lo, self.hi) {
             return false;
         }
         let w = normalize(PARITY_RAY);

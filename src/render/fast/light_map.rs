@@ -204,7 +204,7 @@ impl LightMaps {
             first,
             shadow,
             planes: o.planes,
-            avx2: Simd::detected() != Simd::Baseline,
+            avx2: Simd::detected().has_avx2(),
         }
     }
 
