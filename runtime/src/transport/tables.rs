@@ -478,8 +478,9 @@ impl<'a> TransportTables<'a> {
         let depth_terms = self.form.depth_terms();
         let u = pt.cell.u;
         let mut faces = FaceDistances::new(pt.stretch, u);
-        // In a run, depth_polynomial's own sum at the point's depth, on its P_j computed once,
-        // for every lane at once (from 0.0, as depth_polynomial starts).
+        // depth_polynomial's own sum at the point's depth, on its P_j computed once (from 0.0,
+        // as depth_polynomial starts): for every lane at once in a run, where a lone group
+        // reads it.
         let at_u = if L > 1 {
             lane_sums(&d, &pt.p_u, depth_terms, 0.0)
         } else {
@@ -490,19 +491,15 @@ impl<'a> TransportTables<'a> {
             let Some(range) = &ranges[i] else {
                 continue;
             };
-            let within = range.held(u) == u;
-            let depth = if within && L > 1 {
-                at_u[i]
+            let depth = if range.held(u) == u {
+                if L > 1 {
+                    at_u[i]
+                } else {
+                    lane_sums(&d, &pt.p_u, depth_terms, 0.0)[i]
+                }
             } else {
                 let d_i: [f32; MAX_LEGENDRE] = core::array::from_fn(|j| d[j][i]);
-                if within {
-                    d_i.iter()
-                        .take(depth_terms)
-                        .zip(&pt.p_u)
-                        .fold(0.0, |s, (a, b)| s + *a * *b)
-                } else {
-                    depth_polynomial_in(&d_i, depth_terms, u, &mut faces, range)
-                }
+                depth_polynomial_in(&d_i, depth_terms, u, &mut faces, range)
             };
             let v = range.share * Real::exp(pt.offset + depth);
             t[i] = match top[i] {
