@@ -909,6 +909,12 @@ impl<const N: usize> Sums<N> {
                 // A full run: every lane's sum in one register, each lane's products added in
                 // the same order as below, from −0.0 as `sum` starts (the same bits).
                 Some(block) if L > 1 && lanes == L && q <= MAX_Q => {
+                    #[cfg(all(feature = "std", target_arch = "x86_64"))]
+                    if L == 8 && std::is_x86_feature_detected!("avx2") {
+                        // SAFETY: the CPU has AVX2; block holds L q = 8 q values, q ≤ MAX_Q.
+                        unsafe { depth_sum_gathered(block, q, lq, d) };
+                        continue;
+                    }
                     let mut s = [-0.0f32; L];
                     for (k, l) in lq.iter().enumerate().take(q) {
                         // SAFETY: i < L and k < q, so i q + k < L q = block.len().
@@ -931,6 +937,39 @@ impl<const N: usize> Sums<N> {
             }
         }
     }
+}
+
+/// One depth degree's sums of [`Sums::depth_lanes`] for a run of 8 lanes, each lane's Q
+/// coefficients gathered into one register a k at a time (`block` is [lane, k], 8 q values).
+/// The inserts of the portable loop kept the shuffle port busy (a tenth of T, c and σ of all
+/// groups); the gather loads them. The same products are added in the same order from −0.0,
+/// with no FMA: the same bits.
+///
+/// # Safety
+/// The CPU has AVX2; `L` = 8, `block.len()` ≥ 8 q and q ≤ [`MAX_Q`].
+#[cfg(all(feature = "std", target_arch = "x86_64"))]
+#[target_feature(enable = "avx2")]
+unsafe fn depth_sum_gathered<const L: usize>(
+    block: &[f32],
+    q: usize,
+    lq: &[[f32; L]; MAX_Q],
+    d: &mut [f32; L],
+) {
+    use core::arch::x86_64::*;
+    debug_assert!(L == 8 && block.len() >= 8 * q && q <= MAX_Q);
+    let index = _mm256_mullo_epi32(
+        _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7),
+        _mm256_set1_epi32(q as i32),
+    );
+    let mut s = _mm256_set1_ps(-0.0);
+    for (k, l) in lq.iter().enumerate().take(q) {
+        // SAFETY: lane i reads block[i q + k] < 8 q; l holds L = 8 values.
+        let a = unsafe { _mm256_i32gather_ps::<4>(block.as_ptr().add(k), index) };
+        let l = unsafe { _mm256_loadu_ps(l.as_ptr()) };
+        s = _mm256_add_ps(s, _mm256_mul_ps(a, l));
+    }
+    // SAFETY: d holds L = 8 values.
+    unsafe { _mm256_storeu_ps(d.as_mut_ptr(), s) };
 }
 
 /// A point's features as packed keys and values ([`packed`]), at most `CAP` (more are
