@@ -58,6 +58,45 @@ fn bonnet(n: usize) -> (f64, f64) {
     }
 }
 
+/// P_0, P_1, … at `L` points side by side, each lane stepping as [`Legendre`] does (the same
+/// operations in the same order, so the same bits), with the lanes' values in arrays rather
+/// than in `L` separate steppers, so that they share a vector register.
+#[derive(Clone, Copy, Debug)]
+pub struct LegendreLanes<F, const L: usize> {
+    x: [F; L],
+    prev: [F; L],
+    cur: [F; L],
+    n: usize,
+}
+
+impl<F: Real, const L: usize> LegendreLanes<F, L> {
+    /// The polynomials at the points `x`.
+    #[inline(always)]
+    pub fn new(x: [F; L]) -> Self {
+        Self {
+            x,
+            prev: [F::of(0.0); L],
+            cur: [F::of(1.0); L],
+            n: 0,
+        }
+    }
+
+    /// P_n of every lane, the recurrence then stepped on to P_{n+1}.
+    #[inline(always)]
+    pub fn next_row(&mut self) -> [F; L] {
+        let (p, n) = (self.cur, self.n);
+        let next = if n == 0 {
+            self.x
+        } else {
+            let (a, b) = bonnet(n);
+            let (a, b) = (F::of(a), F::of(b));
+            core::array::from_fn(|i| a * self.x[i] * self.cur[i] - b * self.prev[i])
+        };
+        (self.prev, self.cur, self.n) = (self.cur, next, n + 1);
+        p
+    }
+}
+
 /// [`bonnet`] for n < 64.
 const BONNET: [(f64, f64); 64] = {
     let mut t = [(0.0, 0.0); 64];
@@ -101,6 +140,20 @@ mod tests {
             .enumerate()
         {
             assert!((a - 1.0).abs() < 1e-12 && (b - (-1f64).powi(n as i32)).abs() < 1e-12);
+        }
+    }
+
+    /// Each lane of [`LegendreLanes`] is its own [`Legendre`], bit for bit.
+    #[test]
+    fn lanes_step_as_one_lane_does() {
+        let x = [-1.0f32, -0.73, -0.2, -0.0, 0.0, 0.31, 0.999, 1.0];
+        let mut lanes = LegendreLanes::new(x);
+        let mut alone = x.map(Legendre::new);
+        for _ in 0..40 {
+            let row = lanes.next_row();
+            for (v, one) in row.iter().zip(alone.iter_mut()) {
+                assert_eq!(v.to_bits(), one.next().unwrap_or(f32::NAN).to_bits());
+            }
         }
     }
 }

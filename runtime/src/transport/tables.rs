@@ -17,7 +17,7 @@ use super::log_additive::{
 };
 use super::single::{single_scattering, PhaseValue};
 use crate::container::ArrayView;
-use crate::legendre::Legendre;
+use crate::legendre::LegendreLanes;
 use crate::phase::{angle, phase_between, Cosine};
 use crate::real::Real;
 use core::mem::MaybeUninit;
@@ -473,7 +473,9 @@ impl<'a> TransportTables<'a> {
         let n = n.min(L);
         let ranges = self.fitted_lanes(pt, (g0, n));
         let mut d = [[0.0; L]; MAX_LEGENDRE];
-        sums.depth_lanes(g0, &self.ln_t_lanes(pt.ln_t, (g0, n), self.q), &mut d);
+        let mut rows = [const { MaybeUninit::uninit() }; MAX_Q];
+        let lq = self.ln_t_lanes(pt.ln_t, (g0, n), &mut rows[..self.q.min(MAX_Q)]);
+        sums.depth_lanes(g0, lq, &mut d);
         let top = self.ceiling_lanes::<L>(pt, (g0, n));
         let depth_terms = self.form.depth_terms();
         let u = pt.cell.u;
@@ -513,15 +515,15 @@ impl<'a> TransportTables<'a> {
         (t, ranges)
     }
 
-    /// L_k(s_g), s_g the place of ln t in group g's span, for k < `q` and the groups `g0 .. g0
-    /// + n`: [k][lane].
+    /// L_k(s_g), s_g the place of ln t in group g's span, for k < `rows.len()` and the groups
+    /// `g0 .. g0 + n`: [k][lane], written into `rows` and returned as written.
     #[inline(always)]
-    fn ln_t_lanes<const L: usize>(
+    fn ln_t_lanes<'r, const L: usize>(
         &self,
         ln_t: f32,
         (g0, n): (usize, usize),
-        q: usize,
-    ) -> [[f32; L]; MAX_Q] {
+        rows: &'r mut [MaybeUninit<[f32; L]>],
+    ) -> &'r [[f32; L]] {
         let span = |i: usize, e: usize| self.ln_t_range.get(2 * (g0 + i) + e).unwrap_or(0.0);
         let s: [f32; L] = core::array::from_fn(|i| {
             if i < n {
@@ -530,7 +532,7 @@ impl<'a> TransportTables<'a> {
                 0.0
             }
         });
-        legendre_lanes(&s, q.min(MAX_Q))
+        legendre_lanes(&s, rows)
     }
 
     /// The fitted depths of the groups `g0 .. g0 + n` around `pt` ([`FittedDepths::of`] of
@@ -609,10 +611,11 @@ impl<'a> TransportTables<'a> {
         (g0, sums): (usize, &[Sums<M>; 4]),
         out: &mut [Transport],
     ) {
-        let lq = self.ln_t_lanes(pt.ln_t, (g0, out.len()), cp.q);
+        let mut rows = [const { MaybeUninit::uninit() }; MAX_Q];
+        let lq = self.ln_t_lanes(pt.ln_t, (g0, out.len()), &mut rows[..cp.q.min(MAX_Q)]);
         let mut parts = [[[0.0; L]; MAX_COLLECTOR_LEGENDRE]; 4];
         for (d, sums) in parts.iter_mut().zip(sums) {
-            sums.depth_lanes(g0, &lq, d);
+            sums.depth_lanes(g0, lq, d);
         }
         let depth = cp.form.depth_terms().min(MAX_COLLECTOR_LEGENDRE);
         // In a run, each part's sum at the point's own depth for every lane at once (`dot`'s
@@ -899,7 +902,7 @@ impl<const N: usize> Sums<N> {
     /// polynomial at this point ([`depth_polynomial`](super::log_additive::depth_polynomial));
     /// into `d` [j][lane] (the first `depth` rows; lanes past the run untouched).
     #[inline(always)]
-    fn depth_lanes<const L: usize>(&self, g0: usize, lq: &[[f32; L]; MAX_Q], d: &mut [[f32; L]]) {
+    fn depth_lanes<const L: usize>(&self, g0: usize, lq: &[[f32; L]], d: &mut [[f32; L]]) {
         let width = self.groups * self.q;
         let lanes = (self.first + self.groups).saturating_sub(g0).min(L);
         let (base, q) = ((g0 - self.first) * self.q, self.q);
@@ -952,7 +955,7 @@ impl<const N: usize> Sums<N> {
 unsafe fn depth_sum_gathered<const L: usize>(
     block: &[f32],
     q: usize,
-    lq: &[[f32; L]; MAX_Q],
+    lq: &[[f32; L]],
     d: &mut [f32; L],
 ) {
     use core::arch::x86_64::*;
@@ -1030,20 +1033,20 @@ fn multiply_add(acc: &mut [f32], v: f32, run: &[u8]) {
 /// Groups evaluated side by side: 8 f32 lanes, one AVX2 register.
 const LANES: usize = 8;
 
-/// P_0 … P_{n−1} of each lane of `x` ([k][lane]), by the same steps as [`legendre`].
+/// P_0 … P_{n−1} of each lane of `x` ([k][lane]), by the same steps as [`legendre`], written
+/// into the n = `rows.len()` rows and returned as written. The rows are not zeroed first: a
+/// 512-byte array cleared and copied out for the 5 or 4 rows used cost ~5 % of T of all groups.
 #[inline(always)]
-fn legendre_lanes<const L: usize>(x: &[f32; L], n: usize) -> [[f32; L]; MAX_Q] {
-    let mut p = [[0.0; L]; MAX_Q];
-    let mut steps = [Legendre::new(0.0); L];
-    for (step, &x) in steps.iter_mut().zip(x) {
-        *step = Legendre::new(x);
+fn legendre_lanes<'r, const L: usize>(
+    x: &[f32; L],
+    rows: &'r mut [MaybeUninit<[f32; L]>],
+) -> &'r [[f32; L]] {
+    let mut steps = LegendreLanes::new(*x);
+    for row in rows.iter_mut() {
+        row.write(steps.next_row());
     }
-    for row in p.iter_mut().take(n) {
-        for (slot, step) in row.iter_mut().zip(steps.iter_mut()) {
-            *slot = step.next().unwrap_or(0.0);
-        }
-    }
-    p
+    // SAFETY: every row was written just above, and `MaybeUninit<T>` has the layout of `T`.
+    unsafe { &*(rows as *const [MaybeUninit<[f32; L]>] as *const [[f32; L]]) }
 }
 
 /// Σ_{j<n} d[j][i] p[j] for every lane i, added in j order from `zero` (0.0 as
