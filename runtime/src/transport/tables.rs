@@ -1104,3 +1104,41 @@ impl PhaseValue<f32> for StoredPhase<'_, '_> {
         self.0.phase_at(c)
     }
 }
+
+#[cfg(all(test, feature = "std", target_arch = "x86_64"))]
+mod tests {
+    use super::*;
+
+    /// The gathered depth sums are each lane's Σ_k a_k l_k added in k order from −0.0, bit for
+    /// bit, for every Q the loader accepts; zeros of both signs among the values.
+    #[test]
+    fn gathered_depth_sums_add_in_order() {
+        if !std::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let mut x: u32 = 7;
+        let mut next = move || {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            match x % 13 {
+                0 => 0.0,
+                1 => -0.0,
+                _ => (x as f32 / u32::MAX as f32 - 0.5) * 3.0,
+            }
+        };
+        for q in 1..=MAX_Q {
+            for _ in 0..200 {
+                let block: Vec<f32> = (0..8 * q).map(|_| next()).collect();
+                let lq: Vec<[f32; 8]> = (0..q).map(|_| core::array::from_fn(|_| next())).collect();
+                let mut got = [0.0f32; 8];
+                // SAFETY: the CPU has AVX2 (checked above), 8 lanes, 8 q values, q ≤ MAX_Q.
+                unsafe { depth_sum_gathered(&block, q, &lq, &mut got) };
+                for (i, got) in got.iter().enumerate() {
+                    let want = (0..q).fold(-0.0f32, |s, k| s + block[i * q + k] * lq[k][i]);
+                    assert_eq!(got.to_bits(), want.to_bits(), "q = {q}, lane {i}");
+                }
+            }
+        }
+    }
+}
