@@ -474,7 +474,7 @@ impl<'a> TransportTables<'a> {
         let ranges = self.fitted_lanes(pt, (g0, n));
         let mut d = [[0.0; L]; MAX_LEGENDRE];
         let mut rows = [const { MaybeUninit::uninit() }; MAX_Q];
-        let lq = self.ln_t_lanes(pt.ln_t, (g0, n), &mut rows[..self.q.min(MAX_Q)]);
+        let lq = self.ln_t_lanes(pt.ln_t, (g0, n), self.q, &mut rows);
         sums.depth_lanes(g0, lq, &mut d);
         let top = self.ceiling_lanes::<L>(pt, (g0, n));
         let depth_terms = self.form.depth_terms();
@@ -515,14 +515,15 @@ impl<'a> TransportTables<'a> {
         (t, ranges)
     }
 
-    /// L_k(s_g), s_g the place of ln t in group g's span, for k < `rows.len()` and the groups
-    /// `g0 .. g0 + n`: [k][lane], written into `rows` and returned as written.
+    /// L_k(s_g), s_g the place of ln t in group g's span, for k < `q` and the groups `g0 .. g0
+    /// + n`: [k][lane], written into the first q of `rows` and returned as written.
     #[inline(always)]
     fn ln_t_lanes<'r, const L: usize>(
         &self,
         ln_t: f32,
         (g0, n): (usize, usize),
-        rows: &'r mut [MaybeUninit<[f32; L]>],
+        q: usize,
+        rows: &'r mut [MaybeUninit<[f32; L]>; MAX_Q],
     ) -> &'r [[f32; L]] {
         let span = |i: usize, e: usize| self.ln_t_range.get(2 * (g0 + i) + e).unwrap_or(0.0);
         let s: [f32; L] = core::array::from_fn(|i| {
@@ -532,7 +533,7 @@ impl<'a> TransportTables<'a> {
                 0.0
             }
         });
-        legendre_lanes(&s, rows)
+        legendre_lanes(&s, &mut rows[..q.min(MAX_Q)])
     }
 
     /// The fitted depths of the groups `g0 .. g0 + n` around `pt` ([`FittedDepths::of`] of
@@ -612,7 +613,7 @@ impl<'a> TransportTables<'a> {
         out: &mut [Transport],
     ) {
         let mut rows = [const { MaybeUninit::uninit() }; MAX_Q];
-        let lq = self.ln_t_lanes(pt.ln_t, (g0, out.len()), &mut rows[..cp.q.min(MAX_Q)]);
+        let lq = self.ln_t_lanes(pt.ln_t, (g0, out.len()), cp.q, &mut rows);
         let mut parts = [[[0.0; L]; MAX_COLLECTOR_LEGENDRE]; 4];
         for (d, sums) in parts.iter_mut().zip(sums) {
             sums.depth_lanes(g0, lq, d);
@@ -906,6 +907,8 @@ impl<const N: usize> Sums<N> {
         let width = self.groups * self.q;
         let lanes = (self.first + self.groups).saturating_sub(g0).min(L);
         let (base, q) = ((g0 - self.first) * self.q, self.q);
+        #[cfg(all(feature = "std", target_arch = "x86_64"))]
+        let gather = L == 8 && std::is_x86_feature_detected!("avx2");
         for (j, d) in d.iter_mut().enumerate().take(self.depth) {
             let at = j * width + base;
             match self.acc.get(at..at + L * q) {
@@ -913,8 +916,8 @@ impl<const N: usize> Sums<N> {
                 // the same order as below, from −0.0 as `sum` starts (the same bits).
                 Some(block) if L > 1 && lanes == L && q <= MAX_Q => {
                     #[cfg(all(feature = "std", target_arch = "x86_64"))]
-                    if L == 8 && std::is_x86_feature_detected!("avx2") {
-                        // SAFETY: the CPU has AVX2; block holds L q = 8 q values, q ≤ MAX_Q.
+                    if gather {
+                        // SAFETY: the CPU has AVX2 and L = 8; block holds 8 q values, q ≤ MAX_Q.
                         unsafe { depth_sum_gathered(block, q, lq, d) };
                         continue;
                     }
@@ -1004,11 +1007,19 @@ impl<const CAP: usize> Row<CAP> {
     /// The features pushed, in order.
     #[inline(always)]
     fn as_slice(&self) -> &[(u32, f32)] {
-        let written = &self.keys[..self.n];
-        // SAFETY: `push` wrote every one of the first `n` slots, and `MaybeUninit<T>` has the
-        // layout of `T`.
-        unsafe { &*(written as *const [MaybeUninit<(u32, f32)>] as *const [(u32, f32)]) }
+        // SAFETY: `push` wrote every one of the first `n` slots.
+        unsafe { assume_written(&self.keys[..self.n]) }
     }
+}
+
+/// `slots` as the values they hold.
+///
+/// # Safety
+/// Every slot has been written. (`MaybeUninit<T>` has the layout of `T`.)
+#[inline(always)]
+unsafe fn assume_written<T>(slots: &[MaybeUninit<T>]) -> &[T] {
+    // SAFETY: the caller's promise, and the layouts are the same.
+    unsafe { &*(slots as *const [MaybeUninit<T>] as *const [T]) }
 }
 
 /// Bits of a packed feature key below its depth degree: the column.
@@ -1045,8 +1056,8 @@ fn legendre_lanes<'r, const L: usize>(
     for row in rows.iter_mut() {
         row.write(steps.next_row());
     }
-    // SAFETY: every row was written just above, and `MaybeUninit<T>` has the layout of `T`.
-    unsafe { &*(rows as *const [MaybeUninit<[f32; L]>] as *const [[f32; L]]) }
+    // SAFETY: every row was written just above.
+    unsafe { assume_written(rows) }
 }
 
 /// Σ_{j<n} d[j][i] p[j] for every lane i, added in j order from `zero` (0.0 as
