@@ -35,7 +35,7 @@ def tables_at(binary, t, mu_l, d, mu_v, psi_deg):
     """Order 1 + every group of the shipped tables at one point."""
     out = subprocess.run([str(binary), "transport", "--tables", str(TABLES), "--t", str(t),
                           "--mu-l", str(mu_l), "--depth", str(d), f"--mu-v={mu_v}",
-                          "--psi", str(psi_deg)], check=True, capture_output=True, text=True)
+                          "--psi-deg", str(psi_deg)], check=True, capture_output=True, text=True)
     doc = json.loads(out.stdout)
     return doc["order1"] + sum(g["T"] for g in doc["groups"])
 

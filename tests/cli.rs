@@ -767,7 +767,16 @@ fn transport_tables_answer_and_refuse(ntt: &Path) {
     use nephele_runtime::transport::TransportTables;
     let path = ntt.to_str().unwrap();
     let point = [
-        "--t", "2", "--mu-l", "0.5", "--depth", "0.7", "--mu-v", "-0.6", "--psi", "20",
+        "--t",
+        "2",
+        "--mu-l",
+        "0.5",
+        "--depth",
+        "0.7",
+        "--mu-v",
+        "-0.6",
+        "--psi-deg",
+        "20",
     ];
     let o = nephele(&[&["transport", "--tables", path][..], &point[..]].concat());
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -792,7 +801,7 @@ fn transport_tables_answer_and_refuse(ntt: &Path) {
         "3",
         "--mu-v",
         "0.5",
-        "--psi",
+        "--psi-deg",
         "0",
     ]);
     assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("--depth"));

@@ -39,12 +39,16 @@ fn negative_numbers_are_parsed_then_refused_with_their_range() {
         "1",
         "--mu-v",
         "0.5",
-        "--psi",
+        "--psi-deg",
         "0",
     ];
     let mut args = t.to_vec();
     args.extend(["--mu-l", "-0.5"]);
-    refuses(&args, "--mu-l must be in (0, 1]", None);
+    refuses(
+        &args,
+        "--mu-l: mu_L = -0.5 is not a sun cosine in (0, 1]",
+        None,
+    );
 }
 
 #[test]
@@ -115,7 +119,7 @@ fn transport_uses_the_embedded_tables_like_render() {
         "1",
         "--mu-v",
         "0.5",
-        "--psi",
+        "--psi-deg",
         "0",
     ]);
     let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();

@@ -19,8 +19,8 @@ fn points() -> Vec<[f64; 5]> {
         [4.0, 0.5, 2.0, -0.0, 0.0],
         [0.5, 0.125, 0.25, 1.0, 90.0],
         [128.0, 1.0, 127.0, -1.0, 180.0],
-        [500.0, 0.02, 10.0, 0.5, 45.0],
-        [4.0, 0.5, 5.0, 0.3, 0.0], // below the slab: answered 0
+        [500.0, 0.02, 10.0, 0.5, 45.0], // thicker than the grid, the sun below it
+        [0.25, 0.5, 0.1, 0.3, 0.0],     // thinner than the grid
     ];
     let mut s = 0x2545F4914F6CDD1Du64;
     let mut r = || {
@@ -91,12 +91,23 @@ fn every_row_is_the_runtimes_answer_whatever_the_threads() {
             }
         }
     }
-    // Row 7 lies below the slab: 0, and the sidecar counts it.
-    assert!(got[7 * width..8 * width].iter().all(|&v| v == 0.0));
+    // Rows 6 and 7 lie outside the grid: flagged row by row, counted with their farthest
+    // values in the sidecar. The random rows (t ≤ 128, μ_L ≥ 0.125) are inside.
+    let flags: Vec<u8> = read_npy(&dir.join("one.outside.npy"), &[rows.len() as u64]).unwrap();
+    assert_eq!(&flags[..8], &[0, 0, 0, 0, 0, 0, 1 | 4, 2]);
+    assert!(flags[8..].iter().all(|&f| f == 0));
     let side: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.join("one.json")).unwrap()).unwrap();
-    assert_eq!(side["rows_outside_the_slab_answered_0"], 1);
-    assert_eq!(side["rows_outside_the_tables_grid"], 1);
+    let outside = &side["outside_the_grid"];
+    assert_eq!(outside["t_past_thickest"]["rows"], 1);
+    assert_eq!(outside["t_past_thickest"]["largest_t"], 500.0);
+    assert_eq!(outside["t_below_thinnest"]["smallest_t"], 0.25);
+    assert_eq!(
+        outside["sun_below_lowest"]["smallest_mu_l"]
+            .as_f64()
+            .unwrap() as f32,
+        0.02
+    );
     assert_eq!(side["columns"].as_array().unwrap().len(), width);
     assert_eq!(side["columns"][1], "T_2");
     assert_eq!(side["columns"][width - 4], "T_31+");
@@ -153,7 +164,35 @@ fn bad_points_are_refused_and_nothing_is_written() {
         &nan,
         &[[4.0, 0.5, 1.0, 0.3, 0.0], [4.0, f64::NAN, 1.0, 0.3, 0.0]],
     );
-    refused(&nan, "row 1");
+    refused(&nan, "row 1: mu_L = NaN is not a sun cosine");
+    // Every kind of point outside the slab is an error naming its row and value.
+    for (row, says) in [
+        (
+            [4.0, 0.5, 5.0, 0.3, 0.0],
+            "depth = 5 mfp is outside the slab [0, t = 4]",
+        ),
+        (
+            [4.0, 1.5, 1.0, 0.3, 0.0],
+            "mu_L = 1.5 is not a sun cosine in (0, 1]",
+        ),
+        ([4.0, 0.0, 1.0, 0.3, 0.0], "mu_L = 0 is not a sun cosine"),
+        (
+            [4.0, 0.5, 1.0, 2.0, 0.0],
+            "mu_V = 2 is not a cosine in [-1, 1]",
+        ),
+        (
+            [f64::INFINITY, 0.5, 1.0, 0.3, 0.0],
+            "t = inf mfp is not a thickness",
+        ),
+        (
+            [4.0, 0.5, 1.0, 0.3, f64::NEG_INFINITY],
+            "psi_V = -inf rad is not a finite angle",
+        ),
+    ] {
+        let bad = dir.join("bad.npy");
+        write_points(&bad, &[[4.0, 0.5, 1.0, 0.3, 0.0], row]);
+        refused(&bad, &format!("row 1: {says}"));
+    }
     refuses(
         &["transport", "--points", nan.to_str().unwrap()],
         "--out",

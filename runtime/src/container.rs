@@ -30,6 +30,27 @@ pub const OLDEST_FORMAT_VERSION: u32 = 1;
 
 use layout::{crc32, ENTRY_BYTES, HEADER_BYTES, MAGIC, MAX_ARRAYS, NAME_BYTES};
 
+/// Versions above this are not versions: the bytes after the magic are something else.
+const MAX_PLAUSIBLE_VERSION: u32 = 0xFFFF;
+
+/// The largest end of an array's data the directory claims (bytes from the start), read
+/// without checking the entries (which the CRC-32 guards after).
+fn claimed_end(bytes: &[u8], arrays: usize) -> usize {
+    (0..arrays)
+        .map(|i| {
+            let e = HEADER_BYTES + i * ENTRY_BYTES;
+            let count = (0..4)
+                .map(|k| u32_at(bytes, e + 20 + 4 * k).unwrap_or(1).max(1) as u64)
+                .product::<u64>();
+            let offset = u32_at(bytes, e + 36).unwrap_or(0) as u64;
+            offset
+                .saturating_add(count.saturating_mul(4))
+                .min(usize::MAX as u64) as usize
+        })
+        .max()
+        .unwrap_or(0)
+}
+
 /// Why a byte slice is not a valid container.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FormatError {
@@ -54,8 +75,14 @@ pub enum FormatError {
 impl core::fmt::Display for FormatError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
-            FormatError::Truncated => write!(f, "truncated transport tables"),
-            FormatError::BadMagic => write!(f, "not nephele transport tables (bad magic)"),
+            FormatError::Truncated => write!(
+                f,
+                "truncated transport tables: the file ends before the data its directory lists"
+            ),
+            FormatError::BadMagic => write!(
+                f,
+                "not a nephele transport tables file (.ntt): it does not start with the tables' header"
+            ),
             FormatError::UnsupportedVersion(v) => {
                 write!(
                     f,
@@ -143,15 +170,30 @@ impl<'a> Container<'a> {
             return Err(FormatError::BadMagic);
         }
         let version = u32_at(bytes, 8).ok_or(FormatError::Truncated)?;
+        // A version no writer could have written (text after the magic, say) is a foreign
+        // file, not a newer one.
+        if version > MAX_PLAUSIBLE_VERSION {
+            return Err(FormatError::BadMagic);
+        }
         if !(OLDEST_FORMAT_VERSION..=FORMAT_VERSION).contains(&version) {
             return Err(FormatError::UnsupportedVersion(version));
         }
         let body = bytes.len() - 4;
-        if u32_at(bytes, body) != Some(crc32(&bytes[..body])) {
-            return Err(FormatError::BadChecksum);
-        }
         let arrays = u32_at(bytes, 12).ok_or(FormatError::Truncated)? as usize;
-        if arrays > MAX_ARRAYS || HEADER_BYTES + arrays * ENTRY_BYTES > body {
+        if arrays > MAX_ARRAYS {
+            return Err(FormatError::BadEntry(arrays));
+        }
+        let short = HEADER_BYTES + arrays * ENTRY_BYTES > body;
+        if u32_at(bytes, body) != Some(crc32(&bytes[..body])) {
+            // A truncated file's last four bytes are data, so its checksum fails too: say
+            // what happened when the directory claims data past the end.
+            return Err(if short || claimed_end(bytes, arrays) > body {
+                FormatError::Truncated
+            } else {
+                FormatError::BadChecksum
+            });
+        }
+        if short {
             return Err(FormatError::Truncated);
         }
         let c = Container { bytes, arrays };

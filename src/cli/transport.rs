@@ -1,12 +1,13 @@
 //! `nephele transport`: the compressed tables evaluated at one point, as JSON, or at every row
 //! of a .npy (`--points`), as a .npy.
 
-use anyhow::{bail, ensure, Context, Result};
+use anyhow::{bail, Context, Result};
 use clap::Args;
 use nephele::io::npy::{npy_bytes, read_rows};
 use nephele::io::AtomicFiles;
 use nephele_runtime::transport::{
-    column_names, evaluate_points, Quantities, SlabPoint, Transport, TransportTables, POINT_COLUMNS,
+    column_names, evaluate_points, Domain, OutsideTally, PointError, Quantities, SlabPoint,
+    Transport, TransportTables, POINT_COLUMNS,
 };
 use std::path::{Path, PathBuf};
 
@@ -37,14 +38,22 @@ pub struct TransportArgs {
         required_unless_present = "points"
     )]
     pub mu_v: Option<f32>,
-    /// View azimuth ψ_V from the sun's horizontal travel, degrees.
-    #[arg(long, allow_hyphen_values = true, required_unless_present = "points")]
-    pub psi: Option<f32>,
+    /// View azimuth ψ_V from the sun's horizontal travel, in degrees (C, Python and WGSL take
+    /// radians).
+    #[arg(
+        long = "psi-deg",
+        allow_hyphen_values = true,
+        required_unless_present = "points"
+    )]
+    pub psi_deg: Option<f32>,
     /// Many points instead of one: an (N, 5) float32 or float64 .npy of t, μ_L, depth, μ_V,
-    /// ψ_V (degrees, as --psi), one point per row. Writes --out: an (N, 1 + G) float32 .npy of
-    /// order 1 and T per group, (N, 1 + 4G) with --collector, and a JSON sidecar naming the
-    /// columns.
-    #[arg(long, value_name = "NPY", conflicts_with_all = ["t", "mu_l", "depth", "mu_v", "psi"])]
+    /// ψ_V (degrees, as --psi-deg), one point per row. Writes --out: an (N, 1 + G) float32 .npy
+    /// of order 1 and T per group, (N, 1 + 4G) with --collector, a uint8 .outside.npy beside
+    /// it flagging each row outside the tables' grid (1: t past the thickest slab, 2: below
+    /// the thinnest, 4: sun below the lowest), and a JSON sidecar naming the columns. A row
+    /// outside the slab (t ≤ 0, depth outside [0, t], μ_L outside (0, 1], |μ_V| > 1, NaN, ±∞)
+    /// is an error.
+    #[arg(long, value_name = "NPY", conflicts_with_all = ["t", "mu_l", "depth", "mu_v", "psi_deg"])]
     pub points: Option<PathBuf>,
     /// Where --points writes its answers (.npy; the sidecar beside it, .json).
     #[arg(long, value_name = "NPY", requires = "points")]
@@ -67,30 +76,36 @@ pub fn run(a: TransportArgs) -> Result<()> {
     }
     let at = one_point(&a)?;
     super::with_tables(a.tables.as_deref(), |tab| {
-        answer(&at, a.psi.unwrap_or(0.0), tab)
+        answer(&at, a.psi_deg.unwrap_or(0.0), tab)
     })
 }
 
 /// The point of the single-point flags, checked.
 fn one_point(a: &TransportArgs) -> Result<SlabPoint<f32>> {
     let (Some(t), Some(mu_l), Some(depth), Some(mu_v), Some(psi)) =
-        (a.t, a.mu_l, a.depth, a.mu_v, a.psi)
+        (a.t, a.mu_l, a.depth, a.mu_v, a.psi_deg)
     else {
-        bail!("give --t, --mu-l, --depth, --mu-v and --psi, or --points FILE.npy");
+        bail!("give --t, --mu-l, --depth, --mu-v and --psi-deg, or --points FILE.npy");
     };
-    ensure!(t > 0.0 && t.is_finite(), "--t must be a positive thickness");
-    ensure!(mu_l > 0.0 && mu_l <= 1.0, "--mu-l must be in (0, 1]");
-    ensure!((0.0..=t).contains(&depth), "--depth must be in [0, t]");
-    ensure!((-1.0..=1.0).contains(&mu_v), "--mu-v must be in [-1, 1]");
-    ensure!(psi.is_finite(), "--psi must be a number of degrees");
-    Ok(SlabPoint {
+    let at = SlabPoint {
         depth,
         thickness: t,
         mu_v,
         // Through f64, as --points converts its rows.
         psi_v: f64::from(psi).to_radians() as f32,
         mu_l,
-    })
+    };
+    at.check().map_err(|e| {
+        let flag = match e {
+            PointError::Thickness(_) => "--t",
+            PointError::SunCosine(_) => "--mu-l",
+            PointError::Depth { .. } => "--depth",
+            PointError::ViewCosine(_) => "--mu-v",
+            PointError::Azimuth(_) => "--psi-deg",
+        };
+        anyhow::anyhow!("{flag}: {e}")
+    })?;
+    Ok(at)
 }
 
 /// Every row of `points` through [`evaluate_points`], written to `out` (.npy and .json).
@@ -99,22 +114,20 @@ fn batch(points: &Path, out: &Path, collector: bool, tab: &TransportTables) -> R
     let (rows, n) = read_rows(points, POINT_COLUMNS, names)?;
     let mut flat = Vec::with_capacity(rows.len());
     let dom = tab.domain();
-    let (mut outside_slab, mut outside_grid) = (0usize, 0usize);
+    let mut tally = OutsideTally::default();
+    let mut flags = Vec::with_capacity(n);
     for (i, r) in rows.chunks_exact(POINT_COLUMNS).enumerate() {
-        ensure!(
-            r.iter().all(|v| v.is_finite()),
-            "'{}' row {i}: {r:?} is not finite (columns {names})",
-            points.display()
-        );
         let row = [r[0], r[1], r[2], r[3], r[4].to_radians()];
         let at = SlabPoint::from_row(&row.map(|v| v as f32));
-        let valid = at.thickness > 0.0
-            && (0.0..=at.thickness).contains(&at.depth)
-            && at.mu_l > 0.0
-            && at.mu_l <= 1.0
-            && (-1.0..=1.0).contains(&at.mu_v);
-        outside_slab += usize::from(!valid);
-        outside_grid += usize::from(valid && !dom.contains(&at));
+        at.check().map_err(|e| {
+            anyhow::anyhow!(
+                "'{}' row {i}: {e} (columns {names}); every row must be a point of the slab",
+                points.display()
+            )
+        })?;
+        let outside = dom.outside(&at);
+        tally.add(&outside, &dom);
+        flags.push(outside.bits(&dom) as u8);
         flat.extend([at.thickness, at.mu_l, at.depth, at.mu_v, at.psi_v]);
     }
     let what = if collector {
@@ -134,9 +147,9 @@ fn batch(points: &Path, out: &Path, collector: bool, tab: &TransportTables) -> R
         "columns": columns,
         "units": "T = L / E_perp (1/sr); c_x, c_z, sigma in mean free paths (0 where T is 0); order 1 in closed form, orders >= 2 per group from the compressed form",
         "input_columns": names,
-        "rows_outside_the_slab_answered_0": outside_slab,
-        "rows_outside_the_tables_grid": outside_grid,
-        "domain": {"t": [dom.thickness.0, dom.thickness.1], "mu_l": [dom.mu_l.0, dom.mu_l.1]},
+        "outside_the_grid": outside_json(&tally),
+        "outside_flags": "the .outside.npy beside this file, one uint8 a row: 1 t past the thickest slab (continued by diffusion theory), 2 t below the thinnest (held), 4 mu_L below the lowest sun (held)",
+        "domain": {"t": [dom.thickness.0, dom.thickness.1], "mu_l": [dom.mu_l.0, dom.mu_l.1], "mean_cosine": tab.mean_cosine()},
         "seconds": seconds,
         "points_per_second": n as f64 / seconds.max(1e-12),
         "threads": rayon::current_num_threads(),
@@ -144,22 +157,16 @@ fn batch(points: &Path, out: &Path, collector: bool, tab: &TransportTables) -> R
     let mut files = AtomicFiles::new();
     files.write_bytes(out, &npy_bytes(&[n as u64, width as u64], &answers)?)?;
     files.write_bytes(
+        &out.with_extension("outside.npy"),
+        &npy_bytes(&[n as u64], &flags)?,
+    )?;
+    files.write_bytes(
         &out.with_extension("json"),
         &serde_json::to_vec_pretty(&sidecar)?,
     )?;
     files.commit()?;
-    if outside_slab > 0 {
-        eprintln!(
-            "warning: {outside_slab} rows lie outside the slab (t <= 0, depth outside [0, t], \
-             mu_L outside (0, 1] or |mu_V| > 1): answered 0"
-        );
-    }
-    if outside_grid > 0 {
-        eprintln!(
-            "warning: {outside_grid} rows have t or mu_L outside the tables' grid (t {}..{}, \
-             mu_L {}..{}): their parameters are held at the grid's nearest end",
-            dom.thickness.0, dom.thickness.1, dom.mu_l.0, dom.mu_l.1
-        );
+    for line in outside_lines(&tally, &dom) {
+        eprintln!("warning: {line}");
     }
     println!(
         "{n} points in {seconds:.3} s ({:.2e} points/s, {} threads) → {} ({width} columns)",
@@ -192,22 +199,70 @@ fn answer(at: &SlabPoint<f32>, psi_deg: f32, tab: &TransportTables) -> Result<()
         })
         .collect();
     let dom = tab.domain();
-    let inside = dom.contains(&at);
+    let outside = dom.outside(&at);
+    let inside = outside.is_within();
     if !inside {
-        eprintln!(
-            "warning: t = {} or mu_L = {} is outside the tables' grid (t {}..{}, mu_L {}..{}): \
-             their parameters are held at the grid's nearest end",
-            at.thickness, at.mu_l, dom.thickness.0, dom.thickness.1, dom.mu_l.0, dom.mu_l.1
-        );
+        eprintln!("warning: {}", outside.describe(&dom));
     }
     let out = serde_json::json!({
         "point": {"t": at.thickness, "mu_l": at.mu_l, "depth": at.depth, "mu_v": at.mu_v, "psi_deg": psi_deg},
         "inside_domain": inside,
-        "domain": {"t": [dom.thickness.0, dom.thickness.1], "mu_l": [dom.mu_l.0, dom.mu_l.1]},
+        "outside": (!inside).then(|| outside.describe(&dom).to_string()),
+        "domain": {"t": [dom.thickness.0, dom.thickness.1], "mu_l": [dom.mu_l.0, dom.mu_l.1], "mean_cosine": tab.mean_cosine()},
         "units": "T = L / E_perp (1/sr); c_x, c_z, sigma in mean free paths (the collector: where the light entered, from the viewpoint's horizontal position, z along the sun's horizontal travel; 0 where T is 0); orders >= 2 per group from the compressed form, order 1 (T only) in closed form",
         "order1": tab.order1(&at),
         "groups": groups,
     });
     println!("{}", serde_json::to_string_pretty(&out)?);
     Ok(())
+}
+
+/// The rows outside the grid, per kind, as the sidecar gives them.
+fn outside_json(t: &OutsideTally) -> serde_json::Value {
+    let kind = |(rows, v): (u64, f32), key: &str| {
+        let mut e = serde_json::json!({ "rows": rows });
+        if rows > 0 {
+            e[key] = v.into();
+        }
+        e
+    };
+    serde_json::json!({
+        "t_past_thickest": kind(t.thicker, "largest_t"),
+        "t_below_thinnest": kind(t.thinner, "smallest_t"),
+        "sun_below_lowest": kind(t.lower_sun, "smallest_mu_l"),
+    })
+}
+
+/// One warning line per kind of point outside the grid: the share of points and the farthest.
+pub(crate) fn outside_lines(t: &OutsideTally, d: &Domain) -> Vec<String> {
+    let share = |k: u64| 100.0 * k as f64 / t.points.max(1) as f64;
+    let mut lines = Vec::new();
+    if t.thicker.0 > 0 {
+        lines.push(format!(
+            "{:.1} % of the points have t past the tables' thickest slab, up to {} mfp against \
+             the tables' {}: continued by diffusion theory",
+            share(t.thicker.0),
+            t.thicker.1,
+            d.thickness.1
+        ));
+    }
+    if t.thinner.0 > 0 {
+        lines.push(format!(
+            "{:.1} % of the points have t below the tables' thinnest slab, down to {} mfp against \
+             the tables' {}: held there",
+            share(t.thinner.0),
+            t.thinner.1,
+            d.thickness.0
+        ));
+    }
+    if t.lower_sun.0 > 0 {
+        lines.push(format!(
+            "{:.1} % of the points have the sun below the tables' lowest, down to mu_L = {} \
+             against the tables' {}: held there",
+            share(t.lower_sun.0),
+            t.lower_sun.1,
+            d.mu_l.0
+        ));
+    }
+    lines
 }

@@ -9,8 +9,8 @@
 mod common;
 use common::{pipeline, run_kernel};
 use nephele_runtime::transport::{
-    find_collector, finite_cloud, mean_cosine, FilteredSurface, FiniteCloud, Lateral, LitSurface,
-    SearchOptions, TransportTables, Viewpoint,
+    find_collector, finite_cloud, FilteredSurface, FiniteCloud, Lateral, LitSurface, SearchOptions,
+    TransportTables, Viewpoint,
 };
 
 const SHIPPED: &[u8] = include_bytes!("../../runtime/tables/mie10um/transport.ntt");
@@ -155,7 +155,7 @@ fn the_search_on_the_gpu_follows_the_runtime() {
     let tables = TransportTables::from_bytes(SHIPPED).unwrap();
     let groups = tables.groups();
     let finite = FiniteCloud::for_tables(&tables);
-    assert_eq!(finite.mean_cosine, mean_cosine(&tables));
+    assert_eq!(finite.mean_cosine, tables.mean_cosine());
     // Each group's sun depth spread across the light, as the kernel asks (its mean cosine: the
     // job's third word).
     let search = SearchOptions::for_tables(&tables);

@@ -4,7 +4,7 @@
 //! shared among rayon's threads; each row is evaluated alone, so the answers are the same bit
 //! for bit whatever the thread count.
 
-use super::{SlabPoint, Transport, TransportTables};
+use super::{PointError, SlabPoint, Transport, TransportTables};
 
 /// Values per point in: t (mfp), μ_L, depth d (mfp), μ_V, ψ_V (radians): a [`SlabPoint`].
 pub const POINT_COLUMNS: usize = 5;
@@ -55,8 +55,10 @@ pub fn column_names(
 }
 
 /// Why a batch was refused.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum BatchError {
+    /// A row is not a point of the slab ([`SlabPoint::check`]): the first such row.
+    BadPoint { row: usize, error: PointError },
     /// The points are not whole rows of [`POINT_COLUMNS`] values: their length.
     PointsNotRows(usize),
     /// The output does not hold one row per point: its length and the length needed.
@@ -66,6 +68,7 @@ pub enum BatchError {
 impl core::fmt::Display for BatchError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
+            BatchError::BadPoint { row, error } => write!(f, "row {row}: {error}"),
             BatchError::PointsNotRows(n) => write!(
                 f,
                 "{n} point values are not whole rows of {POINT_COLUMNS} (t, mu_L, depth, mu_V, psi_V)"
@@ -91,8 +94,10 @@ impl SlabPoint<f32> {
 }
 
 /// Evaluates `tables` at every row of `points` (row-major, [`POINT_COLUMNS`] per row) into
-/// `out` (row-major, `what.columns(groups)` per row). Points outside the slab (d ∉ [0, t],
-/// t ≤ 0, NaN) answer 0, as [`TransportTables::evaluate_all`] does. Returns the rows.
+/// `out` (row-major, `what.columns(groups)` per row). Every row is checked first
+/// ([`SlabPoint::check`]): a point outside the slab (d ∉ [0, t], t ≤ 0, μ_L ∉ (0, 1],
+/// |μ_V| > 1, NaN, ±∞) refuses the batch, naming the first such row, and `out` is untouched.
+/// Returns the rows.
 pub fn evaluate_points(
     tables: &TransportTables,
     points: &[f32],
@@ -109,6 +114,11 @@ pub fn evaluate_points(
             got: out.len(),
             need: rows * width,
         });
+    }
+    for (row, p) in points.chunks_exact(POINT_COLUMNS).enumerate() {
+        SlabPoint::from_row(&[p[0], p[1], p[2], p[3], p[4]])
+            .check()
+            .map_err(|error| BatchError::BadPoint { row, error })?;
     }
     let one = |p: &[f32], o: &mut [f32]| {
         let mut row = [0.0; POINT_COLUMNS];

@@ -64,7 +64,7 @@ impl FiniteCloud {
         Self {
             leakage: true,
             spread: true,
-            ..Self::published(mean_cosine(tables))
+            ..Self::published(tables.mean_cosine())
         }
     }
 
@@ -160,16 +160,4 @@ pub(super) fn group_orders(tables: &TransportTables, g: usize) -> (f32, Option<f
         first,
         tables.group_first_order(g + 1).map(|next| next - 1.0),
     )
-}
-
-/// g = ∮ μ p dΩ of the tables' phase function (midpoint rule on 4096 angles).
-pub fn mean_cosine(tables: &TransportTables) -> f32 {
-    let n = 4096;
-    let h = f64::PI / n as f64;
-    let mut sum = 0.0f64;
-    for k in 0..n {
-        let (sin, cos) = Real::sin_cos((k as f64 + 0.5) * h);
-        sum += 2.0 * f64::PI * cos * tables.phase(cos as f32) as f64 * sin * h;
-    }
-    sum as f32
 }

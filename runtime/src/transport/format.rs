@@ -30,7 +30,7 @@
 use super::collector::{CollectorForm, Statistic};
 use super::halo::Halo;
 use super::log_additive::{LogAdditive, MAX_LEGENDRE};
-use super::tables::TransportTables;
+use super::tables::{integrate_mean_cosine, TransportTables};
 use crate::container::{ArrayView, Container, FormatError};
 
 /// The names of the arrays of a `.ntt` (the table above), shared by the reader here and the
@@ -252,8 +252,9 @@ impl<'a> TransportTables<'a> {
     /// Loads the arrays (each of its shape, from the form's sizes and the grids' lengths) and
     /// checks their values (finite, increasing grids, packed depth ranges, the phase table).
     pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
-        let t = Self::parse(&Container::from_bytes(bytes)?)?;
+        let mut t = Self::parse(&Container::from_bytes(bytes)?)?;
         t.check()?;
+        t.mean_cosine = integrate_mean_cosine(&t);
         Ok(t)
     }
 
@@ -308,6 +309,7 @@ impl<'a> TransportTables<'a> {
             phase_theta: need(c, names::PHASE_THETA, theta_len)?,
             phase: need(c, names::PHASE, theta_len)?,
             halo: halo_part(c, g, n, l)?,
+            mean_cosine: 0.0,
         })
     }
 

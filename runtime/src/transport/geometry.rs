@@ -100,9 +100,133 @@ impl SlabPoint<f32> {
     }
 }
 
+/// Cosines are taken up to 1 + this, the rounding of a cosine computed from unit vectors in
+/// f32 (a few ulps); past it a cosine is an error.
+pub const COSINE_SLACK: f32 = 1e-6;
+
+/// Why a point is not in the canonical slab: the coordinate and the caller's value.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PointError {
+    /// t is not finite and > 0 (mfp).
+    Thickness(f32),
+    /// μ_L is not in (0, 1].
+    SunCosine(f32),
+    /// d is not in [0, t] (mfp).
+    Depth { depth: f32, thickness: f32 },
+    /// μ_V is not in [−1, 1].
+    ViewCosine(f32),
+    /// ψ_V is not finite (radians).
+    Azimuth(f32),
+}
+
+impl core::fmt::Display for PointError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            PointError::Thickness(t) => {
+                write!(f, "t = {t} mfp is not a thickness (finite, > 0)")
+            }
+            PointError::SunCosine(m) => write!(
+                f,
+                "mu_L = {m} is not a sun cosine in (0, 1] (a sun below the horizon lights no slab)"
+            ),
+            PointError::Depth { depth, thickness } => {
+                write!(
+                    f,
+                    "depth = {depth} mfp is outside the slab [0, t = {thickness}]"
+                )
+            }
+            PointError::ViewCosine(m) => write!(f, "mu_V = {m} is not a cosine in [-1, 1]"),
+            PointError::Azimuth(p) => write!(f, "psi_V = {p} rad is not a finite angle"),
+        }
+    }
+}
+
+impl SlabPoint<f32> {
+    /// The point checked: t finite and > 0, μ_L ∈ (0, 1], 0 ≤ d ≤ t, μ_V ∈ [−1, 1] and ψ_V
+    /// finite (the cosines up to [`COSINE_SLACK`] past 1). What every interface refuses
+    /// before it evaluates; [`Self::in_slab`] is the renderer's looser test.
+    pub fn check(&self) -> Result<(), PointError> {
+        let cosine = |m: f32| m.abs() <= 1.0 + COSINE_SLACK;
+        if !(self.thickness > 0.0 && self.thickness.is_finite()) {
+            return Err(PointError::Thickness(self.thickness));
+        }
+        if !(self.mu_l > 0.0 && cosine(self.mu_l)) {
+            return Err(PointError::SunCosine(self.mu_l));
+        }
+        if !(self.depth >= 0.0 && self.depth <= self.thickness) {
+            return Err(PointError::Depth {
+                depth: self.depth,
+                thickness: self.thickness,
+            });
+        }
+        if !cosine(self.mu_v) {
+            return Err(PointError::ViewCosine(self.mu_v));
+        }
+        if !self.psi_v.is_finite() {
+            return Err(PointError::Azimuth(self.psi_v));
+        }
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    use super::SlabPoint;
+    use super::{PointError, SlabPoint};
+
+    /// Every coordinate outside the slab, NaN and ±∞ among them, is refused by name; the
+    /// edges (d = 0, d = t, μ_L = 1, μ_V = ±1, ±0) and cosines within rounding of 1 are not.
+    #[test]
+    fn points_outside_the_slab_are_refused_by_coordinate() {
+        let ok = at(3.0, -0.6);
+        assert_eq!(ok.check(), Ok(()));
+        for edge in [at(0.0, 1.0), at(10.0, -1.0), at(5.0, 0.0), at(5.0, -0.0)] {
+            assert_eq!(edge.check(), Ok(()), "{edge:?}");
+        }
+        assert_eq!(at(5.0, 1.000_000_1).check(), Ok(()));
+        let bad = |f: fn(&mut SlabPoint<f32>)| {
+            let mut p = ok;
+            f(&mut p);
+            p.check().unwrap_err()
+        };
+        assert_eq!(bad(|p| p.thickness = 0.0), PointError::Thickness(0.0));
+        for v in [-1.0, f32::NAN, f32::INFINITY] {
+            let mut p = ok;
+            p.thickness = v;
+            assert!(matches!(p.check(), Err(PointError::Thickness(_))), "{v}");
+        }
+        for v in [
+            0.0,
+            -0.0,
+            -0.3,
+            1.5,
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+        ] {
+            let mut p = ok;
+            p.mu_l = v;
+            assert!(matches!(p.check(), Err(PointError::SunCosine(_))), "{v}");
+        }
+        for v in [-1e-3, 10.5, f32::NAN, f32::INFINITY] {
+            let mut p = ok;
+            p.depth = v;
+            assert!(matches!(p.check(), Err(PointError::Depth { .. })), "{v}");
+        }
+        for v in [2.0, -1.01, f32::NAN, f32::NEG_INFINITY] {
+            let mut p = ok;
+            p.mu_v = v;
+            assert!(matches!(p.check(), Err(PointError::ViewCosine(_))), "{v}");
+        }
+        for v in [f32::NAN, f32::INFINITY] {
+            let mut p = ok;
+            p.psi_v = v;
+            assert!(matches!(p.check(), Err(PointError::Azimuth(_))), "{v}");
+        }
+        assert_eq!(
+            bad(|p| p.mu_l = 1.5).to_string(),
+            "mu_L = 1.5 is not a sun cosine in (0, 1] (a sun below the horizon lights no slab)"
+        );
+    }
 
     fn at(depth: f32, mu_v: f32) -> SlabPoint<f32> {
         SlabPoint {

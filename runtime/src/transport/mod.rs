@@ -29,13 +29,14 @@ pub mod leakage;
 mod owned;
 mod search;
 pub mod sun_depth;
+mod thick;
 
 #[cfg(feature = "std")]
 pub use batch::column_names;
 pub use batch::{evaluate_points, BatchError, Quantities, POINT_COLUMNS};
-pub use finite::{absorbed, finite_cloud, mean_cosine, section_radius, FiniteCloud, Kept};
+pub use finite::{absorbed, finite_cloud, section_radius, FiniteCloud, Kept};
 pub use format::MAX_GROUPS;
-pub use geometry::SlabPoint;
+pub use geometry::{PointError, SlabPoint, COSINE_SLACK};
 #[cfg(feature = "std")]
 pub use owned::OwnedTables;
 pub use search::{
@@ -43,4 +44,4 @@ pub use search::{
     LitSurface, LocalSlab, SearchOptions, Viewpoint,
 };
 pub use single::{scattering_cosine, single_scattering, PhaseValue};
-pub use tables::{Domain, Transport, TransportTables};
+pub use tables::{Domain, Outside, OutsideTally, OutsideText, Transport, TransportTables};

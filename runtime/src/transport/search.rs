@@ -121,7 +121,7 @@ impl SearchOptions {
     /// The default search for `tables`: the sun's depth spread by their phase function.
     pub fn for_tables(tables: &TransportTables) -> Self {
         Self {
-            sun_spread: Some(super::finite::mean_cosine(tables)),
+            sun_spread: Some(tables.mean_cosine()),
             ..Self::default()
         }
     }

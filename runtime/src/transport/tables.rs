@@ -16,6 +16,7 @@ use super::log_additive::{
     LogAdditive, Stretch, MAX_CROSS, MAX_HARMONICS, MAX_LEGENDRE,
 };
 use super::single::{single_scattering, PhaseValue};
+use super::thick::{continued, Continued};
 use crate::container::ArrayView;
 use crate::legendre::LegendreLanes;
 use crate::phase::{angle, phase_between, Cosine};
@@ -50,9 +51,11 @@ pub struct Transport {
 
 /// Where the tables hold information: the thicknesses and sun cosines of their grid. Every
 /// other coordinate is covered whole (d ∈ [0, t], μ_V ∈ [−1, 1] with the horizon, any ψ_V).
-/// Outside the grid the form's parameters are held at its nearest end while the geometry (the
-/// boundary factor, the single-scattering factor, the scattering angle) follows the point:
-/// finite and bounded, but an extrapolation a caller can detect with [`Domain::contains`].
+/// Past the thickest slab the tables continue by diffusion theory ([`super::thick`]); below
+/// the thinnest slab and the lowest sun the form's parameters are held at the grid's end
+/// while the geometry (the boundary factor, the single-scattering factor, the scattering
+/// angle) follows the point: finite and bounded, an extrapolation a caller detects with
+/// [`Domain::outside`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Domain {
     /// Smallest and largest thickness (mfp).
@@ -61,7 +64,143 @@ pub struct Domain {
     pub mu_l: (f32, f32),
 }
 
+/// Where a point in the slab lies outside the tables' grid, and by how much: each coordinate
+/// past its end, None where it is within. Past the thickest slab the tables continue by
+/// diffusion theory (docs/compress.md, "Past the thickest slab"); below the thinnest and
+/// below the lowest sun the form's parameters are held at the grid's end.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Outside {
+    /// The point's t when it is outside the grid's thicknesses (mfp).
+    pub thickness: Option<f32>,
+    /// The point's μ_L when it is below the grid's lowest sun cosine.
+    pub mu_l: Option<f32>,
+}
+
+impl Outside {
+    /// t above the thickest slab (continued by diffusion).
+    pub const THICKER: u32 = 1;
+    /// t below the thinnest slab (held).
+    pub const THINNER: u32 = 2;
+    /// μ_L below the lowest sun cosine (held).
+    pub const LOWER_SUN: u32 = 4;
+
+    /// Whether the point is within the grid.
+    pub fn is_within(&self) -> bool {
+        self.thickness.is_none() && self.mu_l.is_none()
+    }
+
+    /// The flags as bits ([`Self::THICKER`], [`Self::THINNER`], [`Self::LOWER_SUN`]) given
+    /// the domain the point was placed in.
+    pub fn bits(&self, domain: &Domain) -> u32 {
+        let mut b = 0;
+        if let Some(t) = self.thickness {
+            b |= if t > domain.thickness.1 {
+                Self::THICKER
+            } else {
+                Self::THINNER
+            };
+        }
+        if self.mu_l.is_some() {
+            b |= Self::LOWER_SUN;
+        }
+        b
+    }
+}
+
+/// What a caller says of a point outside the grid: each coordinate, its value against the
+/// grid's end, and what the tables do there ([`Outside::describe`]).
+pub struct OutsideText<'a>(&'a Outside, &'a Domain);
+
+impl core::fmt::Display for OutsideText<'_> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let (o, d) = (self.0, self.1);
+        let mut sep = "";
+        if let Some(t) = o.thickness {
+            if t > d.thickness.1 {
+                write!(f, "t = {t} mfp is past the tables' thickest slab ({} mfp): continued by diffusion theory", d.thickness.1)?;
+            } else {
+                write!(f, "t = {t} mfp is below the tables' thinnest slab ({} mfp): held there", d.thickness.0)?;
+            }
+            sep = "; ";
+        }
+        if let Some(m) = o.mu_l {
+            let deg = |mu: f32| Real::asin(mu as f64) * 180.0 / f64::PI;
+            write!(
+                f,
+                "{sep}mu_L = {m} (sun {:.1} deg up) is below the tables' lowest sun ({} = {:.1} deg up): held there",
+                deg(m),
+                d.mu_l.0,
+                deg(d.mu_l.0)
+            )?;
+        }
+        Ok(())
+    }
+}
+
+impl Outside {
+    /// A one-line description ("t = 500 mfp is past the tables' thickest slab (128 mfp):
+    /// continued by diffusion theory"); empty within the grid.
+    pub fn describe<'a>(&'a self, domain: &'a Domain) -> OutsideText<'a> {
+        OutsideText(self, domain)
+    }
+}
+
+/// Points outside the grid counted: how many, and the farthest of each kind. What a renderer
+/// that evaluates many points says once at the end.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct OutsideTally {
+    /// Points counted.
+    pub points: u64,
+    /// Points past the thickest slab, and the largest t among them (mfp).
+    pub thicker: (u64, f32),
+    /// Points below the thinnest slab, and the smallest t.
+    pub thinner: (u64, f32),
+    /// Points below the lowest sun, and the smallest μ_L.
+    pub lower_sun: (u64, f32),
+}
+
+impl OutsideTally {
+    /// Counts one point.
+    pub fn add(&mut self, o: &Outside, domain: &Domain) {
+        self.points += 1;
+        if let Some(t) = o.thickness {
+            if t > domain.thickness.1 {
+                self.thicker = (self.thicker.0 + 1, self.thicker.1.max(t));
+            } else {
+                let lo = if self.thinner.0 == 0 { t } else { self.thinner.1.min(t) };
+                self.thinner = (self.thinner.0 + 1, lo);
+            }
+        }
+        if let Some(m) = o.mu_l {
+            let lo = if self.lower_sun.0 == 0 { m } else { self.lower_sun.1.min(m) };
+            self.lower_sun = (self.lower_sun.0 + 1, lo);
+        }
+    }
+
+    /// Adds another tally (of another thread's points).
+    pub fn merge(&mut self, o: &OutsideTally) {
+        let pick = |a: (u64, f32), b: (u64, f32), f: fn(f32, f32) -> f32| match (a.0, b.0) {
+            (0, _) => b,
+            (_, 0) => a,
+            _ => (a.0 + b.0, f(a.1, b.1)),
+        };
+        self.points += o.points;
+        self.thicker = pick(self.thicker, o.thicker, f32::max);
+        self.thinner = pick(self.thinner, o.thinner, f32::min);
+        self.lower_sun = pick(self.lower_sun, o.lower_sun, f32::min);
+    }
+}
+
 impl Domain {
+    /// Which of `at`'s coordinates lie outside the grid (t, μ_L), with their values.
+    pub fn outside(&self, at: &SlabPoint<f32>) -> Outside {
+        let past = |x: f32, (a, b): (f32, f32)| (!(x >= a && x <= b)).then_some(x);
+        Outside {
+            thickness: past(at.thickness, self.thickness),
+            mu_l: past(at.mu_l, (self.mu_l.0, f32::INFINITY)),
+        }
+    }
+
     /// Whether `at` is inside: t and μ_L within the grid (ends included), 0 ≤ d ≤ t and
     /// −1 ≤ μ_V ≤ 1.
     pub fn contains(&self, at: &SlabPoint<f32>) -> bool {
@@ -91,6 +230,10 @@ pub struct TransportTables<'a> {
     pub(super) phase_theta: ArrayView<'a>,
     pub(super) phase: ArrayView<'a>,
     pub(super) halo: Option<Halo<'a>>,
+    /// g of the stored phase function ([`Self::mean_cosine`]); 1/(1 − g) is the transport
+    /// mean free path by which the tables continue past their thickest slab
+    /// ([`super::thick`]).
+    pub(super) mean_cosine: f32,
 }
 
 impl<'a> TransportTables<'a> {
@@ -129,6 +272,18 @@ impl<'a> TransportTables<'a> {
     /// T of the groups `first .. first + count` at `at` into `out[..count]` (the run fits one
     /// [`Sums`]).
     fn transport_run(&self, at: &SlabPoint<f32>, run: (usize, usize), out: &mut [f32]) {
+        if let Some(c) = self.continued(at) {
+            self.transport_run_within(&c.at, run, out);
+            for (g, v) in (run.0..).zip(out.iter_mut()) {
+                *v *= self.diffuse_scale(g, &c);
+            }
+            return;
+        }
+        self.transport_run_within(at, run, out);
+    }
+
+    /// [`Self::transport_run`] at a point within the grid's thicknesses.
+    fn transport_run_within(&self, at: &SlabPoint<f32>, run: (usize, usize), out: &mut [f32]) {
         #[cfg(all(feature = "std", target_arch = "x86_64"))]
         if std::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU has AVX2, checked just above.
@@ -230,6 +385,42 @@ impl<'a> TransportTables<'a> {
 
     /// T, c and σ of the groups `first .. first + count` at `at` into `out[..count]`.
     fn evaluate_run(&self, at: &SlabPoint<f32>, run: (usize, usize), out: &mut [Transport]) {
+        if let Some(c) = self.continued(at) {
+            self.evaluate_run_within(&c.at, run, out);
+            for (g, v) in (run.0..).zip(out.iter_mut()) {
+                v.t *= self.diffuse_scale(g, &c);
+                v.sigma *= if g + 1 == self.groups() {
+                    c.spread_diffuse
+                } else {
+                    c.spread
+                };
+            }
+            return;
+        }
+        self.evaluate_run_within(at, run, out);
+    }
+
+    /// The point past the thickest slab continued into it ([`super::thick`]), or None within
+    /// the grid's thicknesses (and outside the slab, where every group is 0 anyway).
+    fn continued(&self, at: &SlabPoint<f32>) -> Option<Continued> {
+        let t_max = self.thickness.get(self.thickness.len().max(1) - 1)?;
+        at.in_slab()
+            .then(|| continued(at, t_max, 1.0 / (1.0 - self.mean_cosine).max(1e-3)))
+            .flatten()
+    }
+
+    /// How group `g`'s T scales past the thickest slab: the open-ended last group as the
+    /// diffuse fluence, the others never above their value at the thickest slab.
+    fn diffuse_scale(&self, g: usize, c: &Continued) -> f32 {
+        if g + 1 == self.groups() {
+            c.diffuse
+        } else {
+            c.diffuse.min(1.0)
+        }
+    }
+
+    /// [`Self::evaluate_run`] at a point within the grid's thicknesses.
+    fn evaluate_run_within(&self, at: &SlabPoint<f32>, run: (usize, usize), out: &mut [Transport]) {
         #[cfg(all(feature = "std", target_arch = "x86_64"))]
         if std::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU has AVX2, checked just above.
@@ -328,6 +519,11 @@ impl<'a> TransportTables<'a> {
             thickness: ends(&self.thickness),
             mu_l: ends(&self.mu_l),
         }
+    }
+
+    /// g = ∮ μ p dΩ of the phase function the tables were made with (computed once, at load).
+    pub fn mean_cosine(&self) -> f32 {
+        self.mean_cosine
     }
 
     /// Whether the tables hold the collector (c, σ).
@@ -1152,4 +1348,16 @@ mod tests {
             }
         }
     }
+}
+
+/// g = ∮ μ p dΩ of the tables' phase function (midpoint rule on 4096 angles).
+pub(super) fn integrate_mean_cosine(tables: &TransportTables) -> f32 {
+    let n = 4096;
+    let h = f64::PI / n as f64;
+    let mut sum = 0.0f64;
+    for k in 0..n {
+        let (sin, cos) = Real::sin_cos((k as f64 + 0.5) * h);
+        sum += 2.0 * f64::PI * cos * tables.phase(cos as f32) as f64 * sin * h;
+    }
+    sum as f32
 }

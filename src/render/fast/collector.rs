@@ -18,8 +18,8 @@ use super::{Frame, Pixel};
 use crate::render::image::GROUP_FIRST;
 use nephele_runtime::transport::leakage::lateral_rate;
 use nephele_runtime::transport::{
-    absorbed, find_collectors, finite_cloud, local_slab, mean_cosine, section_radius, FiniteCloud,
-    LitSurface, SlabPoint, TransportTables, Viewpoint,
+    absorbed, find_collectors, finite_cloud, local_slab, section_radius, FiniteCloud, LitSurface,
+    SlabPoint, TransportTables, Viewpoint,
 };
 use serde::Serialize;
 
@@ -111,7 +111,7 @@ impl Finite {
             delay_scale: self.delay_scale as f32,
             spread: self.spread,
             absorption: (-albedo.ln()).max(0.0) as f32,
-            mean_cosine: mean_cosine(tables),
+            mean_cosine: tables.mean_cosine(),
         }
     }
 }
