@@ -114,6 +114,17 @@ fn foreign_and_damaged_inputs_are_named() {
         FormatError::BadChecksum
     );
     assert!(Container::from_bytes(&[]).is_err());
+    // Text after the magic is a foreign file, not a version 1936287860 of the format.
+    let mut text = bytes[..8].to_vec();
+    text.extend_from_slice(b"this is not a tables file, but it is long enough to have a checksum");
+    assert_eq!(
+        Container::from_bytes(&text).unwrap_err(),
+        FormatError::BadMagic
+    );
+    assert!(FormatError::BadMagic
+        .to_string()
+        .contains("not a nephele transport tables file"));
+    assert!(FormatError::Truncated.to_string().starts_with("truncated"));
 }
 
 proptest! {
@@ -136,7 +147,8 @@ proptest! {
     fn every_truncation_is_an_error(cut in 0usize..10_000) {
         let bytes = sample();
         let cut = cut % bytes.len();
-        prop_assert!(Container::from_bytes(&bytes[..cut]).is_err());
+        // Named as what happened, not as the checksum that fails with it.
+        prop_assert_eq!(Container::from_bytes(&bytes[..cut]).unwrap_err(), FormatError::Truncated);
     }
 
     #[test]
