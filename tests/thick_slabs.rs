@@ -237,7 +237,7 @@ fn the_walks_transmission_follows_the_diffusion_asymptote() {
     let g = mie_10um().mean_cosine() as f64;
     let two_ze = 4.0 / 3.0 / (1.0 - g);
     let base = walk(128);
-    for t in [256, 512] {
+    for t in [256, 384, 512] {
         let w = walk(t);
         let want = (base.t + two_ze) / (w.t + two_ze);
         let got = w.transmitted / base.transmitted;
@@ -264,7 +264,7 @@ fn past_the_grid_the_tables_agree_with_the_walk_as_well_as_at_the_thickest_slab(
     let tables = mie_10um();
     let base = walk(128);
     let base_pred = base.predicted(&tables);
-    for t in [256, 512] {
+    for t in [256, 384, 512] {
         let w = walk(t);
         let pred = w.predicted(&tables);
         for r in [Region::LitFace, Region::Between, Region::FarFace] {
