@@ -134,8 +134,22 @@ fn a_c_program_under_sanitizers_answers_as_the_runtime() {
     let lines: Vec<&str> = text.lines().collect();
     let tab = mie_10um();
     let hex = |v: f32| format!("{:08x}", v.to_bits());
+    let d = tab.domain();
+    assert_eq!(
+        lines[0],
+        format!(
+            "domain {} {} {} {} {} {} 1",
+            hex(d.thickness.0),
+            hex(d.thickness.1),
+            hex(d.mu_l.0),
+            hex(d.mu_l.1),
+            hex(tab.mean_cosine()),
+            tab.groups()
+        )
+    );
     let mut all = [Transport::default(); 8];
-    for (p, line) in pts.iter().zip(&lines) {
+    let mut inside = 0;
+    for (p, line) in pts.iter().zip(&lines[1..]) {
         let at = SlabPoint {
             thickness: p[0],
             mu_l: p[1],
@@ -143,13 +157,24 @@ fn a_c_program_under_sanitizers_answers_as_the_runtime() {
             mu_v: p[3],
             psi_v: p[4],
         };
+        if at.check().is_err() {
+            assert_eq!(*line, "bad_point 6", "{p:?}");
+            continue;
+        }
+        inside += 1;
         tab.evaluate_all(&at, &mut all);
         let mut want = vec![hex(tab.order1(&at))];
         for v in &all {
             want.extend([hex(v.t), hex(v.c_x), hex(v.c_z), hex(v.sigma)]);
         }
+        want.push(d.outside(&at).bits(&d).to_string());
         assert_eq!(line.split(' ').collect::<Vec<_>>(), want, "{p:?}");
     }
+    assert!(inside < pts.len(), "no point outside the slab was tried");
+    assert!(
+        lines.contains(&format!("batch {inside} 1").as_str()),
+        "the batch differs from the points one by one"
+    );
     let phase = HgDraine::<f32>::from_diameter(10.0);
     let phase_lines: Vec<&&str> = lines.iter().filter(|l| l.starts_with("phase ")).collect();
     assert_eq!(phase_lines.len(), 9);
@@ -216,15 +241,149 @@ fn a_c_program_under_sanitizers_answers_as_the_runtime() {
         ("short_collectors", NepheleStatus::BadArgument),
         ("not_found", NepheleStatus::BadArgument),
         ("bad_table", NepheleStatus::BadArgument),
+        ("batch_bad_point", NepheleStatus::BadPoint),
+        ("batch_stride", NepheleStatus::BadArgument),
+        ("missing_file", NepheleStatus::Io),
     ] {
         assert_eq!(status(case), code as i32, "{case}");
     }
+    assert_eq!(
+        status("batch_untouched"),
+        1,
+        "a refused batch wrote its output"
+    );
+    assert_eq!(
+        status("cleared"),
+        1,
+        "a successful call left the last error"
+    );
+    // Every entry refuses every point outside the slab, and says which coordinate.
+    for i in 0..6 {
+        let line = lines
+            .iter()
+            .find(|l| l.starts_with(&format!("status point_{i} ")))
+            .unwrap();
+        assert_eq!(
+            line.split(' ').skip(2).collect::<Vec<_>>(),
+            ["6", "6", "6"],
+            "{line}"
+        );
+    }
+    let message = |case: &str| -> String {
+        let head = format!("message {case} ");
+        lines
+            .iter()
+            .find(|l| l.starts_with(&head))
+            .unwrap_or_else(|| panic!("no message line for {case}"))[head.len()..]
+            .to_string()
+    };
+    for (i, says) in [
+        "mu_L = 1.5 is not a sun cosine",
+        "mu_V = 2 is not a cosine",
+        "mu_L = NaN is not a sun cosine",
+        "t = inf mfp is not a thickness",
+        "depth = 5 mfp is outside the slab [0, t = 4]",
+        "psi_V = -inf rad is not a finite angle",
+    ]
+    .iter()
+    .enumerate()
+    {
+        let m = message(&format!("point_{i}"));
+        assert!(m.contains(says), "point {i}: {m}");
+    }
+    assert!(message("batch_bad_point").starts_with("point 2: mu_L = 1.5"));
+    let truncated = message("truncated");
+    assert!(
+        truncated.starts_with("truncated transport tables"),
+        "{truncated}"
+    );
+    assert!(
+        !truncated.contains("tables: transport tables"),
+        "{truncated}"
+    );
+    let foreign = message("foreign");
+    assert!(
+        foreign.contains("not a nephele transport tables file"),
+        "{foreign}"
+    );
+    assert!(message("missing_file").contains("'/nonexistent/x.ntt'"));
     let version = lines
         .iter()
         .find(|l| l.starts_with("status version"))
         .unwrap();
     assert!(version.contains("version 9"), "{version}");
     std::fs::remove_dir_all(&tmp).unwrap();
+}
+
+/// One handle shared by two of the caller's threads, each running the batch entry on its own
+/// half of the points (examples/c/nephele_threads.c, under ThreadSanitizer where the compiler
+/// has it): every answer is the one thread's, bit for bit.
+#[test]
+fn two_threads_share_one_handle_and_answer_as_one() {
+    let tmp = std::env::temp_dir().join(format!("nephele-capi-threads-{}", std::process::id()));
+    std::fs::create_dir_all(&tmp).unwrap();
+    let exe = tmp.join("nephele_threads");
+    let cc = std::env::var("CC").unwrap_or_else(|_| "cc".into());
+    let built = Command::new(&cc)
+        .args(["-std=c99", "-Wall", "-Wextra", "-Werror", "-O1", "-g"])
+        .arg("-I")
+        .arg(crate_dir().join("include"))
+        .arg(crate_dir().join("../examples/c/nephele_threads.c"))
+        .arg(static_library())
+        .args(["-lm", "-lpthread", "-ldl", "-o"])
+        .arg(&exe)
+        .output()
+        .expect("run the C compiler");
+    assert!(
+        built.status.success(),
+        "{cc}: {}",
+        String::from_utf8_lossy(&built.stderr)
+    );
+    let out = Command::new(&exe)
+        .arg(crate_dir().join("../runtime/tables/mie10um/transport.ntt"))
+        .args(["20000", "2", "1"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.lines().any(|l| l == "identical 1"), "{text}");
+    std::fs::remove_dir_all(&tmp).unwrap();
+}
+
+/// The library's version macros are the crate's, and the shared library's SONAME carries the
+/// ABI version.
+#[test]
+fn the_versions_and_the_soname_agree() {
+    assert_eq!(
+        NEPHELE_VERSION_MAJOR.to_string(),
+        env!("CARGO_PKG_VERSION_MAJOR")
+    );
+    assert_eq!(
+        NEPHELE_VERSION_MINOR.to_string(),
+        env!("CARGO_PKG_VERSION_MINOR")
+    );
+    assert_eq!(
+        NEPHELE_VERSION_PATCH.to_string(),
+        env!("CARGO_PKG_VERSION_PATCH")
+    );
+    assert_eq!(nephele_abi_version(), NEPHELE_ABI_VERSION);
+    let build = std::fs::read_to_string(crate_dir().join("build.rs")).unwrap();
+    assert!(
+        build.contains(&format!("const ABI_VERSION: u32 = {NEPHELE_ABI_VERSION};")),
+        "capi/build.rs sets the SONAME from another ABI version"
+    );
+    let lib = static_library().with_file_name("libnephele_c.so");
+    if let Ok(out) = Command::new("readelf").arg("-d").arg(&lib).output() {
+        if out.status.success() {
+            let text = String::from_utf8_lossy(&out.stdout);
+            let want = format!("[libnephele_c.so.{NEPHELE_ABI_VERSION}]");
+            assert!(text.contains(&want), "{}: no SONAME {want}", lib.display());
+        }
+    }
 }
 
 /// The C example's sphere of cloud (examples/c/nephele_example.c), the same f32 operations in
@@ -413,7 +572,11 @@ fn truncated_and_corrupt_tables_are_refused_without_a_crash() {
     for n in (0..MIE_10UM.len()).step_by(97) {
         let (s, t) = load(&MIE_10UM[..n]);
         assert_eq!(s, NepheleStatus::BadTables, "truncated at {n}");
-        assert!(t.is_null() && message().starts_with("transport tables: "));
+        assert!(
+            t.is_null() && message().starts_with("truncated transport tables"),
+            "{}",
+            message()
+        );
     }
     let mut state = 0x2545F4914F6CDD1Du64;
     let at = NepheleSlabPoint {

@@ -7,6 +7,7 @@
 
 use nephele_c::*;
 use nephele_runtime::embedded::MIE_10UM;
+use nephele_runtime::transport::SlabPoint;
 use proptest::prelude::*;
 use std::ffi::c_void;
 use std::sync::OnceLock;
@@ -121,18 +122,25 @@ proptest! {
     ) {
         let t = tables().0;
         let at = NepheleSlabPoint { thickness: p[0], mu_l: p[1], depth: p[2], mu_v: p[3], psi_v: p[4] };
+        // A point outside the slab is BAD_POINT from every entry, whatever the other arguments.
+        let valid = SlabPoint { thickness: p[0], mu_l: p[1], depth: p[2], mu_v: p[3], psi_v: p[4] }
+            .check()
+            .is_ok();
         let mut one = NepheleTransport::default();
         let s = unsafe { nephele_evaluate(t, group, &at, &mut one) };
-        prop_assert!(s == NepheleStatus::Ok || s == NepheleStatus::BadGroup, "{s:?}");
+        let want = if group >= 8 { NepheleStatus::BadGroup } else if !valid { NepheleStatus::BadPoint } else { NepheleStatus::Ok };
+        prop_assert_eq!(s, want);
         if s == NepheleStatus::Ok {
             prop_assert!(finite(&[one.t, one.c_x, one.c_z, one.sigma]), "{at:?} → {one:?}");
         }
         let mut all = vec![NepheleTransport::default(); capacity];
         let s = unsafe { nephele_evaluate_all(t, &at, all.as_mut_ptr(), capacity) };
-        prop_assert!(s == NepheleStatus::Ok || s == NepheleStatus::BadArgument, "{s:?}");
+        let want = if capacity < 8 { NepheleStatus::BadArgument } else if !valid { NepheleStatus::BadPoint } else { NepheleStatus::Ok };
+        prop_assert_eq!(s, want);
         let mut o1 = 0.0;
-        prop_assert_eq!(unsafe { nephele_order1(t, &at, &mut o1) }, NepheleStatus::Ok);
-        prop_assert!(o1.is_finite() || !finite(&p), "{at:?} → order 1 {o1}");
+        let s = unsafe { nephele_order1(t, &at, &mut o1) };
+        prop_assert_eq!(s, if valid { NepheleStatus::Ok } else { NepheleStatus::BadPoint });
+        prop_assert!(o1.is_finite(), "{at:?} → order 1 {o1}");
     }
 
     #[test]

@@ -1,14 +1,20 @@
-/* nephele from C: load transport tables, evaluate them and a phase model, and show what bad
+/* nephele from C: check the ABI, load transport tables from a file, ask their domain, evaluate
+ * them point by point and in a batch, a phase model, the collector search, and show what bad
  * input gets back. Built and run by capi/tests/abi.rs (under AddressSanitizer and
  * UndefinedBehaviorSanitizer), which checks every number against the Rust runtime bit for bit.
  *
  *   cc -I capi/include examples/c/nephele_example.c target/release/libnephele_c.a -lm -lpthread -ldl
  *   ./a.out runtime/tables/mie10um/transport.ntt < points.txt
+ * or, installed (scripts/install_capi.sh PREFIX):
+ *   cc examples/c/nephele_example.c $(pkg-config --cflags --libs nephele) -lm
  *
  * stdin: one point per line, five f32 as hexadecimal bits (t, mu_L, depth, mu_V, psi_V).
- * stdout: per point "order1 T c_x c_z sigma ..." as hexadecimal bits; then one line per
- * phase value and per tabulated phase value; then one "collector ..." line per viewpoint and group of the collector search
- * on a sphere of cloud (below); then "status <case> <code>" lines for the bad input. */
+ * stdout: "domain ..." (the tables' grid, g, groups); per point "order1 T c_x c_z sigma ...
+ * outside" as hexadecimal bits and the NEPHELE_OUTSIDE_* flags, or "bad_point <status>" for a
+ * point outside the slab; "batch ..." (the batch entry against the points one by one); one
+ * line per phase value and per tabulated phase value; one "collector ..." line per viewpoint
+ * and group of the collector search on a sphere of cloud (below); then "status <case> <code>"
+ * lines for the bad input and "message <case> <text>" lines for what they say. */
 #include <inttypes.h>
 #include <math.h>
 #include <stdio.h>
@@ -133,6 +139,11 @@ int main(int argc, char **argv) {
         fprintf(stderr, "usage: %s transport.ntt < points\n", argv[0]);
         return 2;
     }
+    if (!NEPHELE_ABI_COMPATIBLE()) {
+        fprintf(stderr, "libnephele_c has ABI %u, this program was built for %u\n",
+                nephele_abi_version(), NEPHELE_ABI_VERSION);
+        return 2;
+    }
     size_t len = 0;
     uint8_t *bytes = read_file(argv[1], &len);
     if (!bytes) {
@@ -140,25 +151,74 @@ int main(int argc, char **argv) {
         return 2;
     }
     NepheleTables *tables = NULL;
-    if (check(nephele_tables_from_bytes(bytes, len, &tables), "load")) return 1;
-    size_t groups = 0;
-    if (check(nephele_tables_groups(tables, &groups), "groups")) return 1;
+    if (check(nephele_tables_from_file(argv[1], &tables), "load")) return 1;
+    NepheleDomain domain;
+    if (check(nephele_tables_domain(tables, &domain), "domain")) return 1;
+    size_t groups = domain.groups;
+    printf("domain %08" PRIx32 " %08" PRIx32 " %08" PRIx32 " %08" PRIx32 " %08" PRIx32 " %zu %u\n",
+           bits(domain.thickness_min), bits(domain.thickness_max), bits(domain.mu_l_min),
+           bits(domain.mu_l_max), bits(domain.mean_cosine), domain.groups, domain.has_collector);
 
-    /* Every point: order 1 and T, c, sigma of every group. */
+    /* Every point: order 1, T, c, sigma of every group and where it lies outside the grid. The
+       points inside the slab are kept, inside a struct of the renderer's own, for the batch. */
+    typedef struct {
+        int pixel;
+        NepheleSlabPoint at;
+    } Sample;
+    size_t cap = 1024, n = 0;
+    Sample *samples = malloc(cap * sizeof *samples);
+    NepheleTransport *one_by_one = malloc(cap * NEPHELE_MAX_GROUPS * sizeof *one_by_one);
+    float *order1_one = malloc(cap * sizeof *order1_one);
     NepheleTransport out[NEPHELE_MAX_GROUPS];
     unsigned int p[5];
     while (scanf("%x %x %x %x %x", &p[0], &p[1], &p[2], &p[3], &p[4]) == 5) {
         NepheleSlabPoint at = {from_bits(p[0]), from_bits(p[1]), from_bits(p[2]),
                                from_bits(p[3]), from_bits(p[4])};
         float o1 = 0;
-        if (check(nephele_order1(tables, &at, &o1), "order1")) return 1;
-        if (check(nephele_evaluate_all(tables, &at, out, NEPHELE_MAX_GROUPS), "evaluate_all")) return 1;
+        uint32_t outside = 0;
+        NepheleStatus s = nephele_order1(tables, &at, &o1);
+        if (s == NEPHELE_STATUS_BAD_POINT) {
+            /* Refused alike by every entry, with the message naming the coordinate. */
+            if (nephele_evaluate_all(tables, &at, out, NEPHELE_MAX_GROUPS) != s ||
+                nephele_outside(tables, &at, &outside) != s || nephele_last_error()[0] == 0)
+                return 1;
+            printf("bad_point %d\n", (int)s);
+            continue;
+        }
+        if (check(s, "order1") ||
+            check(nephele_evaluate_all(tables, &at, out, NEPHELE_MAX_GROUPS), "evaluate_all") ||
+            check(nephele_outside(tables, &at, &outside), "outside"))
+            return 1;
         printf("%08" PRIx32, bits(o1));
         for (size_t g = 0; g < groups; g++)
             printf(" %08" PRIx32 " %08" PRIx32 " %08" PRIx32 " %08" PRIx32, bits(out[g].t),
                    bits(out[g].c_x), bits(out[g].c_z), bits(out[g].sigma));
-        printf("\n");
+        printf(" %u\n", outside);
+        if (n == cap) {
+            cap *= 2;
+            samples = realloc(samples, cap * sizeof *samples);
+            one_by_one = realloc(one_by_one, cap * NEPHELE_MAX_GROUPS * sizeof *one_by_one);
+            order1_one = realloc(order1_one, cap * sizeof *order1_one);
+        }
+        samples[n].pixel = (int)n;
+        samples[n].at = at;
+        memcpy(&one_by_one[n * groups], out, groups * sizeof *out);
+        order1_one[n] = o1;
+        n++;
     }
+
+    /* The batch entry over the kept points, read from inside the Sample structs (a stride of
+       sizeof(Sample)), written packed: bit for bit the answers one by one. */
+    NepheleTransport *batch = malloc((n + 1) * groups * sizeof *batch);
+    float *order1_batch = malloc((n + 1) * sizeof *order1_batch);
+    uint32_t *flags = malloc((n + 1) * sizeof *flags);
+    if (check(nephele_evaluate_batch(tables, &samples[0].at, n, sizeof(Sample), batch, 0,
+                                     order1_batch, flags),
+              "evaluate_batch"))
+        return 1;
+    int same = memcmp(batch, one_by_one, n * groups * sizeof *batch) == 0 &&
+               memcmp(order1_batch, order1_one, n * sizeof *order1_batch) == 0;
+    printf("batch %zu %d\n", n, same);
 
     /* A phase model: HG + Draine for 10 um droplets, evaluated and sampled. */
     NephelePhase *phase = NULL;
@@ -268,6 +328,43 @@ int main(int argc, char **argv) {
            (int)nephele_find_collectors(tables, &surface, &v0, &SUN, &options, found, 1));
     theta[10] = theta[9]; /* not increasing */
     printf("status bad_table %d\n", (int)nephele_phase_tabulated(theta, table, 361, &tabulated));
+
+    /* Points outside the slab, by each entry; a batch holding one writes nothing. */
+    const float nan = NAN, inf = INFINITY;
+    const NepheleSlabPoint outside_slab[] = {
+        {4.0f, 1.5f, 1.0f, 0.3f, 0.0f}, {4.0f, 0.5f, 1.0f, 2.0f, 0.0f},
+        {4.0f, nan, 1.0f, 0.3f, 0.0f},  {inf, 0.5f, 1.0f, 0.3f, 0.0f},
+        {4.0f, 0.5f, 5.0f, 0.3f, 0.0f}, {4.0f, 0.5f, 1.0f, 0.3f, -inf}};
+    for (int i = 0; i < 6; i++) {
+        printf("status point_%d %d %d %d\n", i,
+               (int)nephele_evaluate(tables, 0, &outside_slab[i], &one),
+               (int)nephele_order1(tables, &outside_slab[i], &v),
+               (int)nephele_view_weight(&outside_slab[i], 0.5f, &v));
+        printf("message point_%d %s\n", i, nephele_last_error());
+    }
+    NepheleSlabPoint mixed[3] = {at, at, outside_slab[0]};
+    NepheleTransport untouched[3 * NEPHELE_MAX_GROUPS];
+    memset(untouched, 0x7f, sizeof untouched);
+    printf("status batch_bad_point %d\n",
+           (int)nephele_evaluate_batch(tables, mixed, 3, 0, untouched, 0, NULL, NULL));
+    printf("message batch_bad_point %s\n", nephele_last_error());
+    printf("status batch_untouched %d\n", untouched[0].t == untouched[3 * groups - 1].sigma &&
+                                              bits(untouched[0].t) == 0x7f7f7f7fu);
+    printf("status batch_stride %d\n",
+           (int)nephele_evaluate_batch(tables, mixed, 2, 3, untouched, 0, NULL, NULL));
+    /* A failed call's message stays until the next call; a call that succeeds clears it. */
+    nephele_phase_hg(1.5f, &phase);
+    int had = nephele_last_error()[0] != 0;
+    nephele_tables_groups(tables, &groups);
+    printf("status cleared %d\n", had && nephele_last_error()[0] == 0);
+    /* What the refused loads say: a file cut short, a foreign file, a missing file. */
+    nephele_tables_from_bytes(bytes, len / 2, &bad);
+    printf("message truncated %s\n", nephele_last_error());
+    const char foreign[] = "NEPHTT\r\nthis is text after the magic, long enough to hold a header";
+    nephele_tables_from_bytes((const uint8_t *)foreign, sizeof foreign, &bad);
+    printf("message foreign %s\n", nephele_last_error());
+    printf("status missing_file %d\n", (int)nephele_tables_from_file("/nonexistent/x.ntt", &bad));
+    printf("message missing_file %s\n", nephele_last_error());
     printf("status not_found %d\n",
            (int)nephele_finite_cloud(tables, 0, &surface, &none, &finite, &kept));
     if (bad != NULL) {
@@ -279,5 +376,11 @@ int main(int argc, char **argv) {
     nephele_tables_free(tables);
     nephele_tables_free(NULL);
     free(bytes);
+    free(samples);
+    free(one_by_one);
+    free(order1_one);
+    free(batch);
+    free(order1_batch);
+    free(flags);
     return 0;
 }
