@@ -57,11 +57,20 @@
  */
 #define NEPHELE_ABI_VERSION 2
 
+/**
+ * A point past the tables' thickest slab: continued by diffusion theory.
+ */
+#define NEPHELE_OUTSIDE_THICKER 1
 
+/**
+ * A point below the tables' thinnest slab: the form's parameters held at it.
+ */
+#define NEPHELE_OUTSIDE_THINNER 2
 
-
-
-
+/**
+ * A sun below the tables' lowest: the form's parameters held at it.
+ */
+#define NEPHELE_OUTSIDE_LOWER_SUN 4
 
 /**
  * What a call did.

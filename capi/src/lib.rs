@@ -52,11 +52,16 @@ pub const NEPHELE_VERSION_PATCH: u32 = 0;
 pub const NEPHELE_ABI_VERSION: u32 = 2;
 
 /// A point past the tables' thickest slab: continued by diffusion theory.
-pub const NEPHELE_OUTSIDE_THICKER: u32 = Outside::THICKER;
+pub const NEPHELE_OUTSIDE_THICKER: u32 = 1;
 /// A point below the tables' thinnest slab: the form's parameters held at it.
-pub const NEPHELE_OUTSIDE_THINNER: u32 = Outside::THINNER;
+pub const NEPHELE_OUTSIDE_THINNER: u32 = 2;
 /// A sun below the tables' lowest: the form's parameters held at it.
-pub const NEPHELE_OUTSIDE_LOWER_SUN: u32 = Outside::LOWER_SUN;
+pub const NEPHELE_OUTSIDE_LOWER_SUN: u32 = 4;
+const _: () = assert!(
+    NEPHELE_OUTSIDE_THICKER == Outside::THICKER
+        && NEPHELE_OUTSIDE_THINNER == Outside::THINNER
+        && NEPHELE_OUTSIDE_LOWER_SUN == Outside::LOWER_SUN
+);
 
 /// What a call did.
 #[repr(C)]
