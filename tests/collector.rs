@@ -158,6 +158,35 @@ fn fast_frames_are_the_same_bits_for_any_thread_count() {
     }
 }
 
+/// A sun below the tables' lowest is said, with the share of the searches it held and how low
+/// it went; a sun within the tables' range draws no such warning.
+#[test]
+fn a_sun_below_the_tables_is_said_in_the_render_json() {
+    let tables = nephele_runtime::embedded::mie_10um();
+    let opts = FastOptions::default();
+    let warnings = |elevation_deg: f64| -> Vec<String> {
+        let mut scene = slab_scene(-1500.0, 1500.0, 200.0, 1);
+        let e = elevation_deg.to_radians();
+        scene.sun.direction = [0.0, -e.cos(), e.sin()];
+        let r = render_fast(&scene, &tables, &opts, &|_| {}).unwrap();
+        r.details["warnings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|w| w.as_str().unwrap().to_string())
+            .collect()
+    };
+    let low = warnings(3.0);
+    assert!(
+        low.iter().any(
+            |w| w.starts_with("100.0 % of the collector searches held the sun")
+                && w.contains("mu_L down to 0.052 (3.0 deg up)")
+        ),
+        "{low:?}"
+    );
+    assert!(warnings(45.0).iter().all(|w| !w.contains("held the sun")));
+}
+
 /// A scene whose phase function is not the tables' is refused with one clear error and no
 /// file; --allow-table-mismatch renders it with a warning.
 #[test]

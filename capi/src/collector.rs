@@ -459,6 +459,10 @@ pub unsafe extern "C" fn nephele_finite_cloud(
                     sigma: c.transport.sigma,
                 },
                 at: crate::slab_point(&c.at),
+                unheld: nephele_runtime::transport::Unheld {
+                    thickness: c.at.thickness,
+                    mu_l: c.at.mu_l,
+                },
                 centre: c.centre,
                 sigma: c.sigma,
                 reads: c.reads,

@@ -430,8 +430,18 @@ pub fn run(args: RenderArgs, m: &ArgMatches) -> Result<()> {
         if r.method == "collector" {
             print_search_stats(&r.details["groups"]);
         }
+        print_warnings(&r.details);
     }
     Ok(())
+}
+
+/// The render's own warnings (render.json `warnings`), one `warning:` line each on stderr.
+fn print_warnings(details: &serde_json::Value) {
+    for w in details["warnings"].as_array().into_iter().flatten() {
+        if let Some(w) = w.as_str() {
+            eprintln!("warning: {w}");
+        }
+    }
 }
 
 /// Renders `n` views of `scene` on an orbit from one set of light maps (`--orbit`).
@@ -443,6 +453,7 @@ fn render_orbit(scene: &Scene, args: &RenderArgs, n: usize, out: &Path) -> Resul
     let bar = super::progress::work_bar("render", (n * 1000) as u64);
     bar.set_message("preparing the phase function, the medium and the light maps");
     bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    let mut first_details = serde_json::Value::Null;
     let summary = super::with_tables(args.fast.tables.as_deref(), |tables| {
         let prepared = prepare(scene, tables, &opts)?;
         let mut exposure = args.exposure;
@@ -461,10 +472,15 @@ fn render_orbit(scene: &Scene, args: &RenderArgs, n: usize, out: &Path) -> Resul
                 r.seconds,
                 r.details["seconds_per_stage"].clone(),
             ));
+            if k == 0 {
+                first_details = r.details.clone();
+            }
         }
         Ok((prepared.seconds(), views, exposure))
     })?;
     bar.finish_and_clear();
+    // The first view's warnings (each view's render.json has its own).
+    print_warnings(&first_details);
     let ((setup, maps, sky), views, exposure) = summary;
     let reused: Vec<f64> = views.iter().skip(1).map(|v| v.1).collect();
     let mean_reused = reused.iter().sum::<f64>() / reused.len().max(1) as f64;

@@ -41,7 +41,7 @@ pub use geometry::{PointError, SlabPoint, COSINE_SLACK};
 pub use owned::OwnedTables;
 pub use search::{
     find_collector, find_collectors, local_slab, Clamps, Collector, FilteredSurface, Lateral,
-    LitSurface, LocalSlab, SearchOptions, Viewpoint,
+    LitSurface, LocalSlab, SearchOptions, Unheld, Viewpoint,
 };
 pub use single::{scattering_cosine, single_scattering, PhaseValue};
 pub use tables::{Domain, Outside, OutsideTally, OutsideText, Transport, TransportTables};

@@ -200,8 +200,21 @@ pub struct Collector {
     pub converged: bool,
     /// Parameters held at the tables' domain in the last read.
     pub clamps: Clamps,
+    /// The last read's t and μ_L before they were held ([`Unheld`]).
+    pub unheld: Unheld,
     /// κ̄ (1/m) of the last read's slab: mfp per metre.
     pub extinction: f32,
+}
+
+/// A local slab's thickness and sun cosine as the surface gave them, before they were held
+/// within the tables' grid: how far a search reached past it (equal to the slab's own where
+/// nothing was held).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Unheld {
+    /// t (mfp).
+    pub thickness: f32,
+    /// μ_L = n̄·ω_L (≤ 0 on a face turned from the sun).
+    pub mu_l: f32,
 }
 
 /// The local slab of a viewpoint under a filtered surface, and its horizontal frame.
@@ -211,6 +224,8 @@ pub struct LocalSlab {
     pub at: SlabPoint<f32>,
     /// What the clamping changed.
     pub clamps: Clamps,
+    /// t and μ_L before they were held.
+    pub unheld: Unheld,
     /// p's projection along the normal on the lit face (m, world): the origin of c.
     pub foot: Vec3<f32>,
     /// Unit vectors along c_z (the beam's horizontal travel) and c_x (across, toward the
@@ -292,13 +307,22 @@ pub fn local_slab(
     } else {
         d_raw
     };
-    // t held within the tables' thicknesses, flagged.
-    let hold_thickness = |t: f32, clamps: &mut Clamps| {
+    // t held within the tables' thicknesses, flagged, the value before kept.
+    let mut unheld = Unheld {
+        thickness: 0.0,
+        mu_l: mu_l_raw,
+    };
+    let hold_thickness = |t: f32, clamps: &mut Clamps, unheld: &mut Unheld| {
         let h = t.clamp_to(domain.thickness.0, domain.thickness.1);
         clamps.thickness |= h != t;
+        unheld.thickness = t;
         h
     };
-    let thickness = hold_thickness((s.optical_length * mu_l).max(held), &mut clamps);
+    let thickness = hold_thickness(
+        (s.optical_length * mu_l).max(held),
+        &mut clamps,
+        &mut unheld,
+    );
     let depth = d_raw.clamp_to(0.0, thickness);
     clamps.depth = depth != d_raw;
     let (lo, hi) = if mu_v > 0.0 {
@@ -325,12 +349,12 @@ pub fn local_slab(
     let d_sun = mu_l * v.sun_depth;
     let (depth, thickness) = if mu_v > 0.0 && depth_v > d_sun {
         clamps.sun = true;
-        let t = hold_thickness(d_sun + (thickness - depth_v), &mut clamps);
+        let t = hold_thickness(d_sun + (thickness - depth_v), &mut clamps, &mut unheld);
         (d_sun.min(t), t)
     } else if d_sun.is_finite() && d_sun > thickness {
         clamps.sun = true;
         let excess = d_sun - thickness;
-        let t = hold_thickness(thickness + excess, &mut clamps);
+        let t = hold_thickness(thickness + excess, &mut clamps, &mut unheld);
         ((depth_v + excess).min(t), t)
     } else {
         (depth_v, thickness)
@@ -364,6 +388,7 @@ pub fn local_slab(
             mu_l,
         },
         clamps,
+        unheld,
         foot: add(p, n, below),
         z_axis,
         x_axis,
@@ -581,6 +606,7 @@ impl Search {
             reads: self.reads,
             converged,
             clamps: slab.clamps,
+            unheld: slab.unheld,
             extinction: slab.extinction,
         };
         if converged || self.reads >= opts.max_reads.max(1) {

@@ -18,8 +18,8 @@ use super::{Frame, Pixel};
 use crate::render::image::GROUP_FIRST;
 use nephele_runtime::transport::leakage::lateral_rate;
 use nephele_runtime::transport::{
-    absorbed, find_collectors, finite_cloud, local_slab, section_radius, FiniteCloud, LitSurface,
-    SlabPoint, TransportTables, Viewpoint,
+    absorbed, find_collectors, finite_cloud, local_slab, section_radius, Domain, FiniteCloud,
+    LitSurface, SlabPoint, TransportTables, Viewpoint,
 };
 use serde::Serialize;
 
@@ -156,9 +156,67 @@ pub struct GroupStats {
     pub held_by_view: u64,
     /// Searches whose last read cut the slab above p to p's depth to the sun.
     pub held_by_sun: u64,
+    /// Searches whose last read held t at the tables' thickest slab, and the largest t
+    /// they reached (mfp).
+    pub past_thickest: u64,
+    pub thickest: Option<f32>,
+    /// The smallest μ_L among the searches held at the tables' lowest sun (≤ 0: a face
+    /// turned from the sun).
+    pub lowest_mu_l: Option<f32>,
     /// The finite-cloud correction's factors on T, summed over the searches that found a
     /// collector (their mean: the share of the slab's light the cloud keeps).
     pub kept: f64,
+}
+
+/// The extreme of two optional values by `pick` (None: no value yet).
+fn extreme(a: Option<f32>, b: Option<f32>, pick: fn(f32, f32) -> f32) -> Option<f32> {
+    match (a, b) {
+        (Some(a), Some(b)) => Some(pick(a, b)),
+        (a, b) => a.or(b),
+    }
+}
+
+/// The warnings of a render whose searches held the local slab at the tables' grid: the share
+/// of the searches held (over every group) and how far past the grid they reached, when the
+/// share is at least 0.1 %.
+pub(super) fn held_warnings(stats: &[GroupStats], domain: &Domain) -> Vec<String> {
+    let searches: u64 = stats.iter().map(|s| s.searches).sum();
+    let share = |n: u64| 100.0 * n as f64 / searches.max(1) as f64;
+    let mut out = Vec::new();
+    let past: u64 = stats.iter().map(|s| s.past_thickest).sum();
+    let thickest = stats
+        .iter()
+        .filter_map(|s| s.thickest)
+        .fold(0.0f32, f32::max);
+    if share(past) >= 0.1 {
+        out.push(format!(
+            "{:.1} % of the collector searches held t at the tables' thickest slab: t up to {:.0} \
+             mfp against the tables' {}",
+            share(past),
+            thickest,
+            domain.thickness.1
+        ));
+    }
+    let low: u64 = stats.iter().map(|s| s.clamped_mu_l).sum();
+    let lowest = stats
+        .iter()
+        .filter_map(|s| s.lowest_mu_l)
+        .fold(1.0f32, f32::min);
+    if share(low) >= 0.1 {
+        let up = |mu: f32| mu.clamp(0.0, 1.0).asin().to_degrees();
+        out.push(format!(
+            "{:.1} % of the collector searches held the sun at the tables' lowest (mu_L = {}, {:.1} \
+             deg up): mu_L down to {:.3} ({:.1} deg up{}); their orders >= 2 are the lowest sun's, \
+             too bright for a sun lower than the tables hold",
+            share(low),
+            domain.mu_l.0,
+            up(domain.mu_l.0),
+            lowest.max(0.0),
+            up(lowest),
+            if lowest <= 0.0 { ", faces turned from the sun among them" } else { "" }
+        ));
+    }
+    out
 }
 
 impl GroupStats {
@@ -174,6 +232,9 @@ impl GroupStats {
         self.clamped_depth += o.clamped_depth;
         self.held_by_view += o.held_by_view;
         self.held_by_sun += o.held_by_sun;
+        self.past_thickest += o.past_thickest;
+        self.thickest = extreme(self.thickest, o.thickest, f32::max);
+        self.lowest_mu_l = extreme(self.lowest_mu_l, o.lowest_mu_l, f32::min);
         self.kept += o.kept;
     }
 }
@@ -241,6 +302,13 @@ impl Frame<'_> {
             st.clamped_depth += f.clamps.depth as u64;
             st.held_by_view += f.clamps.view as u64;
             st.held_by_sun += f.clamps.sun as u64;
+            if f.clamps.thickness && f.unheld.thickness > f.at.thickness {
+                st.past_thickest += 1;
+                st.thickest = extreme(st.thickest, Some(f.unheld.thickness), f32::max);
+            }
+            if f.clamps.mu_l {
+                st.lowest_mu_l = extreme(st.lowest_mu_l, Some(f.unheld.mu_l), f32::min);
+            }
             let kept = finite_cloud(self.tables, g, &self.side, &f, &self.finite).factor as f64;
             st.kept += kept;
             *light = Some(GroupLight {

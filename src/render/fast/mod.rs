@@ -356,6 +356,11 @@ impl Prepared<'_> {
         let opts = &self.frame.opts;
         let t0 = Instant::now();
         let (image, stats, sky_share) = self.frame.pixels(&Pinhole::new(camera), progress);
+        let mut warnings = self.warnings.clone();
+        warnings.extend(collector::held_warnings(
+            &stats,
+            &self.frame.tables.domain(),
+        ));
         let t_pixels = t0.elapsed().as_secs_f64();
         let shared = if first { self.maps + self.sky } else { 0.0 };
         let seconds = shared + t_pixels;
@@ -392,7 +397,7 @@ impl Prepared<'_> {
             "maps_reused": !first,
             "groups": stats,
             "sky_term_share_of_scattered_light": sky_share,
-            "warnings": self.warnings,
+            "warnings": warnings,
         });
         r
     }
