@@ -86,15 +86,20 @@ if [[ ! -x "$BIN" ]]; then
 fi
 
 failed=()
-# The Python module (python/, PyO3): built into the venv by maturin, then its tests, which
-# compare it with the CLI above and with closed forms.
+# The Python module (python/, PyO3): an abi3 wheel built by maturin, installed with pip into a
+# fresh venv as a user would install it, then its tests there, which compare it with the CLI
+# above and with closed forms.
 echo
-step "python module: maturin develop --release, python/tests/test_nephele.py"
-if ! (VIRTUAL_ENV="$VENV" PATH="$VENV/bin:$PATH" "$VENV/bin/maturin" develop --release --locked \
-        -m "$ROOT/python/Cargo.toml" --quiet \
-      && "$PY" "$ROOT/python/tests/test_nephele.py" --bin "$BIN"); then
+step "python module: an abi3 wheel (maturin build), pip install into a fresh venv, python/tests/test_nephele.py"
+WHEELS=$(mktemp -d)
+if ! ("$VENV/bin/maturin" build --release --locked -m "$ROOT/python/Cargo.toml" -o "$WHEELS" --quiet \
+      && python3 -m venv "$WHEELS/venv" \
+      && "$WHEELS/venv/bin/pip" install --quiet "$WHEELS"/nephele-*-abi3-*.whl \
+            "$(grep '^numpy==' "$REQ")" "$(grep '^scipy==' "$REQ")" \
+      && (cd "$WHEELS" && "$WHEELS/venv/bin/python" "$ROOT/python/tests/test_nephele.py" --bin "$BIN")); then
     failed+=("python module")
 fi
+rm -rf "$WHEELS"
 for check in "${CHECKS[@]}"; do
     echo
     step "scripts/$check"

@@ -20,7 +20,7 @@
 
 use nephele_runtime::embedded::MIE_10UM;
 use nephele_runtime::phase::{
-    Draine, HenyeyGreenstein, HgDraine, Rayleigh, Schlick, TableError, TabulatedTable, TwoTermHg,
+    Draine, HenyeyGreenstein, HgDraine, Rayleigh, Schlick, TabulatedTable, TwoTermHg,
     VonMisesFisher,
 };
 use nephele_runtime::presets::FIT_MAX_DIAMETER_UM;
@@ -1025,14 +1025,8 @@ pub unsafe extern "C" fn nephele_phase_tabulated(
     };
     unsafe {
         new_phase(out, || {
-            let table = TabulatedTable::<f32>::from_phase(theta, phase).map_err(|e| {
-                let why = match e {
-                    TableError::Shape => "fewer than 2 nodes",
-                    TableError::Angles => "θ not increasing from 0 to 180 degrees",
-                    TableError::Values => "a negative or non-finite p",
-                };
-                format!("tabulated phase function: {why}")
-            })?;
+            let table =
+                TabulatedTable::<f32>::from_phase(theta, phase).map_err(|e| e.to_string())?;
             Ok(Box::new(table))
         })
     }

@@ -522,6 +522,7 @@ fn the_collectors_are_the_runtimes(lines: &[&str], tab: &TransportTables) {
                         reads: 0,
                         converged: false,
                         clamps: Clamps::default(),
+                        unheld: Default::default(),
                         extinction: 0.0,
                     };
                     (zero, [1.0, f32::INFINITY, 1.0])

@@ -3,14 +3,20 @@
 //!
 //! Every answer comes from the Rust runtime itself (the batch of `nephele transport --points`,
 //! `transport::evaluate_points`, rayon across the rows), so Python sees the renderer's numbers
-//! bit for bit. Errors arrive as `ValueError` with the runtime's message; arrays of the wrong
-//! shape or dtype are refused with a message that names them.
+//! bit for bit: the tables in f32 as in C and WGSL, the phase models in f64 (C and WGSL
+//! evaluate them in f32; docs/integration.md gives the difference). Errors arrive as
+//! `ValueError` with the runtime's message; arrays of the wrong shape or dtype are refused with
+//! a message that names them.
 
 use nephele_runtime::embedded::MIE_10UM;
-use nephele_runtime::phase::{Draine, HenyeyGreenstein, HgDraine, Rayleigh, Schlick, TwoTermHg};
+use nephele_runtime::phase::{
+    Draine, HenyeyGreenstein, HgDraine, Rayleigh, Schlick, TabulatedTable, TwoTermHg,
+    VonMisesFisher,
+};
 use nephele_runtime::presets::FIT_MAX_DIAMETER_UM;
 use nephele_runtime::transport::{
-    column_names, evaluate_points, OwnedTables, Quantities, TransportTables, POINT_COLUMNS,
+    column_names, evaluate_points, OwnedTables, Quantities, SlabPoint, TransportTables,
+    POINT_COLUMNS,
 };
 use nephele_runtime::PhaseFunction;
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyUntypedArrayMethods};
@@ -18,7 +24,12 @@ use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-/// Transport tables (a `.ntt`): T, c and σ per order group and order 1 in a slab.
+/// Transport tables (a `.ntt`): T, c and sigma per order group of orders >= 2, and order 1,
+/// at points of the canonical slab (docs/conventions.md).
+///
+/// Tables() holds the shipped Mie 10 um tables, Tables(path) a file, Tables.from_bytes(buf)
+/// any buffer. evaluate(points) answers many points at once; domain says what the tables
+/// cover; outside(points) flags points beyond their grid.
 #[pyclass(frozen, module = "nephele")]
 struct Tables {
     /// The file's bytes, loaded and checked once.
@@ -127,12 +138,35 @@ impl Tables {
         }
     }
 
-    /// Tables.from_bytes(data): tables from the bytes of a `.ntt`.
+    /// Tables.from_bytes(data): tables from the bytes of a `.ntt` in any buffer: bytes,
+    /// bytearray, memoryview, a uint8 numpy array, or anything bytes() accepts. The bytes are
+    /// copied.
     #[staticmethod]
-    fn from_bytes(data: &[u8]) -> PyResult<Self> {
-        Self::checked(data.to_vec(), "(bytes)".into())
+    fn from_bytes(data: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let bytes = if let Ok(b) = data.downcast::<pyo3::types::PyBytes>() {
+            b.as_bytes().to_vec()
+        } else if let Ok(a) = data.downcast::<PyArray1<u8>>() {
+            a.readonly().as_array().to_vec()
+        } else {
+            // bytes(n) would make n zero bytes of an int: only buffers are taken.
+            let buffer = !data.is_instance_of::<pyo3::types::PyInt>();
+            let builtins = data.py().import("builtins")?;
+            let made = buffer
+                .then(|| builtins.getattr("bytes")?.call1((data,)))
+                .unwrap_or_else(|| Err(PyTypeError::new_err("an int")));
+            let b = made.map_err(|_| {
+                PyTypeError::new_err(format!(
+                    "data: the bytes of a .ntt expected (bytes, bytearray, memoryview, a uint8 \
+                     array), got {}",
+                    describe(data)
+                ))
+            })?;
+            b.downcast::<pyo3::types::PyBytes>()?.as_bytes().to_vec()
+        };
+        Self::checked(bytes, "(bytes)".into())
     }
 
+    /// repr(): where the tables came from.
     fn __repr__(&self) -> String {
         format!("nephele.Tables({})", self.source)
     }
@@ -153,15 +187,38 @@ impl Tables {
         })
     }
 
-    /// {"t": (lo, hi), "mu_l": (lo, hi)}: the grid the tables were fitted on (outside it the
-    /// parameters are held at the nearest end).
+    /// {"t": (lo, hi), "mu_l": (lo, hi), "mean_cosine": g}: the grid the tables were fitted
+    /// on, and g of their phase function. Past the thickest slab the tables continue by
+    /// diffusion theory; below the thinnest and below the lowest sun they hold the grid's end
+    /// (outside() flags such points).
     #[getter]
     fn domain<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let d = self.with(|t| t.domain())?;
+        let (d, g) = self.with(|t| (t.domain(), t.mean_cosine()))?;
         let out = PyDict::new(py);
         out.set_item("t", d.thickness)?;
         out.set_item("mu_l", d.mu_l)?;
+        out.set_item("mean_cosine", g)?;
         Ok(out)
+    }
+
+    /// outside(points) -> uint8 array of N flags: 0 within the grid, else a sum of 1 (t past
+    /// the thickest slab), 2 (t below the thinnest) and 4 (the sun below the lowest). points
+    /// as for evaluate; a point outside the slab raises ValueError.
+    fn outside<'py>(
+        &self,
+        py: Python<'py>,
+        points: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray1<u8>>> {
+        let rows = point_rows(points)?;
+        let d = self.with(|t| t.domain())?;
+        let mut flags = Vec::with_capacity(rows.len() / POINT_COLUMNS);
+        for (i, r) in rows.chunks_exact(POINT_COLUMNS).enumerate() {
+            let at = SlabPoint::from_row(&[r[0], r[1], r[2], r[3], r[4]]);
+            at.check()
+                .map_err(|e| value_error("outside", format!("row {i}: {e}")))?;
+            flags.push(d.outside(&at).bits(&d) as u8);
+        }
+        Ok(PyArray1::from_vec(py, flags))
     }
 
     /// evaluate(points, collector=False) → float32 array.
@@ -169,8 +226,10 @@ impl Tables {
     /// points: (N, 5) float32 or float64, rows of t (mfp), mu_L, depth below the lit face (mfp),
     /// mu_V (> 0: light going up), psi_V (radians, from the sun's horizontal travel). Returns
     /// (N, 1 + G): order 1 then T of each group (1/sr), or with collector=True (N, 1 + 4G):
-    /// order 1 then T, c_x, c_z, sigma of each group (mfp). Points outside the slab answer 0.
-    /// The rows are shared among threads; the answers do not depend on how many.
+    /// order 1 then T, c_x, c_z, sigma of each group (mfp). A point outside the slab (t <= 0,
+    /// mu_L outside (0, 1], depth outside [0, t], |mu_V| > 1, NaN, inf) raises ValueError
+    /// naming its row and coordinate. The rows are shared among threads; the answers do not
+    /// depend on how many.
     #[pyo3(signature = (points, collector=false))]
     fn evaluate<'py>(
         &self,
@@ -217,6 +276,9 @@ fn phase_model(
     kw: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Box<dyn PhaseFunction<f64> + Send + Sync>> {
     let get = |name: &str| -> PyResult<Option<f64>> {
+        if model == "tabulated" {
+            return Ok(None);
+        }
         match kw.map(|d| d.get_item(name)).transpose()?.flatten() {
             Some(v) => Ok(Some(v.extract::<f64>().map_err(|_| {
                 PyTypeError::new_err(format!("{model}: {name} must be a number"))
@@ -312,10 +374,38 @@ fn phase_model(
             known(&["k"])?;
             Box::new(Schlick::new(g_of("k")?))
         }
+        "vmf" => {
+            known(&["kappa"])?;
+            let k = need("kappa")?;
+            if !(k >= 0.0 && k.is_finite()) {
+                return Err(PyValueError::new_err(format!(
+                    "vmf: kappa = {k} must be finite and >= 0"
+                )));
+            }
+            Box::new(VonMisesFisher::new(k))
+        }
+        "tabulated" => {
+            known(&["theta", "p"])?;
+            let array = |name: &str| -> PyResult<Vec<f64>> {
+                let item = kw
+                    .and_then(|d| d.get_item(name).ok().flatten())
+                    .ok_or_else(|| {
+                        PyValueError::new_err(format!(
+                            "tabulated needs {name}= (theta: angles in degrees from 0 to 180, \
+                         p: the phase function there, 1/sr, any normalisation)"
+                        ))
+                    })?;
+                values_1d(&format!("tabulated: {name}"), &item)
+            };
+            let table = TabulatedTable::<f64>::from_phase(&array("theta")?, &array("p")?)
+                .map_err(|e| PyValueError::new_err(e.to_string()))?;
+            Box::new(table)
+        }
         other => {
             return Err(PyValueError::new_err(format!(
-            "unknown phase model '{other}' (hg, draine, two_term_hg, hg_draine, rayleigh, schlick)"
-        )))
+                "unknown phase model '{other}' (hg, draine, two_term_hg, hg_draine, rayleigh, \
+                 schlick, vmf, tabulated)"
+            )))
         }
     })
 }
@@ -342,7 +432,8 @@ fn values_1d(what: &str, x: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
 /// phase_eval(model, mu, **params) → p(mu) (1/sr), float64; mu = cos of the scattering angle
 /// (1 forward). Models and their parameters: hg (g), draine (g, alpha), two_term_hg (g, g2, w:
 /// w HG(g) + (1 - w) HG(g2)), hg_draine (diameter in um — Jendersie & d'Eon's curves — or g_hg,
-/// g_d, alpha, w_d), rayleigh, schlick (k).
+/// g_d, alpha, w_d), rayleigh, schlick (k), vmf (kappa), tabulated (theta: angles in degrees
+/// from 0 to 180, p: the phase function there, 1/sr, any normalisation; normalised here).
 #[pyfunction]
 #[pyo3(signature = (model, mu, **params))]
 fn phase_eval<'py>(
@@ -385,7 +476,13 @@ fn map_values<'py>(
     Ok(PyArray1::from_vec(py, out))
 }
 
-/// The module.
+/// nephele-runtime from Python: cloud transport tables and phase models of water droplets on
+/// numpy arrays.
+///
+/// Tables: the transport tables (T, c, sigma per order group, order 1) at many points of the
+/// canonical slab at once; phase_eval and phase_sample: the phase models, evaluated and
+/// sampled exactly. psi_V is in radians here, as in C and WGSL (nephele transport takes
+/// degrees, as --psi-deg). docs/integration.md in the repository has the details.
 #[pymodule]
 fn nephele(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Tables>()?;

@@ -25,7 +25,8 @@ def points(n: int, seed: int = 5) -> np.ndarray:
     t = 0.5 * 256.0 ** rng.random(n)
     pts = np.stack([t, 0.125 + 0.875 * rng.random(n), t * rng.random(n), 2 * rng.random(n) - 1,
                     np.pi * (2 * rng.random(n) - 1)], axis=1)
-    pts[:4] = [[4, 0.5, 0, -0.3, 0.1], [4, 0.5, 4, 0.3, 3.0], [4, 0.5, 2, 0.0, 0.0], [4, 0.5, 5, 0.3, 0.0]]
+    pts[:4] = [[4, 0.5, 0, -0.3, 0.1], [4, 0.5, 4, 0.3, 3.0], [4, 0.5, 2, 0.0, 0.0],
+               [500, 0.05, 10, 0.5, 0.7]]  # past the thickest slab, the sun below the lowest
     return pts
 
 
@@ -51,9 +52,12 @@ def test_transport_matches_the_cli_batch(binary: Path) -> None:
             assert np.array_equal(got.view(np.uint32), cli.view(np.uint32)), "module != CLI"
             names = json.loads((Path(tmp) / "a.json").read_text())["columns"]
             assert names == tab.columns(collector=collector)
-    assert got[3].max() == 0.0, "a point below the slab answers 0"
+            flags = np.load(Path(tmp) / "a.outside.npy")
+            assert np.array_equal(tab.outside(same), flags), "outside flags != CLI"
+    assert tab.outside(pts)[3] == 1 | 4 and tab.outside(pts)[:3].max() == 0
     assert tab.groups == 8 and tab.group_first_orders[0] == 2.0
-    assert tab.domain["t"] == (0.5, 128.0)
+    assert tab.domain["t"] == (0.5, 128.0) and tab.domain["mu_l"] == (0.125, 1.0)
+    assert 0.8 < tab.domain["mean_cosine"] < 0.9
     f32 = tab.evaluate(pts.astype(np.float32))
     assert np.array_equal(f32, tab.evaluate(pts)), "float32 and float64 input (f32 inside)"
 
@@ -72,7 +76,22 @@ def test_errors_are_exceptions_with_the_runtimes_message() -> None:
         (lambda: nephele.phase_eval("mie", np.zeros(3)), ValueError, "unknown phase model"),
         (lambda: nephele.phase_eval("hg", np.array([2.0]), g=0.5), ValueError, "outside [-1, 1]"),
         (lambda: nephele.phase_sample("hg", np.zeros((2, 2)), g=0.5), TypeError, "1-D"),
+        (lambda: nephele.phase_eval("vmf", np.zeros(3), kappa=-1.0), ValueError, "kappa = -1"),
+        (lambda: nephele.phase_eval("tabulated", np.zeros(3), theta=np.array([0.0, 90.0]),
+                                    p=np.ones(2)), ValueError, "not increasing from 0 to 180"),
+        (lambda: nephele.phase_eval("tabulated", np.zeros(3)), ValueError, "tabulated needs theta="),
+        (lambda: nephele.Tables.from_bytes(42), TypeError, "the bytes of a .ntt expected"),
     ]
+    # Points outside the slab raise, naming the row and the coordinate, from every method.
+    good = [4.0, 0.5, 1.0, 0.3, 0.0]
+    for bad, says in [([4, 1.5, 1, 0.3, 0], "row 1: mu_L = 1.5 is not a sun cosine"),
+                      ([4, 0.5, 1, 2.0, 0], "row 1: mu_V = 2 is not a cosine"),
+                      ([4, np.nan, 1, 0.3, 0], "row 1: mu_L = NaN"),
+                      ([np.inf, 0.5, 1, 0.3, 0], "row 1: t = inf mfp is not a thickness"),
+                      ([4, 0.5, 5, 0.3, 0], "row 1: depth = 5 mfp is outside the slab"),
+                      ([4, 0.5, 1, 0.3, -np.inf], "row 1: psi_V = -inf rad")]:
+        cases.append((lambda b=bad: tab.evaluate(np.array([good, b])), ValueError, says))
+        cases.append((lambda b=bad: tab.outside(np.array([good, b])), ValueError, says))
     for call, kind, text in cases:
         try:
             call()
@@ -80,13 +99,27 @@ def test_errors_are_exceptions_with_the_runtimes_message() -> None:
             assert text in str(e), f"{text!r} not in {e!r}"
         else:
             raise AssertionError(f"no {kind.__name__} for {text!r}")
-    truncated = (REPO / "runtime/tables/mie10um/transport.ntt").read_bytes()[:1000]
+    data = (REPO / "runtime/tables/mie10um/transport.ntt").read_bytes()
     try:
-        nephele.Tables.from_bytes(truncated)
+        nephele.Tables.from_bytes(data[:1000])
     except ValueError as e:
-        assert "transport tables" in str(e)
+        assert "truncated transport tables" in str(e), e
     else:
         raise AssertionError("truncated tables accepted")
+    # Any buffer holds tables: bytes, bytearray, memoryview, a uint8 array.
+    pts = points(100)
+    want = nephele.Tables(str(REPO / "runtime/tables/mie10um/transport.ntt")).evaluate(pts)
+    for buf in (data, bytearray(data), memoryview(data), np.frombuffer(data, dtype=np.uint8)):
+        got = nephele.Tables.from_bytes(buf).evaluate(pts)
+        assert np.array_equal(got, want), type(buf)
+
+
+def test_every_public_name_has_a_docstring() -> None:
+    assert nephele.__doc__ and "transport tables" in nephele.__doc__, nephele.__doc__
+    names = [nephele.Tables, nephele.phase_eval, nephele.phase_sample]
+    names += [getattr(nephele.Tables, m) for m in dir(nephele.Tables) if not m.startswith("_")]
+    for obj in names:
+        assert obj.__doc__ and len(obj.__doc__.strip()) > 20, f"{obj!r} has no docstring"
 
 
 def test_phase_models_against_closed_forms_and_chi_square() -> None:
@@ -94,10 +127,19 @@ def test_phase_models_against_closed_forms_and_chi_square() -> None:
     g = 0.7
     hg = (1 - g * g) / (4 * np.pi * (1 + g * g - 2 * g * mu) ** 1.5)
     assert np.allclose(nephele.phase_eval("hg", mu, g=g), hg, rtol=1e-13, atol=0)
+    k = 8.0
+    vmf = k * np.exp(k * (mu - 1)) / (2 * np.pi * (1 - np.exp(-2 * k)))
+    assert np.allclose(nephele.phase_eval("vmf", mu, kappa=k), vmf, rtol=1e-12, atol=0)
+    # A tabulated HG (g = 0.7, every 0.25 degrees) is HG within its linear interpolation.
+    theta_hg = np.linspace(0.0, 180.0, 721)
+    p_hg = (1 - g * g) / (4 * np.pi * (1 + g * g - 2 * g * np.cos(np.radians(theta_hg))) ** 1.5)
+    tab = nephele.phase_eval("tabulated", mu, theta=theta_hg, p=p_hg)
+    assert np.allclose(tab, hg, rtol=2e-3, atol=0), np.max(np.abs(tab / hg - 1))
     rng = np.random.default_rng(9)
     for model, params in [("hg", {"g": 0.7}), ("hg_draine", {"diameter": 10.0}),
                           ("two_term_hg", {"g": 0.9, "g2": -0.3, "w": 0.8}),
-                          ("draine", {"g": 0.5, "alpha": 1.0}), ("rayleigh", {}), ("schlick", {"k": 0.6})]:
+                          ("draine", {"g": 0.5, "alpha": 1.0}), ("rayleigh", {}), ("schlick", {"k": 0.6}),
+                          ("vmf", {"kappa": 8.0}), ("tabulated", {"theta": theta_hg, "p": p_hg})]:
         # Normalised over the sphere.
         x, w = np.polynomial.legendre.leggauss(400)
         cuts = [-1.0, 0.99, 0.9999, 1.0]  # finer toward the forward peak
@@ -126,6 +168,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     test_transport_matches_the_cli_batch(args.bin)
     test_errors_are_exceptions_with_the_runtimes_message()
+    test_every_public_name_has_a_docstring()
     test_phase_models_against_closed_forms_and_chi_square()
     rate = speed()
     print(f"python module: all tests pass ({nephele.__version__}); T of all groups at {rate:.2e} points/s")

@@ -42,6 +42,16 @@ pub enum TableError {
     Values,
 }
 
+impl core::fmt::Display for TableError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            TableError::Shape => "tabulated phase function: fewer than 2 nodes, or angles and values of different lengths",
+            TableError::Angles => "tabulated phase function: θ not increasing from 0 to 180 degrees",
+            TableError::Values => "tabulated phase function: a negative or non-finite p",
+        })
+    }
+}
+
 impl<'a, F: Real> Tabulated<'a, F> {
     /// Wraps stored arrays after checking their shape and ranges.
     pub fn from_parts(theta: &'a [F], f: &'a [F], cdf: &'a [F]) -> Result<Self, TableError> {
