@@ -1015,3 +1015,65 @@ fn render_writes_its_outputs_and_refuses_bad_scenes() {
         assert!(!out.exists(), "{needle}: files were written");
     }
 }
+
+/// `nephele export-gpu`: the WGSL port's storage buffer and index uniform as little-endian
+/// files (the words `nephele_wgsl::ntt_for_gpu` lays out), the shader bound to the group and
+/// bindings asked for, and a layout.json that names each binding with its size.
+#[test]
+fn export_gpu_writes_the_buffers_an_engine_uploads() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("gpu");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_nephele"))
+        .args([
+            "export-gpu",
+            "--out",
+            out.to_str().unwrap(),
+            "--group",
+            "1",
+            "--binding",
+            "2",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let gpu = nephele_wgsl::ntt_for_gpu(nephele_runtime::embedded::MIE_10UM).unwrap();
+    let le = |w: &[u32]| w.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
+    assert_eq!(
+        std::fs::read(out.join("tables.bin")).unwrap(),
+        le(&gpu.words)
+    );
+    assert_eq!(
+        std::fs::read(out.join("index.bin")).unwrap(),
+        le(&gpu.index)
+    );
+    let wgsl = std::fs::read_to_string(out.join("nephele_tables.wgsl")).unwrap();
+    assert_eq!(wgsl, nephele_wgsl::tables(1, 2));
+    assert!(wgsl.contains("@group(1) @binding(2)") && wgsl.contains("@group(1) @binding(3)"));
+    let layout: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("layout.json")).unwrap()).unwrap();
+    assert_eq!(layout["group"], 1);
+    assert_eq!(layout["bindings"][0]["binding"], 2);
+    assert_eq!(layout["bindings"][0]["bytes"], 4 * gpu.words.len());
+    assert_eq!(layout["bindings"][1]["binding"], 3);
+    assert_eq!(
+        layout["bindings"][1]["min_binding_size"],
+        4 * gpu.index.len()
+    );
+    // Not tables: one error line naming the file, nothing written.
+    let bad = dir.path().join("bad.ntt");
+    std::fs::write(&bad, b"not tables").unwrap();
+    let out2 = dir.path().join("gpu2");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_nephele"))
+        .args([
+            "export-gpu",
+            "--tables",
+            bad.to_str().unwrap(),
+            "--out",
+            out2.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("bad.ntt"));
+    assert!(!out2.exists());
+}

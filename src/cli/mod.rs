@@ -5,6 +5,7 @@
 
 mod compare;
 mod compress;
+mod export_gpu;
 mod fit;
 mod mie;
 mod phase;
@@ -59,6 +60,9 @@ enum Command {
     /// Evaluate compressed transport tables (transport.ntt) at one point: T per order group, as JSON.
     #[command(allow_negative_numbers = true)]
     Transport(transport::TransportArgs),
+    /// Lay transport tables out for the GPU: the WGSL port's storage buffer and index uniform as little-endian files, the WGSL source bound to your group and bindings, and layout.json (for engines in any language).
+    #[command(name = "export-gpu")]
+    ExportGpu(export_gpu::ExportGpuArgs),
     /// Render a scene (slab, cloud, voxels, fog; lights and a ground for the path tracer) with the path tracer or a fast method (collector, single, octaves): image and per-order AOVs.
     #[command(allow_negative_numbers = true)]
     Render(render::RenderArgs),
@@ -210,6 +214,7 @@ pub fn run(cli: Cli, matches: &ArgMatches) -> Result<()> {
         Some(Command::Merge(args)) => slab::merge_shards(args),
         Some(Command::Compress(args)) => compress::run(args, sub),
         Some(Command::Transport(args)) => transport::run(args),
+        Some(Command::ExportGpu(args)) => export_gpu::run(args),
         Some(Command::Render(args)) => render::run(args, sub),
         Some(Command::Compare(args)) => compare::run(args),
         None => pipeline::run(cli.full),
