@@ -115,8 +115,18 @@ fn nc_part(g: u32, stat: u32, cols: vec2<u32>, r: NtT, p_x: array<f32, 16>) -> f
     return sum;
 }
 
-// T, c and σ of group g at `at` (the runtime's `evaluate`).
+// T, c and σ of group g at `at` (the runtime's `evaluate`); past the thickest slab T and σ
+// continued by diffusion theory, c held.
 fn evaluate(g: u32, at: SlabPoint) -> NepheleTransport {
+    let c = nt_continued(at);
+    var out = nc_evaluate(g, c.at);
+    out.t *= nt_diffuse_scale(g, c);
+    out.sigma *= select(c.spread, c.spread_diffuse, g + 1u == nephele_ntt_index.groups);
+    return out;
+}
+
+// T, c and σ of group g at a point within the grid's thicknesses.
+fn nc_evaluate(g: u32, at: SlabPoint) -> NepheleTransport {
     let x = nephele_ntt_index;
     let r = nt_transport(g, at);
     var out = NepheleTransport(r.t, 0.0, 0.0, 0.0);

@@ -122,7 +122,8 @@ pub fn ntt_for_gpu(bytes: &[u8]) -> Result<NttGpu, String> {
     use nephele_runtime::fitting::log_additive::LogAdditive;
     use nephele_runtime::fitting::{names, CollectorForm, Statistic};
     let err = |e: &dyn std::fmt::Display| format!("transport tables: {e}");
-    nephele_runtime::transport::TransportTables::from_bytes(bytes).map_err(|e| err(&e))?;
+    let tables =
+        nephele_runtime::transport::TransportTables::from_bytes(bytes).map_err(|e| err(&e))?;
     let c = Container::from_bytes(bytes).map_err(|e| err(&e))?;
     let mut words = Vec::new();
     let mut word_of = |name: &str| put(&mut words, &c, name);
@@ -252,6 +253,9 @@ pub fn ntt_for_gpu(bytes: &[u8]) -> Result<NttGpu, String> {
     let tail = index.len() + collector.len();
     all[tail] = group_first;
     all[tail + 1..tail + 1 + halo.len()].copy_from_slice(&halo);
+    // g of the stored phase function, as the runtime computes it at load (the continuation
+    // past the thickest slab).
+    all[tail + 1 + halo.len()] = tables.mean_cosine().to_bits();
     Ok(NttGpu { words, index: all })
 }
 

@@ -51,7 +51,7 @@ struct NttIndex {
     halo: u32,         // h over [group, thickness, μ_L, plane, annulus]
     halo_groups: u32,  // the groups the halo covers (0: none)
     halo_planes: u32,
-    pad0: u32,
+    mean_cosine: u32,  // g of the stored phase function (f32 bits), for the continuation past t_max
     pad1: u32,
 }
 

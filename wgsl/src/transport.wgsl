@@ -494,7 +494,62 @@ fn nt_transport(g: u32, at: SlabPoint) -> NtT {
     return r;
 }
 
-// T (sr⁻¹) of group g at `at`; 0 where the tables resolve nothing or g is not a group.
+// A point of a slab thicker than the tables' thickest, continued into it by diffusion theory
+// (the runtime's transport/thick.rs, step for step): where it reads the tables, and how T and
+// σ scale. Within the grid: the point itself, every scale 1.
+struct NtContinued {
+    at: SlabPoint,
+    diffuse: f32,         // φ_t(d)/φ_tmax(d'): the open-ended group's T; the others' min(1, it)
+    spread: f32,          // σ's scale for the groups of few orders, d/d' past t_max/2
+    spread_diffuse: f32,  // the open-ended group's, √(t d / (t_max d'))
+}
+
+// The diffusion fluence at depth z of a slab t thick lit at depth z_s, zero at z_e outside
+// each face (unnormalised).
+fn nt_fluence(z: f32, t: f32, z_s: f32, z_e: f32) -> f32 {
+    return (min(z, z_s) + z_e) * (t + z_e - max(z, z_s)) / (t + 2.0 * z_e);
+}
+
+fn nt_continued(at: SlabPoint) -> NtContinued {
+    let x = nephele_ntt_index;
+    var c = NtContinued(at, 1.0, 1.0, 1.0);
+    let t_max = ntt_f32(x.thickness + x.n_t - 1u);
+    let t = at.thickness;
+    if !(t > t_max) || !in_slab(at) {
+        return c;
+    }
+    let half = 0.5 * t_max;
+    let d = at.depth;
+    let h = at.thickness - at.depth;
+    var depth = half;
+    if d <= half {
+        depth = d;
+    } else if h <= half {
+        depth = t_max - h;
+    }
+    let l = 1.0 / max(1.0 - bitcast<f32>(x.mean_cosine), 1e-3);
+    let z_s = at.mu_l * l;
+    let z_e = 2.0 / 3.0 * l;
+    c.diffuse = nt_fluence(d, t, z_s, z_e) / nt_fluence(depth, t_max, z_s, z_e);
+    if depth > 0.0 && d > half {
+        c.spread = d / depth;
+    }
+    c.spread_diffuse = sqrt(t / t_max * select(1.0, d / depth, depth > 0.0));
+    c.at = SlabPoint(depth, t_max, at.mu_v, at.psi_v, at.mu_l);
+    return c;
+}
+
+// How group g's T scales past the thickest slab.
+fn nt_diffuse_scale(g: u32, c: NtContinued) -> f32 {
+    if g + 1u == nephele_ntt_index.groups {
+        return c.diffuse;
+    }
+    return min(c.diffuse, 1.0);
+}
+
+// T (sr⁻¹) of group g at `at`; 0 where the tables resolve nothing or g is not a group. Past
+// the thickest slab, continued by diffusion theory (nt_continued).
 fn transport(g: u32, at: SlabPoint) -> f32 {
-    return nt_transport(g, at).t;
+    let c = nt_continued(at);
+    return nt_transport(g, c.at).t * nt_diffuse_scale(g, c);
 }

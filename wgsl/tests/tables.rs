@@ -169,13 +169,50 @@ impl Wide {
         }
     }
 
-    /// T of group `g` at `at`.
+    /// T of group `g` at `at`; past the thickest slab continued as the runtime does
+    /// (runtime/src/transport/thick.rs), in f64 with g of the tables' phase function.
     fn transport(&self, g: usize, at: &SlabPoint<f32>) -> f64 {
+        let p = at.to_f64();
+        let t_max = *self.thickness.last().unwrap();
+        if !(p.thickness > t_max) || !(p.depth >= 0.0 && p.depth <= p.thickness) || !(p.mu_l > 0.0)
+        {
+            return self.transport_within(g, &p);
+        }
+        let tables = nephele_runtime::transport::TransportTables::from_bytes(SHIPPED).unwrap();
+        let g_mean = tables.mean_cosine() as f64;
+        let l: f64 = 1.0 / (1.0 - g_mean).max(1e-3);
+        let (z_s, z_e) = (p.mu_l * l, 2.0 / 3.0 * l);
+        let fluence =
+            |z: f64, t: f64| (z.min(z_s) + z_e) * (t + z_e - z.max(z_s)) / (t + 2.0 * z_e);
+        let (half, d, h) = (0.5 * t_max, p.depth, p.thickness - p.depth);
+        let depth = if d <= half {
+            d
+        } else if h <= half {
+            t_max - h
+        } else {
+            half
+        };
+        let diffuse = fluence(d, p.thickness) / fluence(depth, t_max);
+        let scale = if g + 1 == self.groups {
+            diffuse
+        } else {
+            diffuse.min(1.0)
+        };
+        let inside = SlabPoint {
+            thickness: t_max,
+            depth,
+            ..p
+        };
+        self.transport_within(g, &inside) * scale
+    }
+
+    /// T of group `g` at `p` within the grid's thicknesses (extrapolated beyond).
+    fn transport_within(&self, g: usize, p: &SlabPoint<f64>) -> f64 {
         use nephele_runtime::fitting::{
             depth_polynomial, ln_boundary, ln_t_position, unpack_u_range, Cell, FittedDepths,
             Legendre, Lerp, CEILING_FACTOR, MAX_LEGENDRE,
         };
-        let p = at.to_f64();
+        let p = *p;
         let (t, d) = (p.thickness, p.depth);
         if !(t > 0.0 && d >= 0.0 && d <= t) {
             return 0.0;
