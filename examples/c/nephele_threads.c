@@ -1,7 +1,8 @@
 /* One tables handle shared by the caller's threads: nephele_evaluate_batch over N points on one
- * thread, then over the same points split among T threads, each on its own range. Checks that
- * every answer is the same bits, and prints the points per second of each (the library starts
- * no threads of its own; this is how a renderer shares a batch).
+ * thread, then over the same points shared among T threads, each claiming chunks of 1024
+ * points from a shared counter until none is left (so that a thread slowed by the machine
+ * takes fewer). Checks that every answer is the same bits, and prints the points per second
+ * of each (the library starts no threads of its own; this is how a renderer shares a batch).
  *
  *   cc -O2 -I capi/include examples/c/nephele_threads.c target/release/libnephele_c.a \
  *      -lm -lpthread -ldl -o threads
@@ -21,18 +22,27 @@
 
 #include "nephele.h"
 
+enum { CHUNK = 1024 };
+
 typedef struct {
     const NepheleTables *tables;
     const NepheleSlabPoint *points;
     NepheleTransport *out;
-    size_t first, count, groups;
+    size_t count, groups;
+    size_t *next; /* the first point not yet claimed, shared */
     NepheleStatus status;
 } Range;
 
 static void *run_range(void *arg) {
     Range *r = arg;
-    r->status = nephele_evaluate_batch(r->tables, r->points + r->first, r->count, 0,
-                                       r->out + r->first * r->groups, 0, NULL, NULL);
+    r->status = NEPHELE_STATUS_OK;
+    for (;;) {
+        size_t first = __atomic_fetch_add(r->next, (size_t)CHUNK, __ATOMIC_RELAXED);
+        if (first >= r->count || r->status != NEPHELE_STATUS_OK) break;
+        size_t n = r->count - first < CHUNK ? r->count - first : CHUNK;
+        r->status = nephele_evaluate_batch(r->tables, r->points + first, n, 0,
+                                           r->out + first * r->groups, 0, NULL, NULL);
+    }
     return NULL;
 }
 
@@ -47,11 +57,12 @@ static double timed(Range *proto, size_t n, int threads) {
     {
         pthread_t ids[64];
         Range ranges[64];
+        size_t next = 0;
         double start = now();
         for (int i = 0; i < threads; i++) {
             ranges[i] = *proto;
-            ranges[i].first = n * (size_t)i / (size_t)threads;
-            ranges[i].count = n * (size_t)(i + 1) / (size_t)threads - ranges[i].first;
+            ranges[i].count = n;
+            ranges[i].next = &next;
             pthread_create(&ids[i], NULL, run_range, &ranges[i]);
         }
         for (int i = 0; i < threads; i++) {
@@ -102,7 +113,7 @@ int main(int argc, char **argv) {
     NepheleTransport *one = malloc(n * g * sizeof *one), *many = malloc(n * g * sizeof *many);
     /* One thread and T threads alternately, the fastest of each kept: a machine whose clock
        drifts slows both alike. */
-    Range single = {tables, points, one, 0, n, g, NEPHELE_STATUS_OK}, split = single;
+    Range single = {tables, points, one, n, g, NULL, NEPHELE_STATUS_OK}, split = single;
     split.out = many;
     double t1 = INFINITY, tn = INFINITY;
     for (int k = 0; k < rounds; k++) {
