@@ -527,9 +527,9 @@ fn nt_continued(at: SlabPoint) -> NtContinued {
     } else if h <= half {
         depth = t_max - h;
     }
-    let l = 1.0 / max(1.0 - bitcast<f32>(x.mean_cosine), 1e-3);
-    let z_s = at.mu_l * l;
-    let z_e = 2.0 / 3.0 * l;
+    let g_mean = min(bitcast<f32>(x.mean_cosine), 0.999);
+    let z_s = at.mu_l / (1.0 - g_mean);
+    let z_e = 2.0 / (3.0 * (1.0 - g_mean));
     c.diffuse = nt_fluence(d, t, z_s, z_e) / nt_fluence(depth, t_max, z_s, z_e);
     if depth > 0.0 && d > half {
         c.spread = d / depth;

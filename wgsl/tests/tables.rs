@@ -179,9 +179,8 @@ impl Wide {
             return self.transport_within(g, &p);
         }
         let tables = nephele_runtime::transport::TransportTables::from_bytes(SHIPPED).unwrap();
-        let g_mean = tables.mean_cosine() as f64;
-        let l: f64 = 1.0 / (1.0 - g_mean).max(1e-3);
-        let (z_s, z_e) = (p.mu_l * l, 2.0 / 3.0 * l);
+        let g_mean = (tables.mean_cosine() as f64).min(0.999);
+        let (z_s, z_e) = (p.mu_l / (1.0 - g_mean), 2.0 / (3.0 * (1.0 - g_mean)));
         let fluence =
             |z: f64, t: f64| (z.min(z_s) + z_e) * (t + z_e - z.max(z_s)) / (t + 2.0 * z_e);
         let (half, d, h) = (0.5 * t_max, p.depth, p.thickness - p.depth);

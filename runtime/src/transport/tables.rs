@@ -230,9 +230,8 @@ pub struct TransportTables<'a> {
     pub(super) phase_theta: ArrayView<'a>,
     pub(super) phase: ArrayView<'a>,
     pub(super) halo: Option<Halo<'a>>,
-    /// g of the stored phase function ([`Self::mean_cosine`]); 1/(1 − g) is the transport
-    /// mean free path by which the tables continue past their thickest slab
-    /// ([`super::thick`]).
+    /// g of the stored phase function ([`Self::mean_cosine`]), by which the tables continue
+    /// past their thickest slab ([`super::thick`]).
     pub(super) mean_cosine: f32,
 }
 
@@ -405,7 +404,7 @@ impl<'a> TransportTables<'a> {
     fn continued(&self, at: &SlabPoint<f32>) -> Option<Continued> {
         let t_max = self.thickness.get(self.thickness.len().max(1) - 1)?;
         at.in_slab()
-            .then(|| continued(at, t_max, 1.0 / (1.0 - self.mean_cosine).max(1e-3)))
+            .then(|| continued(at, t_max, self.mean_cosine))
             .flatten()
     }
 

@@ -3,7 +3,7 @@
 //! Far from both faces light is diffuse, and diffusion theory says how it changes with t. A
 //! collimated beam lit from above acts as a source at depth z_s = μ_L ℓ (ℓ = 1/(1 − g) the
 //! transport mean free path, in mfp); the fluence vanishes at the extrapolated boundaries
-//! z_e = 2ℓ/3 outside each face. Between them the fluence is the slab's Green's function,
+//! z_e = 2ℓ/3 outside each face ([`super::leakage::extrapolation_length`]). Between them the fluence is the slab's Green's function,
 //!
 //!   φ_t(z) = (min(z, z_s) + z_e) (t + z_e − max(z, z_s)) / (t + 2 z_e),
 //!
@@ -30,6 +30,7 @@
 //! t = 256, 384 and 512 (docs/compress.md, "Past the thickest slab").
 
 use super::geometry::SlabPoint;
+use super::leakage::extrapolation_length;
 use crate::real::Real;
 
 /// Where a point past the grid reads the tables, and how its values scale.
@@ -47,9 +48,9 @@ pub(super) struct Continued {
 }
 
 /// The point `at` of a slab thicker than `t_max` continued into the slab `t_max` thick, the
-/// tables' phase function of transport mean free path `transport_mfp` (mfp); None when `at`
-/// is within the grid's thicknesses (or its t is not finite).
-pub(super) fn continued(at: &SlabPoint<f32>, t_max: f32, transport_mfp: f32) -> Option<Continued> {
+/// tables' phase function of mean cosine `g`; None when `at` is within the grid's thicknesses
+/// (or its t is not finite).
+pub(super) fn continued(at: &SlabPoint<f32>, t_max: f32, g: f32) -> Option<Continued> {
     let t = at.thickness;
     if !(t > t_max) || !t.is_finite() {
         return None;
@@ -63,8 +64,10 @@ pub(super) fn continued(at: &SlabPoint<f32>, t_max: f32, transport_mfp: f32) -> 
     } else {
         half
     };
-    let z_s = at.mu_l * transport_mfp;
-    let z_e = 2.0 / 3.0 * transport_mfp;
+    // g < 1 for any phase function that scatters at all; held so that ℓ stays finite.
+    let g = g.min(0.999);
+    let z_s = at.mu_l / (1.0 - g);
+    let z_e = extrapolation_length(g);
     let diffuse = fluence(d, t, z_s, z_e) / fluence(depth, t_max, z_s, z_e);
     let spread = if depth > 0.0 && d > half {
         d / depth
@@ -105,13 +108,13 @@ mod tests {
 
     #[test]
     fn within_the_grid_nothing_changes() {
-        assert_eq!(continued(&point(128.0, 3.0), 128.0, 7.0), None);
-        assert_eq!(continued(&point(f32::INFINITY, 3.0), 128.0, 7.0), None);
+        assert_eq!(continued(&point(128.0, 3.0), 128.0, 0.85), None);
+        assert_eq!(continued(&point(f32::INFINITY, 3.0), 128.0, 0.85), None);
     }
 
     #[test]
     fn the_three_regions_meet_continuously() {
-        let (t_max, l) = (128.0, 7.0);
+        let (t_max, l) = (128.0, 0.85);
         for t in [160.0f32, 500.0, 1e4] {
             // Across d = t_max/2 and across t − d = t_max/2: the diffuse factor and d' join.
             for edge in [64.0f32, t - 64.0] {
@@ -134,11 +137,12 @@ mod tests {
 
     #[test]
     fn near_the_lit_face_the_diffuse_light_grows_a_little_and_transmission_falls() {
-        let (t_max, l) = (128.0, 7.0);
-        let top = continued(&point(1000.0, 2.0), t_max, l).unwrap();
+        let (t_max, g) = (128.0, 0.85);
+        let l = 1.0 / (1.0 - g);
+        let top = continued(&point(1000.0, 2.0), t_max, g).unwrap();
         assert_eq!(top.at.depth, 2.0);
         assert!(top.diffuse > 1.0 && top.diffuse < 1.15, "{}", top.diffuse);
-        let bottom = continued(&point(1000.0, 1000.0), t_max, l).unwrap();
+        let bottom = continued(&point(1000.0, 1000.0), t_max, g).unwrap();
         assert_eq!(bottom.at.depth, 128.0);
         // Transmission ∝ 1/(t + 2 z_e).
         let z_e = 2.0 / 3.0 * l;
