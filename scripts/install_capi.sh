@@ -6,7 +6,7 @@
 #   PREFIX/lib/pkgconfig/nephele.pc          pkg-config --cflags --libs nephele
 #   PREFIX/lib/cmake/nephele/                find_package(nephele 0.1 REQUIRED), then link
 #                                            nephele::nephele (shared) or nephele::nephele_static
-# Usage: bash scripts/install_capi.sh PREFIX      (docs/integration.md, "The C contract")
+# Usage: bash scripts/install_capi.sh PREFIX      (docs/integration.md, "From C and C++")
 set -euo pipefail
 prefix=${1:?"usage: bash scripts/install_capi.sh PREFIX (e.g. \$HOME/.local or /usr/local)"}
 cd "$(dirname "$0")/.."

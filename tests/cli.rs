@@ -1047,7 +1047,7 @@ fn export_gpu_writes_the_buffers_an_engine_uploads() {
         le(&gpu.index)
     );
     let wgsl = std::fs::read_to_string(out.join("nephele_tables.wgsl")).unwrap();
-    assert_eq!(wgsl, nephele_wgsl::tables(1, 2));
+    assert_eq!(wgsl, nephele_wgsl::tables_module(1, 2));
     assert!(wgsl.contains("@group(1) @binding(2)") && wgsl.contains("@group(1) @binding(3)"));
     let layout: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("layout.json")).unwrap()).unwrap();

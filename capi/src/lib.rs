@@ -3,9 +3,10 @@
 //! `scripts/install_capi.sh PREFIX`, found by pkg-config and CMake's `find_package`).
 //!
 //! The contract (the header's preamble states it for C readers, cbindgen.toml):
-//! - Every function returns a [`NepheleStatus`]. On anything but `NEPHELE_STATUS_OK` the
-//!   message is in [`nephele_last_error`] (per thread) and the outputs are untouched; a call
-//!   that succeeds clears the message.
+//! - Every function that can fail returns a [`NepheleStatus`]. On anything but
+//!   `NEPHELE_STATUS_OK` the message is in [`nephele_last_error`] (per thread) and the outputs
+//!   are untouched (a panic, a bug, may leave a batch's outputs partly written); a call that
+//!   succeeds clears the message.
 //! - Null pointers, corrupt or truncated tables, unknown format versions, groups out of
 //!   range, points outside the slab and parameters outside a model's domain are reported,
 //!   never undefined behaviour; a panic inside the runtime (a bug) is caught at the boundary
@@ -702,7 +703,8 @@ impl BatchLayout {
 ///
 /// # Safety
 /// `points` is valid for `count` reads at `point_stride`, `out` for `count` rows of writes
-/// at `out_stride`, `order1` and `outside` (when not null) for `count` writes.
+/// at `out_stride`, `order1` and `outside` (when not null) for `count` writes; no output
+/// overlaps the points.
 #[no_mangle]
 pub unsafe extern "C" fn nephele_evaluate_batch(
     tables: *const NepheleTables,

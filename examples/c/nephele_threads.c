@@ -11,7 +11,7 @@
  * Arguments: tables, points N, threads T, rounds (one and T threads alternately; the fastest of
  * each is kept).
  * stdout: "identical 1", "one_thread <points/s>", "threads <T> <points/s>", "ratio <x>". */
-#define _POSIX_C_SOURCE 199309L
+#define _POSIX_C_SOURCE 200112L
 #include <math.h>
 #include <pthread.h>
 #include <stdint.h>
@@ -31,6 +31,7 @@ typedef struct {
     size_t count, groups;
     size_t *next; /* the first point not yet claimed, shared */
     NepheleStatus status;
+    char message[256]; /* the worker's own last error: messages are per thread */
 } Range;
 
 static void *run_range(void *arg) {
@@ -42,6 +43,8 @@ static void *run_range(void *arg) {
         size_t n = r->count - first < CHUNK ? r->count - first : CHUNK;
         r->status = nephele_evaluate_batch(r->tables, r->points + first, n, 0,
                                            r->out + first * r->groups, 0, NULL, NULL);
+        if (r->status != NEPHELE_STATUS_OK)
+            snprintf(r->message, sizeof r->message, "%s", nephele_last_error());
     }
     return NULL;
 }
@@ -68,7 +71,7 @@ static double timed(Range *proto, size_t n, int threads) {
         for (int i = 0; i < threads; i++) {
             pthread_join(ids[i], NULL);
             if (ranges[i].status != NEPHELE_STATUS_OK) {
-                fprintf(stderr, "thread %d: %s\n", i, nephele_last_error());
+                fprintf(stderr, "thread %d: %s\n", i, ranges[i].message);
                 exit(1);
             }
         }
@@ -113,7 +116,7 @@ int main(int argc, char **argv) {
     NepheleTransport *one = malloc(n * g * sizeof *one), *many = malloc(n * g * sizeof *many);
     /* One thread and T threads alternately, the fastest of each kept: a machine whose clock
        drifts slows both alike. */
-    Range single = {tables, points, one, n, g, NULL, NEPHELE_STATUS_OK}, split = single;
+    Range single = {tables, points, one, n, g, NULL, NEPHELE_STATUS_OK, ""}, split = single;
     split.out = many;
     double t1 = INFINITY, tn = INFINITY;
     for (int k = 0; k < rounds; k++) {

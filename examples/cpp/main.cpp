@@ -75,18 +75,20 @@ int main(int argc, char **argv) try {
     std::vector<uint32_t> outside(n);
     // Two threads, one handle, each its own half of the batch.
     std::vector<std::thread> workers;
-    NepheleStatus status[2] = {NEPHELE_STATUS_OK, NEPHELE_STATUS_OK};
+    // Messages are per thread: each worker keeps its own.
+    std::string failed[2];
     for (int k = 0; k < 2; k++) {
         workers.emplace_back([&, k] {
             size_t first = n * k / 2, count = n * (k + 1) / 2 - first;
-            status[k] = nephele_evaluate_batch(tables.get(), &samples[first].at, count,
-                                               sizeof(Sample), &batch[first * g], 0, nullptr,
-                                               &outside[first]);
+            if (nephele_evaluate_batch(tables.get(), &samples[first].at, count, sizeof(Sample),
+                                       &batch[first * g], 0, nullptr,
+                                       &outside[first]) != NEPHELE_STATUS_OK)
+                failed[k] = nephele_last_error();
         });
     }
     for (auto &w : workers) w.join();
-    check(status[0], "batch, first half");
-    check(status[1], "batch, second half");
+    for (const auto &f : failed)
+        if (!f.empty()) throw std::runtime_error("batch: " + f);
     for (size_t i = 0; i < n; i++)
         check(nephele_evaluate_all(tables.get(), &samples[i].at, &single[i * g], g), "point");
     if (std::memcmp(batch.data(), single.data(), batch.size() * sizeof batch[0]) != 0)

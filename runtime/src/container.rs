@@ -180,14 +180,12 @@ impl<'a> Container<'a> {
         }
         let body = bytes.len() - 4;
         let arrays = u32_at(bytes, 12).ok_or(FormatError::Truncated)? as usize;
-        if arrays > MAX_ARRAYS {
-            return Err(FormatError::BadEntry(arrays));
-        }
-        let short = HEADER_BYTES + arrays * ENTRY_BYTES > body;
+        let short = arrays > MAX_ARRAYS || HEADER_BYTES + arrays * ENTRY_BYTES > body;
         if u32_at(bytes, body) != Some(crc32(&bytes[..body])) {
             // A truncated file's last four bytes are data, so its checksum fails too: say
-            // what happened when the directory claims data past the end.
-            return Err(if short || claimed_end(bytes, arrays) > body {
+            // what happened when the directory (of a plausible size) claims data past the end.
+            let cut = arrays <= MAX_ARRAYS && (short || claimed_end(bytes, arrays) > body);
+            return Err(if cut {
                 FormatError::Truncated
             } else {
                 FormatError::BadChecksum

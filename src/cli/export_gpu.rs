@@ -51,7 +51,7 @@ pub fn run(a: ExportGpuArgs) -> Result<()> {
     };
     let (storage, index) = (le(&gpu.words), le(&gpu.index));
     let layout = serde_json::json!({
-        "what": "nephele's transport tables for the WGSL port (docs/integration.md, 'On the GPU: WGSL'): upload tables.bin as a read-only storage buffer and index.bin as a uniform buffer, bind them at the group and bindings below, and add nephele_tables.wgsl (or nephele_wgsl::tables(group, binding)) to the shader",
+        "what": "nephele's transport tables for the WGSL port (docs/integration.md, 'On the GPU: WGSL'): upload tables.bin as a read-only storage buffer and index.bin as a uniform buffer, bind them at the group and bindings below, and add nephele_tables.wgsl (the phase models and the tables, a whole module; nephele_wgsl::tables_module(group, binding)) before the shader's own code",
         "tables": name,
         "format_version": nephele_runtime::container::FORMAT_VERSION,
         "byte_order": "little-endian u32 words (the f32 bits of the tables' arrays, then u32 offsets)",
@@ -80,7 +80,7 @@ pub fn run(a: ExportGpuArgs) -> Result<()> {
         ],
         "shader": "nephele_tables.wgsl",
     });
-    let shader = nephele_wgsl::tables(a.group, a.binding);
+    let shader = nephele_wgsl::tables_module(a.group, a.binding);
     write(
         &a.out,
         &[

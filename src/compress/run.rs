@@ -878,7 +878,7 @@ fn manifest(
             mu_v: [-1.0, 1.0],
             psi_v: [0.0, std::f64::consts::PI],
             depth: "[0, t]",
-            outside: "t or mu_L outside their ranges: the form's parameters are held at the nearest end of the grid while the geometry (boundary factor, single-scattering factor, scattering angle) follows the point; TransportTables::domain() tells a caller whether a point is inside",
+            outside: "t or mu_L outside their ranges: past the thickest slab the tables continue by diffusion theory (docs/compress.md, 'Past the thickest slab'); below the thinnest slab and below the lowest sun the form's parameters are held at the grid's end while the geometry (boundary factor, single-scattering factor, scattering angle) follows the point; Domain::outside tells a caller which coordinate and by how much",
         },
     })
 }

@@ -90,6 +90,12 @@ pub fn tables(group: u32, binding: u32) -> String {
     .replace("NEPHELE_NTT_BINDING", &binding.to_string())
 }
 
+/// [`PHASE`] and [`tables`] together: the transport tables as one self-contained module source
+/// an engine includes before its own shader code (what `nephele export-gpu` writes).
+pub fn tables_module(group: u32, binding: u32) -> String {
+    format!("{PHASE}\n{}", tables(group, binding))
+}
+
 /// The collector search and the finite-cloud correction in WGSL (`find_collector(g, viewpoint,
 /// sun, options) -> NepheleCollector`, `finite_cloud(g, collector, finite) -> Kept`), for
 /// after [`tables`]. The renderer supplies its lit surface as four functions of its module:

@@ -505,9 +505,9 @@ struct NtContinued {
 }
 
 // The diffusion fluence at depth z of a slab t thick lit at depth z_s, zero at z_e outside
-// each face (unnormalised).
-fn nt_fluence(z: f32, t: f32, z_s: f32, z_e: f32) -> f32 {
-    return (min(z, z_s) + z_e) * (t + z_e - max(z, z_s)) / (t + 2.0 * z_e);
+// each face (unnormalised), as its two factors.
+fn nt_fluence(z: f32, t: f32, z_s: f32, z_e: f32) -> vec2<f32> {
+    return vec2<f32>(min(z, z_s) + z_e, (t + z_e - max(z, z_s)) / (t + 2.0 * z_e));
 }
 
 fn nt_continued(at: SlabPoint) -> NtContinued {
@@ -528,13 +528,15 @@ fn nt_continued(at: SlabPoint) -> NtContinued {
         depth = t_max - h;
     }
     let g_mean = min(bitcast<f32>(x.mean_cosine), 0.999);
-    let z_s = at.mu_l / (1.0 - g_mean);
+    let z_s = min(at.mu_l / (1.0 - g_mean), half);
     let z_e = 2.0 / (3.0 * (1.0 - g_mean));
-    c.diffuse = nt_fluence(d, t, z_s, z_e) / nt_fluence(depth, t_max, z_s, z_e);
+    let here = nt_fluence(d, t, z_s, z_e);
+    let there = nt_fluence(depth, t_max, z_s, z_e);
+    c.diffuse = (here.x / there.x) * (here.y / there.y);
     if depth > 0.0 && d > half {
         c.spread = d / depth;
     }
-    c.spread_diffuse = sqrt(t / t_max * select(1.0, d / depth, depth > 0.0));
+    c.spread_diffuse = sqrt(t / t_max) * select(1.0, sqrt(d / depth), depth > 0.0);
     c.at = SlabPoint(depth, t_max, at.mu_v, at.psi_v, at.mu_l);
     return c;
 }

@@ -47,6 +47,22 @@ fn modules() -> Vec<(&'static str, naga::Module, naga::valid::ModuleInfo)> {
         .collect()
 }
 
+/// What `nephele export-gpu` writes, `tables_module`, is a whole module on its own: Naga parses
+/// and validates it with nothing before or after it.
+#[test]
+fn the_exported_tables_module_stands_alone() {
+    let source = nephele_wgsl::tables_module(1, 2);
+    let module = naga::front::wgsl::parse_str(&source)
+        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
+    naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::empty(),
+    )
+    .validate(&module)
+    .expect("the exported module validates");
+    assert!(source.contains("@group(1) @binding(2)") && source.contains("@group(1) @binding(3)"));
+}
+
 /// Runs `tool args…` and asserts it accepts the file.
 fn validates(tool: &str, args: &[&str], file: &Path) {
     let out = Command::new(tool)

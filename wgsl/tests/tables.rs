@@ -180,10 +180,14 @@ impl Wide {
         }
         let tables = nephele_runtime::transport::TransportTables::from_bytes(SHIPPED).unwrap();
         let g_mean = (tables.mean_cosine() as f64).min(0.999);
-        let (z_s, z_e) = (p.mu_l / (1.0 - g_mean), 2.0 / (3.0 * (1.0 - g_mean)));
+        let half = 0.5 * t_max;
+        let (z_s, z_e) = (
+            (p.mu_l / (1.0 - g_mean)).min(half),
+            2.0 / (3.0 * (1.0 - g_mean)),
+        );
         let fluence =
             |z: f64, t: f64| (z.min(z_s) + z_e) * (t + z_e - z.max(z_s)) / (t + 2.0 * z_e);
-        let (half, d, h) = (0.5 * t_max, p.depth, p.thickness - p.depth);
+        let (d, h) = (p.depth, p.thickness - p.depth);
         let depth = if d <= half {
             d
         } else if h <= half {

@@ -207,11 +207,11 @@ pub struct Collector {
 }
 
 /// A local slab's thickness and sun cosine as the surface gave them, before they were held
-/// within the tables' grid: how far a search reached past it (equal to the slab's own where
-/// nothing was held).
+/// within the tables' grid: how far a search reached past it.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Unheld {
-    /// t (mfp).
+    /// The largest t (mfp) the slab took on its way, before any hold (at least the slab's
+    /// own: the steps after the first start from the held value).
     pub thickness: f32,
     /// μ_L = n̄·ω_L (≤ 0 on a face turned from the sun).
     pub mu_l: f32,
@@ -315,7 +315,8 @@ pub fn local_slab(
     let hold_thickness = |t: f32, clamps: &mut Clamps, unheld: &mut Unheld| {
         let h = t.clamp_to(domain.thickness.0, domain.thickness.1);
         clamps.thickness |= h != t;
-        unheld.thickness = t;
+        // The farthest the slab reached: the later steps start from a held t.
+        unheld.thickness = unheld.thickness.max(t);
         h
     };
     let thickness = hold_thickness(

@@ -160,8 +160,9 @@ pub struct GroupStats {
     /// they reached (mfp).
     pub past_thickest: u64,
     pub thickest: Option<f32>,
-    /// The smallest μ_L among the searches held at the tables' lowest sun (≤ 0: a face
-    /// turned from the sun).
+    /// Searches whose last read held μ_L at the tables' lowest sun, and the smallest μ_L
+    /// they reached (≤ 0: a face turned from the sun).
+    pub below_lowest_sun: u64,
     pub lowest_mu_l: Option<f32>,
     /// The finite-cloud correction's factors on T, summed over the searches that found a
     /// collector (their mean: the share of the slab's light the cloud keeps).
@@ -197,7 +198,7 @@ pub(super) fn held_warnings(stats: &[GroupStats], domain: &Domain) -> Vec<String
             domain.thickness.1
         ));
     }
-    let low: u64 = stats.iter().map(|s| s.clamped_mu_l).sum();
+    let low: u64 = stats.iter().map(|s| s.below_lowest_sun).sum();
     let lowest = stats
         .iter()
         .filter_map(|s| s.lowest_mu_l)
@@ -233,6 +234,7 @@ impl GroupStats {
         self.held_by_view += o.held_by_view;
         self.held_by_sun += o.held_by_sun;
         self.past_thickest += o.past_thickest;
+        self.below_lowest_sun += o.below_lowest_sun;
         self.thickest = extreme(self.thickest, o.thickest, f32::max);
         self.lowest_mu_l = extreme(self.lowest_mu_l, o.lowest_mu_l, f32::min);
         self.kept += o.kept;
@@ -302,11 +304,14 @@ impl Frame<'_> {
             st.clamped_depth += f.clamps.depth as u64;
             st.held_by_view += f.clamps.view as u64;
             st.held_by_sun += f.clamps.sun as u64;
-            if f.clamps.thickness && f.unheld.thickness > f.at.thickness {
+            let domain = self.tables.domain();
+            if f.clamps.thickness && f.at.thickness >= domain.thickness.1 {
                 st.past_thickest += 1;
                 st.thickest = extreme(st.thickest, Some(f.unheld.thickness), f32::max);
             }
-            if f.clamps.mu_l {
+            // Held at the lowest sun (not a cosine a rounding past 1, held at 1).
+            if f.unheld.mu_l < domain.mu_l.0 {
+                st.below_lowest_sun += 1;
                 st.lowest_mu_l = extreme(st.lowest_mu_l, Some(f.unheld.mu_l), f32::min);
             }
             let kept = finite_cloud(self.tables, g, &self.side, &f, &self.finite).factor as f64;
