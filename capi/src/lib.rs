@@ -297,14 +297,22 @@ pub unsafe extern "C" fn nephele_tables_from_bytes(
             );
         }
         let bytes = unsafe { std::slice::from_raw_parts(bytes, len) };
-        match OwnedTables::from_bytes(bytes) {
-            Ok(owned) => {
-                *out = Box::into_raw(Box::new(NepheleTables { owned }));
-                NepheleStatus::Ok
-            }
-            Err(e) => fail(NepheleStatus::BadTables, e.to_string()),
-        }
+        store(
+            out,
+            OwnedTables::from_bytes(bytes).map_err(|e| e.to_string()),
+        )
     })
+}
+
+/// Loaded tables into `*out` as a new handle, or `NEPHELE_STATUS_BAD_TABLES` with the message.
+fn store(out: &mut *mut NepheleTables, loaded: Result<OwnedTables, String>) -> NepheleStatus {
+    match loaded {
+        Ok(owned) => {
+            *out = Box::into_raw(Box::new(NepheleTables { owned }));
+            NepheleStatus::Ok
+        }
+        Err(e) => fail(NepheleStatus::BadTables, e),
+    }
 }
 
 /// Tables from the `.ntt` file at `path` (a NUL-terminated UTF-8 path) into `*out`. Refused
@@ -333,13 +341,10 @@ pub unsafe extern "C" fn nephele_tables_from_file(
             Ok(b) => b,
             Err(e) => return fail(NepheleStatus::Io, format!("cannot read '{path}': {e}")),
         };
-        match OwnedTables::from_bytes(bytes) {
-            Ok(owned) => {
-                *out = Box::into_raw(Box::new(NepheleTables { owned }));
-                NepheleStatus::Ok
-            }
-            Err(e) => fail(NepheleStatus::BadTables, format!("'{path}': {e}")),
-        }
+        store(
+            out,
+            OwnedTables::from_bytes(bytes).map_err(|e| format!("'{path}': {e}")),
+        )
     })
 }
 
@@ -354,13 +359,10 @@ pub unsafe extern "C" fn nephele_tables_embedded(out: *mut *mut NepheleTables) -
             Ok(o) => o,
             Err(s) => return s,
         };
-        match OwnedTables::from_static(MIE_10UM) {
-            Ok(owned) => {
-                *out = Box::into_raw(Box::new(NepheleTables { owned }));
-                NepheleStatus::Ok
-            }
-            Err(e) => fail(NepheleStatus::BadTables, format!("embedded tables: {e}")),
-        }
+        store(
+            out,
+            OwnedTables::from_static(MIE_10UM).map_err(|e| format!("embedded tables: {e}")),
+        )
     })
 }
 

@@ -53,6 +53,28 @@ fn static_library() -> PathBuf {
         .expect("libnephele_c.a beside the test binary")
 }
 
+/// `source` compiled by the system C compiler ($CC or cc) against the static library into
+/// `exe`, strictly (C99, every warning an error), with `extra` flags.
+fn compile_c(source: &Path, exe: &Path, extra: &[&str]) {
+    let cc = std::env::var("CC").unwrap_or_else(|_| "cc".into());
+    let built = Command::new(&cc)
+        .args(["-std=c99", "-Wall", "-Wextra", "-Werror", "-g", "-O1"])
+        .args(extra)
+        .arg("-I")
+        .arg(crate_dir().join("include"))
+        .arg(source)
+        .arg(static_library())
+        .args(["-lm", "-lpthread", "-ldl", "-o"])
+        .arg(exe)
+        .output()
+        .expect("run the C compiler");
+    assert!(
+        built.status.success(),
+        "{cc}: {}",
+        String::from_utf8_lossy(&built.stderr)
+    );
+}
+
 /// Points over the whole domain: faces, the horizon (±0), grid edges and beyond, random.
 fn points() -> Vec<[f32; 5]> {
     let mut p = vec![
@@ -91,22 +113,10 @@ fn a_c_program_under_sanitizers_answers_as_the_runtime() {
     std::fs::create_dir_all(&tmp).unwrap();
     let exe = tmp.join("nephele_example");
     let source = crate_dir().join("../examples/c/nephele_example.c");
-    let cc = std::env::var("CC").unwrap_or_else(|_| "cc".into());
-    let built = Command::new(&cc)
-        .args(["-std=c99", "-Wall", "-Wextra", "-Werror", "-g", "-O1"])
-        .args(["-fsanitize=address,undefined", "-fno-sanitize-recover=all"])
-        .arg("-I")
-        .arg(crate_dir().join("include"))
-        .arg(&source)
-        .arg(static_library())
-        .args(["-lm", "-lpthread", "-ldl", "-o"])
-        .arg(&exe)
-        .output()
-        .expect("run the C compiler");
-    assert!(
-        built.status.success(),
-        "{cc}: {}",
-        String::from_utf8_lossy(&built.stderr)
+    compile_c(
+        &source,
+        &exe,
+        &["-fsanitize=address,undefined", "-fno-sanitize-recover=all"],
     );
     let pts = points();
     let mut child = Command::new(&exe)
@@ -323,21 +333,10 @@ fn two_threads_share_one_handle_and_answer_as_one() {
     let tmp = std::env::temp_dir().join(format!("nephele-capi-threads-{}", std::process::id()));
     std::fs::create_dir_all(&tmp).unwrap();
     let exe = tmp.join("nephele_threads");
-    let cc = std::env::var("CC").unwrap_or_else(|_| "cc".into());
-    let built = Command::new(&cc)
-        .args(["-std=c99", "-Wall", "-Wextra", "-Werror", "-O1", "-g"])
-        .arg("-I")
-        .arg(crate_dir().join("include"))
-        .arg(crate_dir().join("../examples/c/nephele_threads.c"))
-        .arg(static_library())
-        .args(["-lm", "-lpthread", "-ldl", "-o"])
-        .arg(&exe)
-        .output()
-        .expect("run the C compiler");
-    assert!(
-        built.status.success(),
-        "{cc}: {}",
-        String::from_utf8_lossy(&built.stderr)
+    compile_c(
+        &crate_dir().join("../examples/c/nephele_threads.c"),
+        &exe,
+        &[],
     );
     let out = Command::new(&exe)
         .arg(crate_dir().join("../runtime/tables/mie10um/transport.ntt"))

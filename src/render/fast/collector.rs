@@ -279,6 +279,7 @@ impl Frame<'_> {
             &mut found,
         );
         let mut light = [None; GROUP_FIRST.len() - 1];
+        let domain = self.tables.domain();
         for (((g, st), found), light) in stats.iter_mut().enumerate().zip(found).zip(&mut light) {
             st.searches += 1;
             let Some(f) = found else {
@@ -304,7 +305,6 @@ impl Frame<'_> {
             st.clamped_depth += f.clamps.depth as u64;
             st.held_by_view += f.clamps.view as u64;
             st.held_by_sun += f.clamps.sun as u64;
-            let domain = self.tables.domain();
             if f.clamps.thickness && f.at.thickness >= domain.thickness.1 {
                 st.past_thickest += 1;
                 st.thickest = extreme(st.thickest, Some(f.unheld.thickness), f32::max);
