@@ -69,7 +69,7 @@ pub fn run(a: ExportGpuArgs) -> Result<()> {
             },
             {
                 "binding": a.binding + 1,
-                "wgsl": "var<uniform> nephele_ntt_index: NttIndex",
+                "wgsl": "var<uniform> nephele_ntt_index: NepheleNttIndex",
                 "file": "index.bin",
                 "bytes": index.len(),
                 "usage": "UNIFORM | COPY_DST",

@@ -8,7 +8,7 @@
 // across the light; n itself with `spread` = 0). Needs search.wgsl before it.
 
 // Which corrections apply (1 on) and the medium's constants.
-struct FiniteCloud {
+struct NepheleFiniteCloud {
     leakage: u32,
     coverage: u32,
     rate_scale: f32,
@@ -20,7 +20,7 @@ struct FiniteCloud {
 
 // What a group's collector keeps: the factor on T_g, the lateral radius (mfp; the largest f32
 // where the surface knows no edge: the runtime's +inf) and the footprint's coverage.
-struct Kept {
+struct NepheleKept {
     factor: f32,
     radius: f32,
     coverage: f32,
@@ -28,7 +28,7 @@ struct Kept {
 
 // What a path loses per scattering: absorption, the sides' rate, the orders before they count,
 // and whether the sides count the lateral orders (1) or the orders (0), for mean cosine g.
-struct Loss {
+struct NepheleLoss {
     absorption: f32,
     lateral: f32,
     delay: f32,
@@ -36,29 +36,29 @@ struct Loss {
     g: f32,
 }
 
-const NF_J0_SQUARED: f32 = 5.783185962946784;
+const NEPHELE_NF_J0_SQUARED: f32 = 5.783185962946784;
 
-fn nf_diffusion(g: f32) -> f32 {
+fn nephele_nf_diffusion(g: f32) -> f32 {
     return 1.0 / (3.0 * (1.0 - g));
 }
 
-fn nf_extrapolation(g: f32) -> f32 {
+fn nephele_nf_extrapolation(g: f32) -> f32 {
     return 2.0 / (3.0 * (1.0 - g));
 }
 
-fn nf_lateral_rate(radius: f32, g: f32) -> f32 {
+fn nephele_nf_lateral_rate(radius: f32, g: f32) -> f32 {
     if !(radius >= 0.0) || radius >= NEPHELE_F32_MAX {
         return 0.0;
     }
-    let re = radius + nf_extrapolation(g);
-    return nf_diffusion(g) * NF_J0_SQUARED / (re * re);
+    let re = radius + nephele_nf_extrapolation(g);
+    return nephele_nf_diffusion(g) * NEPHELE_NF_J0_SQUARED / (re * re);
 }
 
 // n⊥(n): the order at which diffusion would have spread as far across the light as a
 // persistent walk of mean cosine g (⟨P₂⟩ = g²) entering along it after n flights (the walk's
 // exact moments; runtime's leakage::lateral_orders).
-fn nf_lateral_orders(n: f32, g0: f32) -> f32 {
-    let g = ns_clamp(g0, 1e-3, 0.999);
+fn nephele_nf_lateral_orders(n: f32, g0: f32) -> f32 {
+    let g = nephele_ns_clamp(g0, 1e-3, 0.999);
     let h = g * g;
     let gn = nephele_exp(n * nephele_ln(g));
     let hn = nephele_exp(n * nephele_ln(h));
@@ -73,22 +73,22 @@ fn nf_lateral_orders(n: f32, g0: f32) -> f32 {
 }
 
 // n − n⊥(n) for large n: g/(1 − g) + 1/(1 − g²).
-fn nf_lateral_offset(g0: f32) -> f32 {
-    let g = ns_clamp(g0, 1e-3, 0.999);
+fn nephele_nf_lateral_offset(g0: f32) -> f32 {
+    let g = nephele_ns_clamp(g0, 1e-3, 0.999);
     return g / (1.0 - g) + 1.0 / (1.0 - g * g);
 }
 
-fn nf_loss_exponent(l: Loss, n: f32) -> f32 {
+fn nephele_nf_loss_exponent(l: NepheleLoss, n: f32) -> f32 {
     var across = n;
     if l.spread != 0u {
-        across = nf_lateral_orders(n, l.g);
+        across = nephele_nf_lateral_orders(n, l.g);
     }
     let late = select(0.0, across - l.delay, across - l.delay > 0.0);
     return -l.absorption * n - l.lateral * late;
 }
 
 // erfcx(x) = e^{x²} erfc(x), x ≥ 0 (Numerical Recipes' erfcc fit, < 1.2e-7 relative).
-fn nf_erfcx(x: f32) -> f32 {
+fn nephele_nf_erfcx(x: f32) -> f32 {
     let t = 1.0 / (1.0 + 0.5 * x);
     var p = 0.17087277;
     p = -0.82215223 + t * p;
@@ -104,78 +104,78 @@ fn nf_erfcx(x: f32) -> f32 {
 }
 
 // The first-passage integral's arguments at n₀: (u, v, e^{−u² − v²}).
-fn nf_passage(n0: f32, s: f32, z: f32, d: f32) -> vec3<f32> {
+fn nephele_nf_passage(n0: f32, s: f32, z: f32, d: f32) -> vec3<f32> {
     let u = z / (2.0 * sqrt(d * n0));
     let v = sqrt(s * n0);
     return vec3<f32>(u, v, nephele_exp(-(u * u) - v * v));
 }
 
 // e^{−2uv} erfc(x) for x = ±(u − v), without overflow.
-fn nf_tilted_erfc(p: vec3<f32>, x: f32) -> f32 {
+fn nephele_nf_tilted_erfc(p: vec3<f32>, x: f32) -> f32 {
     if x >= 0.0 {
-        return p.z * nf_erfcx(x);
+        return p.z * nephele_nf_erfcx(x);
     }
-    return 2.0 * nephele_exp(-(2.0 * p.x * p.y)) - p.z * nf_erfcx(-x);
+    return 2.0 * nephele_exp(-(2.0 * p.x * p.y)) - p.z * nephele_nf_erfcx(-x);
 }
 
 // W(n₀, s) = ∫₀^{n₀} f(n) e^{−s n} dn.
-fn nf_below(n0: f32, s: f32, z: f32, d: f32) -> f32 {
+fn nephele_nf_below(n0: f32, s: f32, z: f32, d: f32) -> f32 {
     if !(n0 > 0.0) {
         return 0.0;
     }
-    let p = nf_passage(n0, s, z, d);
-    return 0.5 * (nf_tilted_erfc(p, p.x - p.y) + p.z * nf_erfcx(p.x + p.y));
+    let p = nephele_nf_passage(n0, s, z, d);
+    return 0.5 * (nephele_nf_tilted_erfc(p, p.x - p.y) + p.z * nephele_nf_erfcx(p.x + p.y));
 }
 
 // W(∞, s) − W(n₀, s).
-fn nf_above(n0: f32, s: f32, z: f32, d: f32) -> f32 {
+fn nephele_nf_above(n0: f32, s: f32, z: f32, d: f32) -> f32 {
     if !(n0 > 0.0) {
         return nephele_exp(-z * sqrt(s / d));
     }
-    let p = nf_passage(n0, s, z, d);
-    let tail = 0.5 * (nf_tilted_erfc(p, p.y - p.x) - p.z * nf_erfcx(p.x + p.y));
+    let p = nephele_nf_passage(n0, s, z, d);
+    let tail = 0.5 * (nephele_nf_tilted_erfc(p, p.y - p.x) - p.z * nephele_nf_erfcx(p.x + p.y));
     return select(0.0, tail, tail > 0.0);
 }
 
 // The share of [start, to) (`open`: no end) of f e^{−s n}.
-fn nf_share(start: f32, to: f32, open: bool, s: f32, z: f32, d: f32) -> f32 {
+fn nephele_nf_share(start: f32, to: f32, open: bool, s: f32, z: f32, d: f32) -> f32 {
     if open {
-        return nf_above(start, s, z, d);
+        return nephele_nf_above(start, s, z, d);
     }
     if to > start {
-        return nf_below(to, s, z, d) - nf_below(start, s, z, d);
+        return nephele_nf_below(to, s, z, d) - nephele_nf_below(start, s, z, d);
     }
     return 0.0;
 }
 
-fn nf_order_exponent(n: f32, s: f32, z: f32, d: f32) -> f32 {
+fn nephele_nf_order_exponent(n: f32, s: f32, z: f32, d: f32) -> f32 {
     return -(z * z) / (4.0 * d * n) - s * n - 1.5 * nephele_ln(n);
 }
 
 // The share of a group's light (orders first ..= last, `open` without end) the loss leaves,
 // seen at `depth` of a slab `thickness` mfp thick, mean cosine g.
-fn group_survival(first: f32, last: f32, open: bool, depth: f32, thickness: f32, g: f32,
-    l: Loss) -> f32 {
+fn nephele_group_survival(first: f32, last: f32, open: bool, depth: f32, thickness: f32, g: f32,
+    l: NepheleLoss) -> f32 {
     if !(l.absorption > 0.0) && !(l.lateral > 0.0) {
         return 1.0;
     }
-    let d = nf_diffusion(g);
-    let ze = nf_extrapolation(g);
+    let d = nephele_nf_diffusion(g);
+    let ze = nephele_nf_extrapolation(g);
     let z = abs(depth - 1.0 / (1.0 - g)) + ze;
     let te = thickness + 2.0 * ze;
-    let slab_rate = d * PI * PI / (te * te);
+    let slab_rate = d * NEPHELE_PI * NEPHELE_PI / (te * te);
     var with_loss = 0.0;
     var without = 0.0;
     if !open && last - first < 64.0 {
         let count = u32(last - first) + 1u;
-        var shift = nf_order_exponent(first, slab_rate, z, d);
+        var shift = nephele_nf_order_exponent(first, slab_rate, z, d);
         for (var k = 1u; k < count; k++) {
-            shift = max(shift, nf_order_exponent(first + f32(k), slab_rate, z, d));
+            shift = max(shift, nephele_nf_order_exponent(first + f32(k), slab_rate, z, d));
         }
         for (var k = 0u; k < count; k++) {
             let n = first + f32(k);
-            let e = nf_order_exponent(n, slab_rate, z, d);
-            with_loss += nephele_exp(e + nf_loss_exponent(l, n) - shift);
+            let e = nephele_nf_order_exponent(n, slab_rate, z, d);
+            with_loss += nephele_exp(e + nephele_nf_loss_exponent(l, n) - shift);
             without += nephele_exp(e + 0.0 - shift);
         }
     } else {
@@ -183,55 +183,55 @@ fn group_survival(first: f32, last: f32, open: bool, depth: f32, thickness: f32,
         let hi = last + 0.5;
         let rate = select(1e-30, l.lateral, l.lateral > 1e-30);
         // Beyond order 30 the lateral orders are n − their offset to within 0.1.
-        let offset = select(0.0, nf_lateral_offset(g), l.spread != 0u);
-        var delay = ns_clamp(l.delay + offset, 0.0, 60.0 / rate);
+        let offset = select(0.0, nephele_nf_lateral_offset(g), l.spread != 0u);
+        var delay = nephele_ns_clamp(l.delay + offset, 0.0, 60.0 / rate);
         if !open {
-            delay = ns_clamp(delay, 0.0, hi);
+            delay = nephele_ns_clamp(delay, 0.0, hi);
         }
         let split = select(lo, delay, delay > lo);
-        let early = nf_share(lo, split, false, slab_rate + l.absorption, z, d);
+        let early = nephele_nf_share(lo, split, false, slab_rate + l.absorption, z, d);
         let late = nephele_exp(l.lateral * delay)
-            * nf_share(split, hi, open, slab_rate + l.absorption + l.lateral, z, d);
+            * nephele_nf_share(split, hi, open, slab_rate + l.absorption + l.lateral, z, d);
         with_loss = early + late;
-        without = nf_share(lo, hi, open, slab_rate, z, d);
+        without = nephele_nf_share(lo, hi, open, slab_rate, z, d);
     }
     if !(without > 1e-30) || !(with_loss >= 0.0) {
-        return nephele_exp(nf_loss_exponent(l, first));
+        return nephele_exp(nephele_nf_loss_exponent(l, first));
     }
-    return ns_clamp(with_loss / without, 0.0, 1.0);
+    return nephele_ns_clamp(with_loss / without, 0.0, 1.0);
 }
 
 // The share of group g's T the cloud keeps at the collector `c` (found = 1).
-fn finite_cloud(g: u32, c: NepheleCollector, opts: FiniteCloud) -> Kept {
+fn nephele_finite_cloud(g: u32, c: NepheleCollector, opts: NepheleFiniteCloud) -> NepheleKept {
     let x = nephele_ntt_index;
-    var kept = Kept(1.0, NEPHELE_F32_MAX, 1.0);
+    var kept = NepheleKept(1.0, NEPHELE_F32_MAX, 1.0);
     if opts.leakage == 0u && opts.coverage == 0u && !(opts.absorption > 0.0) {
         return kept;
     }
     let g_mean = opts.mean_cosine;
-    var l = Loss(max(opts.absorption, 0.0), 0.0, 0.0, 0u, g_mean);
+    var l = NepheleLoss(max(opts.absorption, 0.0), 0.0, 0.0, 0u, g_mean);
     let side = nephele_surface_lateral(c.centre, c.sigma);
     if side.hit != 0u {
-        kept.coverage = ns_clamp(side.coverage, 0.0, 1.0);
+        kept.coverage = nephele_ns_clamp(side.coverage, 0.0, 1.0);
         if opts.leakage != 0u && abs(side.edge_distance) < NEPHELE_F32_MAX {
             let edge = side.edge_distance * c.extinction;
             kept.radius = 3.0 * edge;
-            l.lateral = opts.rate_scale * nf_lateral_rate(kept.radius, g_mean);
-            let reach = edge + nf_extrapolation(g_mean);
-            l.delay = opts.delay_scale * reach * reach / nf_diffusion(g_mean);
+            l.lateral = opts.rate_scale * nephele_nf_lateral_rate(kept.radius, g_mean);
+            let reach = edge + nephele_nf_extrapolation(g_mean);
+            l.delay = opts.delay_scale * reach * reach / nephele_nf_diffusion(g_mean);
             l.spread = opts.spread;
         }
     }
     var first = 2.0;
     if g < x.groups {
-        first = ntt_f32(x.group_first + g);
+        first = nephele_ntt_f32(x.group_first + g);
     }
     let open = g + 1u >= x.groups;
     var last = 0.0;
     if !open {
-        last = ntt_f32(x.group_first + g + 1u) - 1.0;
+        last = nephele_ntt_f32(x.group_first + g + 1u) - 1.0;
     }
-    kept.factor = group_survival(first, last, open, c.at.depth, c.at.thickness, g_mean, l);
+    kept.factor = nephele_group_survival(first, last, open, c.at.depth, c.at.thickness, g_mean, l);
     if opts.coverage != 0u {
         kept.factor *= kept.coverage;
     }

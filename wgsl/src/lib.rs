@@ -6,8 +6,9 @@
 //! sampling, as functions to paste or `#include` into a shader (no entry point, no bindings):
 //!
 //! ```wgsl
-//! let c = hg_draine_sample(hg_draine_from_diameter(10.0), xi);   // c.mu, c.one_minus_mu
-//! let p = hg_draine_eval(hg_draine_from_diameter(10.0), c);      // sr⁻¹
+//! let hd = nephele_hg_draine_from_diameter(10.0);
+//! let c = nephele_hg_draine_sample(hd, xi);   // c.mu, c.one_minus_mu
+//! let p = nephele_hg_draine_eval(hd, c);      // sr⁻¹
 //! ```
 //!
 //! [`tabulated`] adds the tabulated phase function (a Mie table: f = 2π p sin θ linear between
@@ -19,9 +20,10 @@
 //! does, copies the arrays the shaders read and writes the index uniform):
 //!
 //! ```wgsl
-//! let at = SlabPoint(depth, thickness, mu_v, psi_v, mu_l);
-//! var t = order1(at);                        // sr⁻¹, albedo 1
-//! for (var g = 0u; g < nephele_ntt_index.groups; g++) { t += transport(g, at); }
+//! let at = nephele_slab_point(thickness, mu_l, depth, mu_v, psi_v);  // C's order, ψ in radians
+//! var t = nephele_order1(at);                // sr⁻¹, albedo 1
+//! let groups = nephele_transport_all(at);    // T of every group, the features built once
+//! for (var g = 0u; g < nephele_ntt_index.groups; g++) { t += groups[g]; }
 //! ```
 //!
 //! The port follows `nephele_runtime` formula for formula in f32, with its own exp, ln, sin, cos
@@ -33,17 +35,21 @@
 //! GLSL through their validators.
 //!
 //! [`SEARCH`] adds the collector search and the finite-cloud correction over the renderer's lit
-//! surface, which the renderer's shader supplies as three functions (docs/integration.md).
+//! surface, which the renderer's shader supplies as four functions (docs/integration.md).
+//!
+//! Every name the sources declare at module scope starts with `nephele_`, `Nephele` or
+//! `NEPHELE_`, so that they share a module with a renderer's own code.
 
 /// The elementary functions (`nephele_exp`, `nephele_ln`, `nephele_exp_m1`, `nephele_sin_cos`,
-/// `nephele_asin`) and the phase models in WGSL: `hg_eval`, `hg_sample`, `draine_eval`, `draine_cdf`,
-/// `draine_sample`, `hg_draine_eval`, `hg_draine_sample`, `hg_draine_from_diameter`, over the
-/// `Cosine` (μ, 1 − μ) and `HgDraine` (g_HG, g_D, α, w_D) structs.
+/// `nephele_asin`) and the phase models in WGSL: `nephele_hg_eval`, `nephele_hg_sample`,
+/// `nephele_draine_eval`, `nephele_draine_cdf`, `nephele_draine_sample`, `nephele_hg_draine_eval`,
+/// `nephele_hg_draine_sample`, `nephele_hg_draine_from_diameter`, over the `NepheleCosine`
+/// (μ, 1 − μ) and `NepheleHgDraine` (g_HG, g_D, α, w_D) structs.
 pub const PHASE: &str = concat!(include_str!("math.wgsl"), include_str!("phase.wgsl"));
 
-/// The tabulated phase function in WGSL (`tabulated_eval`, `tabulated_sample`), reading its
+/// The tabulated phase function in WGSL (`nephele_tabulated_eval`, `nephele_tabulated_sample`), reading its
 /// table from `var<storage, read> nephele_tab: array<f32>` at `@group(group) @binding(binding)`;
-/// needs [`PHASE`] before it (for `Cosine`).
+/// needs [`PHASE`] before it (for `NepheleCosine`).
 pub fn tabulated(group: u32, binding: u32) -> String {
     include_str!("tabulated.wgsl")
         .replace("NEPHELE_TAB_GROUP", &group.to_string())
@@ -70,13 +76,17 @@ pub fn tabulated_buffer(table: &nephele_runtime::phase::Tabulated<f32>) -> Vec<f
 
 /// The transport tables in WGSL, from a `.ntt` laid out by [`ntt_for_gpu`]: its words (`array<u32>`,
 /// [`NttGpu::words`]) at `@group(group) @binding(binding)` and its index ([`NttGpu::index`], a
-/// uniform struct `NttIndex` of [`NTT_INDEX_WORDS`] u32) at `binding + 1`; needs [`PHASE`]
-/// before it. It gives, over `SlabPoint` (depth, thickness, μ_V, ψ_V, μ_L):
-/// - `transport(g: u32, at: SlabPoint) -> f32`: T of order group g (orders ≥ 2, sr⁻¹), the
-///   runtime's `TransportTables::transport`;
-/// - `evaluate(g: u32, at: SlabPoint) -> NepheleTransport`: T, the collector (c_x, c_z) and
-///   its spread σ (mfp) of group g, `TransportTables::evaluate`;
-/// - `order1(at: SlabPoint) -> f32`: order 1 (sr⁻¹, albedo 1), `TransportTables::order1`.
+/// uniform struct `NepheleNttIndex` of [`NTT_INDEX_WORDS`] u32) at `binding + 1`; needs
+/// [`PHASE`] before it. It gives, over `NepheleSlabPoint` (thickness, μ_L, depth, μ_V, ψ_V
+/// in radians: C's field order; `nephele_slab_point(…)`, `nephele_slab_point_deg(…)` with ψ_V
+/// in degrees):
+/// - `nephele_transport_all(at) -> array<f32, 8>`: T of every order group (orders ≥ 2, sr⁻¹;
+///   at most [`MAX_GROUPS`], the rest 0), the point's features built once, the runtime's
+///   `TransportTables::transport_all`; `nephele_transport(g, at)` for one group;
+/// - `nephele_evaluate_all(at) -> array<NepheleTransport, 8>`: T, the collector (c_x, c_z) and
+///   its spread σ (mfp) of every group, `TransportTables::evaluate_all`;
+///   `nephele_evaluate(g, at)` for one group;
+/// - `nephele_order1(at) -> f32`: order 1 (sr⁻¹, albedo 1), `TransportTables::order1`.
 pub fn tables(group: u32, binding: u32) -> String {
     [
         include_str!("ntt.wgsl"),
@@ -96,14 +106,19 @@ pub fn tables_module(group: u32, binding: u32) -> String {
     format!("{PHASE}\n{}", tables(group, binding))
 }
 
-/// The collector search and the finite-cloud correction in WGSL (`find_collector(g, viewpoint,
-/// sun, options) -> NepheleCollector`, `finite_cloud(g, collector, finite) -> Kept`), for
+/// The collector search and the finite-cloud correction in WGSL (`nephele_find_collector(g,
+/// viewpoint, sun, options) -> NepheleCollector`, `nephele_finite_cloud(g, collector, finite)
+/// -> NepheleKept`), for
 /// after [`tables`]. The renderer supplies its lit surface as four functions of its module:
-/// `nephele_surface_filtered(at: vec3<f32>, sigma: f32) -> LitSample`,
-/// `nephele_surface_lateral(at: vec3<f32>, sigma: f32) -> LateralSample`,
+/// `nephele_surface_filtered(at: vec3<f32>, sigma: f32) -> NepheleLitSample`,
+/// `nephele_surface_lateral(at: vec3<f32>, sigma: f32) -> NepheleLateralSample`,
 /// `nephele_surface_initial_scale() -> f32` and `nephele_surface_sun_depth(at: vec3<f32>) -> f32`
 /// (the sun's optical depth, negative where unknown; search.wgsl has the structs).
 pub const SEARCH: &str = concat!(include_str!("search.wgsl"), include_str!("finite.wgsl"));
+
+/// Most order groups of a `.ntt` the WGSL port reads (`NEPHELE_MAX_GROUPS`: `transport_all`
+/// and `evaluate_all` return arrays of 8).
+pub const MAX_GROUPS: usize = 8;
 
 /// Words of the index uniform ([`NttGpu::index`]).
 pub const NTT_INDEX_WORDS: usize = 48;
@@ -225,6 +240,11 @@ pub fn ntt_for_gpu(bytes: &[u8]) -> Result<NttGpu, String> {
         }
         None => [0; 15],
     };
+    if groups as usize > MAX_GROUPS {
+        return Err(format!(
+            "transport tables: {groups} order groups; the WGSL port reads at most {MAX_GROUPS}"
+        ));
+    }
     let u32_of = |n: usize| n as u32;
     let index = [
         groups,

@@ -4,12 +4,12 @@
 // need the runtime's precision. Cephes' single-precision algorithms (S. L. Moshier), written
 // out; they use only +, −, ×, floor, frexp and ldexp, which are exact or correctly rounded.
 
-const PI: f32 = 3.14159265358979;
+const NEPHELE_PI: f32 = 3.14159265358979;
 // The largest f32. WGSL forbids infinities and NaNs as constants (a shader with one fails to
 // compile on Tint and WebKit) and lets a driver assume none at run time, so the port
 // saturates where the runtime would overflow, and its callers pass finite values.
 const NEPHELE_F32_MAX: f32 = 3.40282347e38;
-const INV_FOUR_PI: f32 = 0.0795774715459477;
+const NEPHELE_INV_FOUR_PI: f32 = 0.0795774715459477;
 
 // asin(x), |x| ≤ 1, to a few f32 ulps (Cephes' asinf): a polynomial in x² up to |x| = 1/2,
 // π/2 − 2 asin(√((1 − |x|)/2)) beyond. Vulkan lets the built-in asin be off by 4096 ulps (it
@@ -26,7 +26,7 @@ fn nephele_asin(x: f32) -> f32 {
         + 7.4953002686e-2) * z + 1.6666752422e-1) * z * a + a;
     var r = p;
     if flip {
-        r = 0.5 * PI - 2.0 * p;
+        r = 0.5 * NEPHELE_PI - 2.0 * p;
     }
     return select(r, -r, x < 0.0);
 }

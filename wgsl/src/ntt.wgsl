@@ -4,7 +4,7 @@
 // each array starts and the form's sizes (`NttGpu::index`, written by `nephele_wgsl::ntt_for_gpu`
 // after the runtime's own checks of the file). Needs math.wgsl and phase.wgsl before it.
 
-struct NttIndex {
+struct NepheleNttIndex {
     groups: u32,
     q: u32,            // Legendre terms in ln t
     legendre: u32,     // J, Legendre terms in depth
@@ -58,27 +58,41 @@ struct NttIndex {
 @group(NEPHELE_NTT_GROUP) @binding(NEPHELE_NTT_BINDING)
 var<storage, read> nephele_ntt: array<u32>;
 @group(NEPHELE_NTT_GROUP) @binding(NEPHELE_NTT_INDEX_BINDING)
-var<uniform> nephele_ntt_index: NttIndex;
+var<uniform> nephele_ntt_index: NepheleNttIndex;
 
-fn ntt_f32(word: u32) -> f32 {
+fn nephele_ntt_f32(word: u32) -> f32 {
     return bitcast<f32>(nephele_ntt[word]);
 }
 
-// A point of the slab: depth d and thickness t (mean free paths), view cosine μ_V (> 0: the
-// light goes up), view azimuth ψ_V (radians, from the sun's horizontal travel), sun cosine μ_L.
-struct SlabPoint {
-    depth: f32,
+// A point of the slab, in the field order and units of C's `NepheleSlabPoint` and Python's
+// rows: thickness t and depth d below the lit face (mean free paths), sun cosine μ_L ∈ (0, 1],
+// view cosine μ_V (> 0: the light goes up), view azimuth ψ_V (radians, from the sun's
+// horizontal travel).
+struct NepheleSlabPoint {
     thickness: f32,
+    mu_l: f32,
+    depth: f32,
     mu_v: f32,
     psi_v: f32,
-    mu_l: f32,
+}
+
+// The point at thickness t, sun cosine μ_L, depth d, view cosine μ_V and azimuth ψ_V (radians).
+fn nephele_slab_point(thickness: f32, mu_l: f32, depth: f32, mu_v: f32, psi_v: f32)
+    -> NepheleSlabPoint {
+    return NepheleSlabPoint(thickness, mu_l, depth, mu_v, psi_v);
+}
+
+// The point at azimuth ψ_V given in degrees (the CLI's `--psi-deg`).
+fn nephele_slab_point_deg(thickness: f32, mu_l: f32, depth: f32, mu_v: f32, psi_v_deg: f32)
+    -> NepheleSlabPoint {
+    return NepheleSlabPoint(thickness, mu_l, depth, mu_v, psi_v_deg * (NEPHELE_PI / 180.0));
 }
 
 // The weight of T at `at` in a pixel whose view ray has opacity `alpha`: α / (1 − e^{−τ_b}),
 // τ_b the slab's own path beyond the viewpoint — (t − d)/μ_V going up, d/|μ_V| going down,
 // unbounded along the faces — its opacity held ≥ 10⁻³ (the runtime's `SlabPoint::view_weight`:
 // T holds the slab's sources over that path, the pixel over its own ray).
-fn nephele_view_weight(at: SlabPoint, alpha: f32) -> f32 {
+fn nephele_view_weight(at: NepheleSlabPoint, alpha: f32) -> f32 {
     var opacity = 1.0;
     if at.mu_v > 0.0 {
         opacity = -nephele_exp_m1(-(at.thickness - at.depth) / at.mu_v);
@@ -91,7 +105,7 @@ fn nephele_view_weight(at: SlabPoint, alpha: f32) -> f32 {
 // Whether the tables can be read at `at` (the runtime's `SlabPoint::in_slab`): t finite and
 // > 0, 0 ≤ d ≤ t, μ_L finite and > 0, μ_V and ψ_V finite. Elsewhere T and order 1 are 0. (A
 // driver may assume no NaN or infinity: pass finite values.)
-fn in_slab(at: SlabPoint) -> bool {
+fn nephele_in_slab(at: NepheleSlabPoint) -> bool {
     let top = NEPHELE_F32_MAX;
     return at.thickness > 0.0 && at.thickness <= top && at.depth >= 0.0
         && at.depth <= at.thickness && at.mu_l > 0.0 && at.mu_l <= top
@@ -99,26 +113,26 @@ fn in_slab(at: SlabPoint) -> bool {
 }
 
 // x between two nodes of a grid: weight 1 − w on `lo`, w on `hi` (one node where lo = hi or
-// w = 0: `lerp_nodes`).
-struct Lerp {
+// w = 0: `nephele_lerp_nodes`).
+struct NepheleLerp {
     lo: u32,
     hi: u32,
     w: f32,
 }
 
-// 1 or 2: the nodes a Lerp draws on.
-fn lerp_nodes(l: Lerp) -> u32 {
+// 1 or 2: the nodes a NepheleLerp draws on.
+fn nephele_lerp_nodes(l: NepheleLerp) -> u32 {
     return select(1u, 2u, l.hi != l.lo && l.w > 0.0);
 }
 
-// The k-th node of `l` (k < lerp_nodes(l)).
-fn lerp_node(l: Lerp, k: u32) -> u32 {
+// The k-th node of `l` (k < nephele_lerp_nodes(l)).
+fn nephele_lerp_node(l: NepheleLerp, k: u32) -> u32 {
     return select(l.lo, l.hi, k == 1u);
 }
 
 // Its weight.
-fn lerp_weight(l: Lerp, k: u32) -> f32 {
-    if lerp_nodes(l) == 1u {
+fn nephele_lerp_weight(l: NepheleLerp, k: u32) -> f32 {
+    if nephele_lerp_nodes(l) == 1u {
         return 1.0;
     }
     return select(1.0 - l.w, l.w, k == 1u);
@@ -126,12 +140,12 @@ fn lerp_weight(l: Lerp, k: u32) -> f32 {
 
 // The interval i of the n ≥ 2 increasing values at `offset` with a[i] ≤ x < a[i + 1], held
 // to the first and the last outside them.
-fn ntt_bracket(offset: u32, n: u32, x: f32) -> u32 {
+fn nephele_ntt_bracket(offset: u32, n: u32, x: f32) -> u32 {
     var lo = 0u;
     var hi = max(n, 2u) - 1u;
     while hi - lo > 1u {
         let mid = (lo + hi) / 2u;
-        if ntt_f32(offset + mid) <= x {
+        if nephele_ntt_f32(offset + mid) <= x {
             lo = mid;
         } else {
             hi = mid;
@@ -141,27 +155,27 @@ fn ntt_bracket(offset: u32, n: u32, x: f32) -> u32 {
 }
 
 // Where x sits among the n increasing values at `offset` (held at the ends).
-fn ntt_lerp(offset: u32, n: u32, x: f32) -> Lerp {
-    if n <= 1u || !(x > ntt_f32(offset)) {
-        return Lerp(0u, 0u, 0.0);
+fn nephele_ntt_lerp(offset: u32, n: u32, x: f32) -> NepheleLerp {
+    if n <= 1u || !(x > nephele_ntt_f32(offset)) {
+        return NepheleLerp(0u, 0u, 0.0);
     }
-    if x >= ntt_f32(offset + n - 1u) {
-        return Lerp(n - 1u, n - 1u, 0.0);
+    if x >= nephele_ntt_f32(offset + n - 1u) {
+        return NepheleLerp(n - 1u, n - 1u, 0.0);
     }
-    let lo = ntt_bracket(offset, n, x);
-    let va = ntt_f32(offset + lo);
-    let vb = ntt_f32(offset + lo + 1u);
-    return Lerp(lo, lo + 1u, (x - va) / (vb - va));
+    let lo = nephele_ntt_bracket(offset, n, x);
+    let va = nephele_ntt_f32(offset + lo);
+    let vb = nephele_ntt_f32(offset + lo + 1u);
+    return NepheleLerp(lo, lo + 1u, (x - va) / (vb - va));
 }
 
 // cos Θ between the sun's propagation direction and the view, 1 − cos Θ = |ω_L − ω_V|²/2, the
 // sines from (1 − |μ|)(1 + |μ|) (exact near |μ| = 1).
-fn scattering_cosine(at: SlabPoint) -> Cosine {
+fn nephele_scattering_cosine(at: NepheleSlabPoint) -> NepheleCosine {
     let sin_l = sqrt(clamp((1.0 - abs(at.mu_l)) * (1.0 + abs(at.mu_l)), 0.0, 1.0));
     let sin_v = sqrt(clamp((1.0 - abs(at.mu_v)) * (1.0 + abs(at.mu_v)), 0.0, 1.0));
     let sc = nephele_sin_cos(at.psi_v);
     let dx = sin_v * sc.x;
     let dz = sin_l - sin_v * sc.y;
     let dd = at.mu_l + at.mu_v;
-    return cosine_from_one_minus_mu(clamp(0.5 * (dx * dx + dz * dz + dd * dd), 0.0, 2.0));
+    return nephele_cosine_from_one_minus_mu(clamp(0.5 * (dx * dx + dz * dz + dd * dd), 0.0, 2.0));
 }

@@ -10,20 +10,20 @@
 // Needs ntt.wgsl before it.
 
 // The stored p at a cosine: θ among the nodes (degrees in the file), f = 2π p sin θ linear.
-fn stored_phase(c: Cosine) -> f32 {
-    let a = cosine_angle(c);
-    let to_rad = PI / 180.0;
+fn nephele_stored_phase(c: NepheleCosine) -> f32 {
+    let a = nephele_cosine_angle(c);
+    let to_rad = NEPHELE_PI / 180.0;
     let x = nephele_ntt_index;
-    let lo = ntt_bracket(x.phase_theta, x.n_phase, a.x / to_rad);
-    let ta = ntt_f32(x.phase_theta + lo) * to_rad;
-    let tb = ntt_f32(x.phase_theta + lo + 1u) * to_rad;
-    let fa = 2.0 * PI * ntt_f32(x.phase + lo) * nephele_sin_cos(ta).x;
-    let fb = 2.0 * PI * ntt_f32(x.phase + lo + 1u) * nephele_sin_cos(tb).x;
-    return phase_between(vec2<f32>(ta, fa), vec2<f32>(tb, fb), a);
+    let lo = nephele_ntt_bracket(x.phase_theta, x.n_phase, a.x / to_rad);
+    let ta = nephele_ntt_f32(x.phase_theta + lo) * to_rad;
+    let tb = nephele_ntt_f32(x.phase_theta + lo + 1u) * to_rad;
+    let fa = 2.0 * NEPHELE_PI * nephele_ntt_f32(x.phase + lo) * nephele_sin_cos(ta).x;
+    let fb = 2.0 * NEPHELE_PI * nephele_ntt_f32(x.phase + lo + 1u) * nephele_sin_cos(tb).x;
+    return nephele_phase_between(vec2<f32>(ta, fa), vec2<f32>(tb, fb), a);
 }
 
 // T₁ for a phase function of value p (albedo included) at `at`.
-fn beam_scattered_once(p: f32, at: SlabPoint) -> f32 {
+fn nephele_beam_scattered_once(p: f32, at: NepheleSlabPoint) -> f32 {
     let d = at.depth;
     let t = at.thickness;
     let source = p * nephele_exp(-d / at.mu_l);
@@ -54,9 +54,9 @@ fn beam_scattered_once(p: f32, at: SlabPoint) -> f32 {
 }
 
 // Order 1 at `at` (sr⁻¹, albedo 1): the runtime's `TransportTables::order1`.
-fn order1(at: SlabPoint) -> f32 {
-    if !in_slab(at) {
+fn nephele_order1(at: NepheleSlabPoint) -> f32 {
+    if !nephele_in_slab(at) {
         return 0.0;
     }
-    return beam_scattered_once(stored_phase(scattering_cosine(at)), at);
+    return nephele_beam_scattered_once(nephele_stored_phase(nephele_scattering_cosine(at)), at);
 }

@@ -17,24 +17,24 @@ fn sphere_disc(at: vec3<f32>) -> vec2<f32> {
     return vec2<f32>(b * b - c, b);
 }
 
-fn nephele_surface_filtered(at: vec3<f32>, sigma: f32) -> LitSample {
+fn nephele_surface_filtered(at: vec3<f32>, sigma: f32) -> NepheleLitSample {
     let db = sphere_disc(at);
     if !(db.x > 0.0) {
-        return LitSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, 0.0, 0u);
+        return NepheleLitSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, 0.0, 0u);
     }
     let h = sqrt(db.x);
     let entry = vec3<f32>(at.x + (h - db.y) * SUN.x, at.y + (h - db.y) * SUN.y,
         at.z + (h - db.y) * SUN.z);
-    return LitSample(entry, entry / RADIUS, 2.0 * h, KAPPA * (2.0 * h), 1u);
+    return NepheleLitSample(entry, entry / RADIUS, 2.0 * h, KAPPA * (2.0 * h), 1u);
 }
 
-fn nephele_surface_lateral(at: vec3<f32>, sigma: f32) -> LateralSample {
+fn nephele_surface_lateral(at: vec3<f32>, sigma: f32) -> NepheleLateralSample {
     let db = sphere_disc(at);
     if !(db.x > 0.0) {
-        return LateralSample(0.0, 0.0, 0u);
+        return NepheleLateralSample(0.0, 0.0, 0u);
     }
     let rho2 = at.x * at.x + at.y * at.y + at.z * at.z - db.y * db.y;
-    return LateralSample(1.0, RADIUS - sqrt(max(rho2, 0.0)), 1u);
+    return NepheleLateralSample(1.0, RADIUS - sqrt(max(rho2, 0.0)), 1u);
 }
 
 fn nephele_surface_initial_scale() -> f32 {
@@ -59,13 +59,13 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let k = i / job.y;
     let g = i % job.y;
     let b = 9u * k;
-    let v = Viewpoint(vec3<f32>(viewpoints[b], viewpoints[b + 1u], viewpoints[b + 2u]),
+    let v = NepheleViewpoint(vec3<f32>(viewpoints[b], viewpoints[b + 1u], viewpoints[b + 2u]),
         vec3<f32>(viewpoints[b + 3u], viewpoints[b + 4u], viewpoints[b + 5u]), viewpoints[b + 6u],
         viewpoints[b + 7u], viewpoints[b + 8u]);
-    let c = find_collector(g, v, SUN, SearchOptions(8u, 0.1, 1u, 1u, 1u, bitcast<f32>(job.z)));
-    var kept = Kept(1.0, NEPHELE_F32_MAX, 1.0);
+    let c = nephele_find_collector(g, v, SUN, NepheleSearchOptions(8u, 0.1, 1u, 1u, 1u, bitcast<f32>(job.z)));
+    var kept = NepheleKept(1.0, NEPHELE_F32_MAX, 1.0);
     if c.found != 0u {
-        kept = finite_cloud(g, c, FiniteCloud(1u, 0u, 1.0, 0.0, 1u, 0.0, bitcast<f32>(job.z)));
+        kept = nephele_finite_cloud(g, c, NepheleFiniteCloud(1u, 0u, 1.0, 0.0, 1u, 0.0, bitcast<f32>(job.z)));
     }
     let o = 24u * i;
     out[o] = f32(c.found);

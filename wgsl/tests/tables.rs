@@ -329,7 +329,7 @@ fn on_gpu(points: &[SlabPoint<f32>], groups: usize) -> (Vec<f32>, f64) {
     let kernel = pipeline("tables", &source);
     let flat: Vec<f32> = points
         .iter()
-        .flat_map(|p| [p.depth, p.thickness, p.mu_v, p.psi_v, p.mu_l])
+        .flat_map(|p| [p.thickness, p.mu_l, p.depth, p.mu_v, p.psi_v])
         .collect();
     let job = [points.len() as u32, groups as u32, 0, 0];
     let start = Instant::now();
@@ -530,4 +530,110 @@ fn tables_on_the_gpu_follow_the_runtime() {
         failures.is_empty(),
         "beyond 1e-5 or zero mismatches: {failures:?}"
     );
+}
+
+/// Per point, T, c and σ of every group by `nephele_evaluate_all` (the point's features built
+/// once) against eight `nephele_evaluate(g, at)` calls (built for each group), and T alone by
+/// `nephele_transport_all` against eight `nephele_transport(g, at)`, in one run on 2·10⁴
+/// points, each kernel timed three times in turn (the best kept): a record, not a GPU claim
+/// (`cargo test --release -p nephele-wgsl --test tables -- --ignored --nocapture`). With
+/// NEPHELE_WGSL_BASELINE=DIR (an earlier version's WGSL sources and tests/tables_kernel.wgsl:
+/// scripts/bench_wgsl.sh) that version's kernel is timed too.
+#[test]
+#[ignore]
+fn all_groups_per_call_throughput_record() {
+    let tables = TransportTables::from_bytes(SHIPPED).unwrap();
+    let groups = tables.groups();
+    let pts = points(20_000);
+    let flat: Vec<f32> = pts
+        .iter()
+        .flat_map(|p| [p.thickness, p.mu_l, p.depth, p.mu_v, p.psi_v])
+        .collect();
+    let ntt = nephele_wgsl::ntt_for_gpu(SHIPPED).unwrap();
+    let all = "    let all = nephele_evaluate_all(at);\n    for (var g = 0u; g < job.y; g++) {\n        let e = all[g];";
+    assert!(KERNEL.contains(all), "the kernel's loop");
+    let src = format!("{}\n{}", nephele_wgsl::PHASE, nephele_wgsl::tables(0, 3));
+    let with = |body: &str| format!("{src}\n{}", KERNEL.replace(all, body));
+    let mut kernels = vec![
+        ("T, c, σ: nephele_evaluate_all", with(all), flat.clone()),
+        (
+            "T, c, σ: nephele_evaluate per group",
+            with("    for (var g = 0u; g < job.y; g++) {\n        let e = nephele_evaluate(g, at);"),
+            flat.clone(),
+        ),
+        (
+            "T: nephele_transport_all",
+            with("    let all = nephele_transport_all(at);\n    for (var g = 0u; g < job.y; g++) {\n        let e = NepheleTransport(all[g], 0.0, 0.0, 0.0);"),
+            flat.clone(),
+        ),
+        (
+            "T: nephele_transport per group",
+            with("    for (var g = 0u; g < job.y; g++) {\n        let e = NepheleTransport(nephele_transport(g, at), 0.0, 0.0, 0.0);"),
+            flat.clone(),
+        ),
+    ];
+    if let Ok(dir) = std::env::var("NEPHELE_WGSL_BASELINE") {
+        let read = |f: &str| std::fs::read_to_string(format!("{dir}/{f}")).expect(f);
+        let old = [
+            "math.wgsl",
+            "phase.wgsl",
+            "ntt.wgsl",
+            "order1.wgsl",
+            "transport.wgsl",
+        ]
+        .map(read)
+        .concat()
+            + &read("collector.wgsl");
+        let old = old
+            .replace("NEPHELE_NTT_GROUP", "0")
+            .replace("NEPHELE_NTT_INDEX_BINDING", "4")
+            .replace("NEPHELE_NTT_BINDING", "3");
+        // Its points in its own field order (depth, thickness, μ_V, ψ_V, μ_L).
+        let old_flat = pts
+            .iter()
+            .flat_map(|p| [p.depth, p.thickness, p.mu_v, p.psi_v, p.mu_l])
+            .collect();
+        kernels.push((
+            "T, c, σ: baseline per group",
+            format!("{old}\n{}", read("tables_kernel.wgsl")),
+            old_flat,
+        ));
+    }
+    let compiled: Vec<_> = kernels
+        .iter()
+        .map(|(name, src, data)| (name, pipeline(name, src), data))
+        .collect();
+    let mut best = vec![f64::INFINITY; compiled.len()];
+    for _ in 0..3 {
+        for (k, (_, kernel, data)) in compiled.iter().enumerate() {
+            let start = Instant::now();
+            run_kernel(
+                kernel,
+                [pts.len() as u32, groups as u32, 0, 0],
+                data,
+                Some(&ntt),
+                4 * (4 * groups as u64 + 1) * pts.len() as u64,
+                pts.len() as u32,
+            );
+            best[k] = best[k].min(start.elapsed().as_secs_f64());
+        }
+    }
+    for ((name, _, _), s) in compiled.iter().zip(&best) {
+        println!(
+            "{name}: {:.3e} points/s ({groups} groups and order 1)",
+            pts.len() as f64 / s
+        );
+    }
+    let ratio = |a: usize, b: usize| best[b] / best[a];
+    println!(
+        "all groups per call: {:.2}x the per-group calls (T, c, σ), {:.2}x (T)",
+        ratio(0, 1),
+        ratio(2, 3)
+    );
+    if best.len() > 4 {
+        println!(
+            "nephele_evaluate_all: {:.2}x the baseline's per-group calls",
+            ratio(0, 4)
+        );
+    }
 }
