@@ -87,6 +87,8 @@ pub fn tabulated_buffer(table: &nephele_runtime::phase::Tabulated<f32>) -> Vec<f
 ///   its spread σ (mfp) of every group, `TransportTables::evaluate_all`;
 ///   `nephele_evaluate(g, at)` for one group;
 /// - `nephele_order1(at) -> f32`: order 1 (sr⁻¹, albedo 1), `TransportTables::order1`.
+/// - `nephele_tables_domain() -> NepheleDomain` (the grid's ends and g, `TransportTables::domain`)
+///   and `nephele_outside(at) -> u32` (the bits of `Outside::bits`).
 pub fn tables(group: u32, binding: u32) -> String {
     [
         include_str!("ntt.wgsl"),

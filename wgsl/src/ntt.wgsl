@@ -88,6 +88,42 @@ fn nephele_slab_point_deg(thickness: f32, mu_l: f32, depth: f32, mu_v: f32, psi_
     return NepheleSlabPoint(thickness, mu_l, depth, mu_v, psi_v_deg * (NEPHELE_PI / 180.0));
 }
 
+// The tables' domain (the runtime's `Domain`, C's `nephele_tables_domain`): the grid's
+// thinnest and thickest slab (mfp), its lowest and highest sun cosine, and g of the stored
+// phase function (the continuation past the thickest slab uses it).
+struct NepheleDomain {
+    thickness: vec2<f32>,
+    mu_l: vec2<f32>,
+    mean_cosine: f32,
+}
+
+fn nephele_tables_domain() -> NepheleDomain {
+    let x = nephele_ntt_index;
+    return NepheleDomain(
+        vec2<f32>(nephele_ntt_f32(x.thickness), nephele_ntt_f32(x.thickness + x.n_t - 1u)),
+        vec2<f32>(nephele_ntt_f32(x.mu_l), nephele_ntt_f32(x.mu_l + x.n_l - 1u)),
+        bitcast<f32>(x.mean_cosine));
+}
+
+// Where a point lies outside the grid, as C's `nephele_outside`: t past the thickest slab
+// (continued by diffusion theory), t below the thinnest (held), the sun below the lowest (held).
+const NEPHELE_OUTSIDE_THICKER: u32 = 1u;
+const NEPHELE_OUTSIDE_THINNER: u32 = 2u;
+const NEPHELE_OUTSIDE_LOWER_SUN: u32 = 4u;
+
+fn nephele_outside(at: NepheleSlabPoint) -> u32 {
+    let d = nephele_tables_domain();
+    var bits = 0u;
+    if !(at.thickness >= d.thickness.x && at.thickness <= d.thickness.y) {
+        bits |= select(NEPHELE_OUTSIDE_THINNER, NEPHELE_OUTSIDE_THICKER,
+            at.thickness > d.thickness.y);
+    }
+    if !(at.mu_l >= d.mu_l.x) {
+        bits |= NEPHELE_OUTSIDE_LOWER_SUN;
+    }
+    return bits;
+}
+
 // The weight of T at `at` in a pixel whose view ray has opacity `alpha`: α / (1 − e^{−τ_b}),
 // τ_b the slab's own path beyond the viewpoint — (t − d)/μ_V going up, d/|μ_V| going down,
 // unbounded along the faces — its opacity held ≥ 10⁻³ (the runtime's `SlabPoint::view_weight`:

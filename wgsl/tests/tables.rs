@@ -532,6 +532,84 @@ fn tables_on_the_gpu_follow_the_runtime() {
     );
 }
 
+/// The domain and the outside flags on the GPU as the runtime has them (`Domain`,
+/// `Domain::outside`'s bits): the grid's ends and g in the first five words, then one flag
+/// word per point, over the test points (t = 0.3 … 200 against 0.5 … 128) and suns down to 0.005.
+#[test]
+fn the_domain_and_the_outside_flags_on_the_gpu_are_the_runtimes() {
+    let tables = TransportTables::from_bytes(SHIPPED).unwrap();
+    let dom = tables.domain();
+    let mut pts = points(4096);
+    for (i, p) in pts.iter_mut().enumerate().step_by(5) {
+        p.mu_l = 0.005 + 0.2 * (i % 7) as f32 / 7.0;
+    }
+    let flat: Vec<f32> = pts
+        .iter()
+        .flat_map(|p| [p.thickness, p.mu_l, p.depth, p.mu_v, p.psi_v])
+        .collect();
+    let kernel = r#"
+@group(0) @binding(0) var<uniform> job: vec4<u32>;
+@group(0) @binding(1) var<storage, read> points: array<f32>;
+@group(0) @binding(2) var<storage, read_write> out: array<u32>;
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i == 0u {
+        let d = nephele_tables_domain();
+        out[0] = bitcast<u32>(d.thickness.x);
+        out[1] = bitcast<u32>(d.thickness.y);
+        out[2] = bitcast<u32>(d.mu_l.x);
+        out[3] = bitcast<u32>(d.mu_l.y);
+        out[4] = bitcast<u32>(d.mean_cosine);
+    }
+    if i >= job.x {
+        return;
+    }
+    let b = 5u * i;
+    let at = nephele_slab_point(points[b], points[b + 1u], points[b + 2u], points[b + 3u],
+        points[b + 4u]);
+    out[5u + i] = nephele_outside(at);
+}
+"#;
+    let source = format!(
+        "{}\n{}\n{kernel}",
+        nephele_wgsl::PHASE,
+        nephele_wgsl::tables(0, 3)
+    );
+    let ntt = nephele_wgsl::ntt_for_gpu(SHIPPED).unwrap();
+    let out = run_kernel(
+        &pipeline("domain", &source),
+        [pts.len() as u32, 0, 0, 0],
+        &flat,
+        Some(&ntt),
+        4 * (5 + pts.len() as u64),
+        pts.len() as u32,
+    );
+    let words: &[u32] = bytemuck::cast_slice(&out);
+    let f = |i: usize| f32::from_bits(words[i]);
+    assert_eq!(
+        (f(0), f(1), f(2), f(3), f(4)),
+        (
+            dom.thickness.0,
+            dom.thickness.1,
+            dom.mu_l.0,
+            dom.mu_l.1,
+            tables.mean_cosine()
+        )
+    );
+    let mut kinds = [0usize; 8];
+    for (i, p) in pts.iter().enumerate() {
+        let want = dom.outside(p).bits(&dom);
+        assert_eq!(words[5 + i], want, "{p:?}");
+        kinds[want as usize] += 1;
+    }
+    // Every kind was tried: within, thicker, thinner, the sun below, and both.
+    for bits in [0, 1, 2, 4, 5, 6] {
+        assert!(kinds[bits] > 0, "no point with flags {bits}: {kinds:?}");
+    }
+}
+
 /// Per point, T, c and σ of every group by `nephele_evaluate_all` (the point's features built
 /// once) against eight `nephele_evaluate(g, at)` calls (built for each group), and T alone by
 /// `nephele_transport_all` against eight `nephele_transport(g, at)`, in one run on 2·10⁴

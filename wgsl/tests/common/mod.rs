@@ -47,6 +47,7 @@ async fn open() -> Gpu {
 }
 
 /// The compute pipeline of `source`'s entry point `main`.
+#[allow(dead_code)] // not every test binary computes
 pub fn pipeline(label: &str, source: &str) -> wgpu::ComputePipeline {
     let g = gpu();
     let module = g.device.create_shader_module(wgpu::ShaderModuleDescriptor {
