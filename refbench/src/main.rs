@@ -22,9 +22,9 @@
 
 use nephele::slab::walk::batch_rng;
 use nephele::slab::{SlabGrid, Slice};
+use nephele_runtime::fitting::Simd;
 use nephele_runtime::phase::{Draine, HenyeyGreenstein};
 use nephele_runtime::presets::jendersie_deon;
-use nephele_runtime::simd::Simd;
 use nephele_runtime::PhaseFunction;
 use std::ffi::{c_char, c_int, c_long, CStr, CString};
 use std::hint::black_box;

@@ -20,7 +20,10 @@ mod legendre;
 pub mod phase;
 pub mod presets;
 pub mod real;
-pub mod simd;
+#[cfg_attr(not(feature = "fitting"), allow(dead_code))]
+mod simd;
+#[cfg_attr(not(feature = "fitting"), allow(dead_code))]
+mod small_angle;
 // The math of a bare no_std build; compiled (and unit-tested) with std too.
 #[cfg_attr(any(feature = "std", feature = "libm"), allow(dead_code))]
 mod soft_math;
@@ -43,6 +46,8 @@ pub mod fitting {
         crc32, ENTRY_BYTES, HEADER_BYTES, MAGIC, MAX_ARRAYS, NAME_BYTES,
     };
     pub use crate::legendre::Legendre;
+    pub use crate::simd::Simd;
+    pub use crate::small_angle::sin_cos_small;
     pub use crate::transport::collector::{
         CollectorForm, Statistic, MAX_COLLECTOR_HARMONICS, MAX_COLLECTOR_LEGENDRE,
     };

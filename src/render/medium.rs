@@ -6,7 +6,7 @@ use super::fbm::Fbm;
 use super::geometry::{box_clip, outside_box, slab_clip, Affine, Vec3};
 use super::majorant::{Bounds, MajorantGrid, Majorants};
 use super::mesh::TriangleMesh;
-use nephele_runtime::simd::Simd;
+use nephele_runtime::fitting::Simd;
 
 /// The medium as the integrator sees it.
 pub trait Medium: Sync {

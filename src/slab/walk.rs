@@ -10,10 +10,11 @@
 use super::grid::SlabGrid;
 use super::lanes::{free_path as free_path_of, Lane, LaneRng, LANES};
 use super::tally::BatchTally;
-use nephele_runtime::frame::{orthonormal_basis, sin_cos_small};
-use nephele_runtime::phase::Cosine;
+use nephele_runtime::fitting::sin_cos_small;
 #[cfg(target_arch = "x86_64")]
-use nephele_runtime::simd::Simd;
+use nephele_runtime::fitting::Simd;
+use nephele_runtime::frame::orthonormal_basis;
+use nephele_runtime::phase::Cosine;
 use nephele_runtime::PhaseFunction;
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;

@@ -96,7 +96,8 @@ fn nephele_nc_part(g: u32, stat: u32, cols: vec2<u32>, r: NepheleNtT, p_x: array
         group_stride = x.cx_group_stride;
     }
     let depth = min(x.c_depth_terms, 8u);
-    nephele_nt_begin(g, NepheleNtPass(beta, x.c_param_stride, group_stride, x.c_q, cols.x, cols.y), r.s);
+    nephele_nt_begin(g, NepheleNtPass(beta, x.c_param_stride, group_stride, x.c_q, cols.x,
+        cols.y), r.s);
     nephele_nc_features(stat);
     var sum = 0.0;
     for (var j = 0u; j < depth; j++) {

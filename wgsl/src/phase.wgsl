@@ -152,7 +152,8 @@ struct NepheleHgDraine {
 }
 
 fn nephele_hg_draine_eval(m: NepheleHgDraine, c: NepheleCosine) -> f32 {
-    return (1.0 - m.w_d) * nephele_hg_eval(m.g_hg, c) + m.w_d * nephele_draine_eval(m.g_d, m.alpha, c);
+    return (1.0 - m.w_d) * nephele_hg_eval(m.g_hg, c)
+        + m.w_d * nephele_draine_eval(m.g_d, m.alpha, c);
 }
 
 // The HG lobe when ξ < 1 − w_D (ξ rescaled to it), else the Draine lobe: the pdf of a sample

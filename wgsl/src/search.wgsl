@@ -1,5 +1,5 @@
 // The collector search of Bouthors et al. 2008, §6.1, on the GPU: nephele-runtime's
-// `nephele_find_collector`, step for step. Where, on the cloud's lit surface, the light of one order
+// `find_collector`, step for step. Where, on the cloud's lit surface, the light of one order
 // group seen at p entered: the fixed point of (c, σ) with the surface filtered at σ
 // (docs/collector.md):
 //
@@ -203,7 +203,8 @@ fn nephele_ns_angle(c: f32, s: f32) -> f32 {
 // t held within the tables' thicknesses.
 fn nephele_ns_hold_thickness(t: f32) -> f32 {
     let x = nephele_ntt_index;
-    return nephele_ns_clamp(t, nephele_ntt_f32(x.thickness), nephele_ntt_f32(x.thickness + x.n_t - 1u));
+    return nephele_ns_clamp(t, nephele_ntt_f32(x.thickness),
+        nephele_ntt_f32(x.thickness + x.n_t - 1u));
 }
 
 // The slab tangent to `s` that holds the viewpoint, the sun toward `sun`: μ_L = n̄·ω_L,
@@ -212,13 +213,15 @@ fn nephele_ns_hold_thickness(t: f32) -> f32 {
 // μ_L held within the tables' grid; seen going up, where p lies deeper than μ_L τ_☉, the slab
 // above p cut to it; where μ_L τ_☉ exceeds the slab's thickness, the slab grown at its lit face
 // by the excess, p with it (the runtime's `local_slab`).
-fn nephele_local_slab(s: NepheleLitSample, v: NepheleViewpoint, sun: vec3<f32>) -> NepheleLocalSlab {
+fn nephele_local_slab(s: NepheleLitSample, v: NepheleViewpoint,
+    sun: vec3<f32>) -> NepheleLocalSlab {
     let x = nephele_ntt_index;
     let p = v.position;
     let n = s.normal;
     var clamps = 0u;
     let mu_l_raw = nephele_ns_dot(n, sun);
-    let mu_l = nephele_ns_clamp(mu_l_raw, nephele_ntt_f32(x.mu_l), nephele_ntt_f32(x.mu_l + x.n_l - 1u));
+    let mu_l = nephele_ns_clamp(mu_l_raw, nephele_ntt_f32(x.mu_l),
+        nephele_ntt_f32(x.mu_l + x.n_l - 1u));
     clamps |= select(0u, 2u, mu_l != mu_l_raw);
     var extinction = 0.0;
     if s.length > 0.0 {
@@ -288,7 +291,8 @@ fn nephele_local_slab(s: NepheleLitSample, v: NepheleViewpoint, sun: vec3<f32>) 
     } else {
         x_axis = nephele_ns_cross(n, z_axis);
     }
-    return NepheleLocalSlab(NepheleSlabPoint(thickness_v, mu_l, depth_v, mu_v, nephele_ns_angle(cos_psi, al)), clamps,
+    return NepheleLocalSlab(NepheleSlabPoint(thickness_v, mu_l, depth_v, mu_v,
+        nephele_ns_angle(cos_psi, al)), clamps,
         nephele_ns_add(p, n, below), z_axis, x_axis, extinction);
 }
 
@@ -311,7 +315,8 @@ fn nephele_ns_query(c_in: vec3<f32>, scale: f32, last: NepheleCollector) -> Neph
 }
 
 // The collector of group g seen from `v`, the sun toward `sun` (unit).
-fn nephele_find_collector(g: u32, v_in: NepheleViewpoint, sun: vec3<f32>, opts: NepheleSearchOptions) -> NepheleCollector {
+fn nephele_find_collector(g: u32, v_in: NepheleViewpoint, sun: vec3<f32>,
+    opts: NepheleSearchOptions) -> NepheleCollector {
     var c = v_in.position;
     var sigma = nephele_surface_initial_scale();
     var last: NepheleCollector;
@@ -339,7 +344,8 @@ fn nephele_find_collector(g: u32, v_in: NepheleViewpoint, sun: vec3<f32>, opts: 
             return last;
         }
         let k = 1.0 / slab.extinction;
-        let aim = nephele_ns_add(nephele_ns_add(slab.foot, slab.z_axis, tr.c_z * k), slab.x_axis, tr.c_x * k);
+        let aim = nephele_ns_add(nephele_ns_add(slab.foot, slab.z_axis, tr.c_z * k), slab.x_axis,
+            tr.c_x * k);
         let new_sigma = tr.sigma * k;
         let delta = vec3<f32>(aim.x - c.x, aim.y - c.y, aim.z - c.z);
         let along = nephele_ns_dot(delta, sun);

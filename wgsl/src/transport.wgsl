@@ -198,7 +198,8 @@ fn nephele_nt_prepare(at: NepheleSlabPoint) {
     let ln_t = nephele_ln(t);
     nephele_nt_pt.ln_t = ln_t;
     let omm = nephele_scattering_cosine(at).one_minus_mu;
-    let cell = NepheleNtCell(at, nephele_ntt_lerp(x.mu_l, x.n_l, at.mu_l), nephele_ntt_lerp(x.mu_v, x.n_v, at.mu_v),
+    let cell = NepheleNtCell(at, nephele_ntt_lerp(x.mu_l, x.n_l, at.mu_l),
+        nephele_ntt_lerp(x.mu_v, x.n_v, at.mu_v),
         nephele_nt_stretched_u(at.depth, t, ln_t), 2.0 * nephele_asin(min(sqrt(0.5 * omm), 1.0)));
     nephele_nt_pt.cell = cell;
     nephele_nt_pt.near_t = nephele_ntt_lerp(x.thickness, x.n_t, t);
@@ -273,7 +274,8 @@ fn nephele_nt_features() {
         for (var a = 0u; a < nephele_lerp_nodes(c.v); a++) {
             for (var b = 0u; b < nephele_lerp_nodes(c.l); b++) {
                 let p = nephele_lerp_node(c.v, a) * nl + nephele_lerp_node(c.l, b);
-                nephele_nt_add(col + p, nephele_lerp_weight(c.v, a) * nephele_lerp_weight(c.l, b) * ln_f1, 0u);
+                let w = nephele_lerp_weight(c.v, a) * nephele_lerp_weight(c.l, b);
+                nephele_nt_add(col + p, w * ln_f1, 0u);
             }
         }
         col += nm * nl;
@@ -288,7 +290,8 @@ fn nephele_nt_features() {
         col += 2u * nm * nl;
     } else {
         for (var k = 0u; k < nephele_lerp_nodes(c.v); k++) {
-            nephele_nt_add(col + nephele_lerp_node(c.v, k), nephele_lerp_weight(c.v, k) * ln_f1, 0u);
+            nephele_nt_add(col + nephele_lerp_node(c.v, k), nephele_lerp_weight(c.v, k) * ln_f1,
+                0u);
         }
         col += nm;
     }
@@ -301,7 +304,8 @@ fn nephele_nt_features() {
     let a = min(x.cross, 6u);
     if a > 0u {
         for (var k = 0u; k < nephele_lerp_nodes(c.l); k++) {
-            nephele_nt_add(col + nephele_lerp_node(c.l, k), nephele_lerp_weight(c.l, k) * ln_f1, 0u);
+            nephele_nt_add(col + nephele_lerp_node(c.l, k), nephele_lerp_weight(c.l, k) * ln_f1,
+                0u);
         }
         col += nl;
         let hemi = select(a * a, 0u, c.at.mu_v > 0.0);
@@ -309,7 +313,8 @@ fn nephele_nt_features() {
             let base = col + j * 2u * a * a + hemi;
             for (var ia = 0u; ia < a; ia++) {
                 for (var ib = 0u; ib < a; ib++) {
-                    nephele_nt_add(base + ia * a + ib, nephele_nt_pt.pv[ia] * nephele_nt_pt.pl[ib], j);
+                    nephele_nt_add(base + ia * a + ib,
+                        nephele_nt_pt.pv[ia] * nephele_nt_pt.pl[ib], j);
                 }
             }
         }
@@ -329,9 +334,11 @@ fn nephele_nt_fitted_depths(g: u32, near_t: NepheleLerp, c: NepheleNtCell) -> ve
     for (var a = 0u; a < nephele_lerp_nodes(near_t); a++) {
         for (var b = 0u; b < nephele_lerp_nodes(c.l); b++) {
             for (var m = 0u; m < nephele_lerp_nodes(c.v); m++) {
-                let corner = ((nephele_lerp_node(near_t, a) * x.n_l) + nephele_lerp_node(c.l, b)) * x.n_v
+                let corner = ((nephele_lerp_node(near_t, a) * x.n_l)
+                    + nephele_lerp_node(c.l, b)) * x.n_v
                     + nephele_lerp_node(c.v, m);
-                let wk = nephele_lerp_weight(near_t, a) * nephele_lerp_weight(c.l, b) * nephele_lerp_weight(c.v, m);
+                let wk = nephele_lerp_weight(near_t, a) * nephele_lerp_weight(c.l, b)
+                    * nephele_lerp_weight(c.v, m);
                 let packed = u32(nephele_ntt_f32(x.u_range + g * per_group + corner));
                 let ra = f32(packed / 4096u) * step;
                 let rb = f32(packed % 4096u) * step;
@@ -425,14 +432,16 @@ fn nephele_nt_far_fraction(u: f32, t: f32) -> f32 {
 
 // The depth part of ln T at u, read as the tables' information allows (the runtime's
 // `depth_polynomial`).
-fn nephele_nt_depth_polynomial(d: array<f32, 16>, n: u32, u: f32, thickness: f32, r: vec3<f32>) -> f32 {
+fn nephele_nt_depth_polynomial(d: array<f32, 16>, n: u32, u: f32, thickness: f32,
+    r: vec3<f32>) -> f32 {
     let edge = nephele_nt_held(r, u);
     let value = nephele_nt_polynomial(d, n, edge);
     if edge == u {
         return value;
     }
     let far = u > r.y;
-    let inside = nephele_nt_held(r, select(r.x + NEPHELE_NT_EDGE_STEP, r.y - NEPHELE_NT_EDGE_STEP, far));
+    let inside = nephele_nt_held(r, select(r.x + NEPHELE_NT_EDGE_STEP, r.y - NEPHELE_NT_EDGE_STEP,
+        far));
     let inner = nephele_nt_polynomial(d, n, inside);
     if !(abs(edge - inside) > 0.0) || !(inner > value) {
         return value;
@@ -460,7 +469,7 @@ fn nephele_nt_halo_centre(b: u32) -> f32 {
 }
 
 // e^h, the halo around the transmitted beam of group g at the cell (the runtime's
-// `nephele_transport::halo`): for views going down within the last edge, h read linearly between the
+// `transport::halo`): for views going down within the last edge, h read linearly between the
 // thickness and sun-cosine nodes, the planes and the annuli's median angles, held below the
 // first and falling to 0 at the last edge; 1 elsewhere and for the groups it does not cover.
 fn nephele_nt_halo(g: u32, near_t: NepheleLerp, c: NepheleNtCell) -> f32 {
@@ -485,7 +494,8 @@ fn nephele_nt_halo(g: u32, near_t: NepheleLerp, c: NepheleNtCell) -> f32 {
         while b + 2u < nb && nephele_nt_halo_centre(b + 1u) <= deg {
             b += 1u;
         }
-        let w = (deg - nephele_nt_halo_centre(b)) / (nephele_nt_halo_centre(b + 1u) - nephele_nt_halo_centre(b));
+        let lo = nephele_nt_halo_centre(b);
+        let w = (deg - lo) / (nephele_nt_halo_centre(b + 1u) - lo);
         ab = vec2<u32>(b, b + 1u);
         aw = vec2<f32>(1.0 - w, w);
     }
@@ -502,7 +512,8 @@ fn nephele_nt_halo(g: u32, near_t: NepheleLerp, c: NepheleNtCell) -> f32 {
             for (var k = 0u; k < 2u; k++) {
                 let j = select(j0, j1, k == 1u);
                 let wjk = select(1.0 - wj, wj, k == 1u);
-                let row = ((nephele_lerp_node(near_t, a) * x.n_l + nephele_lerp_node(c.l, b)) * planes + j) * nb;
+                let node = nephele_lerp_node(near_t, a) * x.n_l + nephele_lerp_node(c.l, b);
+                let row = (node * planes + j) * nb;
                 for (var e = 0u; e < 2u; e++) {
                     h += wtl * wjk * aw[e] * nephele_ntt_f32(base + row + ab[e]);
                 }
@@ -546,9 +557,11 @@ fn nephele_nt_transport(g: u32) -> NepheleNtT {
         return r;
     }
     r.s = nephele_nt_span_position(g, nephele_nt_pt.ln_t);
-    nephele_nt_begin(g, NepheleNtPass(x.beta, x.param_stride, x.group_stride, x.q, 0u, 0xffffffffu), r.s);
+    nephele_nt_begin(g, NepheleNtPass(x.beta, x.param_stride, x.group_stride, x.q, 0u,
+        0xffffffffu), r.s);
     nephele_nt_features();
-    let depth = nephele_nt_depth_polynomial(nephele_nt_acc, x.depth_terms, r.cell.u, r.cell.at.thickness, r.range);
+    let depth = nephele_nt_depth_polynomial(nephele_nt_acc, x.depth_terms, r.cell.u,
+        r.cell.at.thickness, r.range);
     let v = r.range.z * nephele_exp(nephele_nt_pt.ln_b + depth);
     let top = nephele_nt_ceiling(g, near_t, r.cell);
     r.t = select(v, top, top >= 0.0 && v > top) * nephele_nt_halo(g, near_t, r.cell);

@@ -62,10 +62,12 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let v = NepheleViewpoint(vec3<f32>(viewpoints[b], viewpoints[b + 1u], viewpoints[b + 2u]),
         vec3<f32>(viewpoints[b + 3u], viewpoints[b + 4u], viewpoints[b + 5u]), viewpoints[b + 6u],
         viewpoints[b + 7u], viewpoints[b + 8u]);
-    let c = nephele_find_collector(g, v, SUN, NepheleSearchOptions(8u, 0.1, 1u, 1u, 1u, bitcast<f32>(job.z)));
+    let c = nephele_find_collector(g, v, SUN, NepheleSearchOptions(8u, 0.1, 1u, 1u, 1u,
+        bitcast<f32>(job.z)));
     var kept = NepheleKept(1.0, NEPHELE_F32_MAX, 1.0);
     if c.found != 0u {
-        kept = nephele_finite_cloud(g, c, NepheleFiniteCloud(1u, 0u, 1.0, 0.0, 1u, 0.0, bitcast<f32>(job.z)));
+        kept = nephele_finite_cloud(g, c, NepheleFiniteCloud(1u, 0u, 1.0, 0.0, 1u, 0.0,
+            bitcast<f32>(job.z)));
     }
     let o = 24u * i;
     out[o] = f32(c.found);

@@ -10,8 +10,8 @@
 //! near 1 (50 µm droplets: 0.01° nodes, 1 − cos 0.01° = 1.5e-8).
 
 use super::{Cosine, PhaseFunction, Simd};
-use crate::frame::sin_cos_small;
 use crate::real::Real;
+use crate::small_angle::sin_cos_small;
 
 /// A borrowed table: nodes θ (radians, from 0 to π), normalised densities per unit angle f and
 /// the CDF at the nodes (0 … 1). Build one with [`TabulatedTable`] (std) or from stored arrays.

@@ -20,8 +20,8 @@ use super::geometry::SlabPoint;
 use super::leakage::{
     diffusion_coefficient, extrapolation_length, group_survival, lateral_rate, Loss,
 };
-use super::search::{Collector, LitSurface};
-use super::tables::TransportTables;
+use super::surface::{Collector, LitSurface};
+use super::tables::{group_orders, TransportTables};
 use crate::real::Real;
 
 /// Which corrections apply, and the medium's constants.
@@ -151,13 +151,4 @@ pub fn absorbed(
     };
     let (first, last) = group_orders(tables, g);
     group_survival(first, last, at.depth, at.thickness, opts.mean_cosine, &loss)
-}
-
-/// The orders group `g` holds: its first and its last (None: no end).
-pub(super) fn group_orders(tables: &TransportTables, g: usize) -> (f32, Option<f32>) {
-    let first = tables.group_first_order(g).unwrap_or(2.0);
-    (
-        first,
-        tables.group_first_order(g + 1).map(|next| next - 1.0),
-    )
 }

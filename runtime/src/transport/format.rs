@@ -1,6 +1,7 @@
 //! The `.ntt` layout of the compressed transport tables: the arrays' names, shapes and
-//! limits, their loading and checking ([`TransportTables::from_bytes`]), and the packing of
-//! the fitted depth ranges. The toolchain's writer uses the same names and limits
+//! limits, the checks of each array (the loader, `load.rs`, applies them in
+//! [`super::TransportTables::from_bytes`]), and the packing of the fitted depth ranges. The
+//! toolchain's writer uses the same names and limits
 //! (`nephele_runtime::fitting`); the evaluation is in [`super::tables`].
 //!
 //! Arrays (all f32):
@@ -30,7 +31,6 @@
 use super::collector::{CollectorForm, Statistic};
 use super::halo::Halo;
 use super::log_additive::{LogAdditive, MAX_LEGENDRE};
-use super::tables::{integrate_mean_cosine, TransportTables};
 use crate::container::{ArrayView, Container, FormatError};
 
 /// The names of the arrays of a `.ntt` (the table above), shared by the reader here and the
@@ -78,7 +78,7 @@ pub const MAX_GROUPS: usize = 64;
 
 /// nephele slab's default order groups by their first orders, order 1 first: 1, 2, 3–4, 5–6,
 /// 7–8, 9–12, 13–18, 19–30, 31–∞ (a `.ntt` holds those of orders ≥ 2:
-/// [`TransportTables::group_first_order`]).
+/// [`super::TransportTables::group_first_order`]).
 pub const DEFAULT_GROUP_FIRST: [u32; 9] = [1, 2, 3, 5, 7, 9, 13, 19, 31];
 
 /// Most nodes of each grid (sun cosines, view cosines, thicknesses).
@@ -93,7 +93,7 @@ pub(super) struct CollectorPart<'a> {
     pub(super) strides: [Strides; 3],
 }
 
-fn need<'a>(
+pub(super) fn need<'a>(
     c: &Container<'a>,
     name: &'static str,
     len: usize,
@@ -105,12 +105,12 @@ fn need<'a>(
     Ok(a)
 }
 
-fn increasing(a: &ArrayView) -> bool {
+pub(super) fn increasing(a: &ArrayView) -> bool {
     a.iter().zip(a.iter().skip(1)).all(|(x, y)| x < y)
 }
 
 /// The T form's sizes and Q from the `form` array, within the runtime's limits.
-fn parse_form(c: &Container) -> Result<(LogAdditive, usize), FormatError> {
+pub(super) fn parse_form(c: &Container) -> Result<(LogAdditive, usize), FormatError> {
     let bad = FormatError::BadArray(names::FORM);
     let a = c
         .find(names::FORM)
@@ -170,7 +170,7 @@ impl Strides {
 }
 
 /// The optional collector arrays, checked like the others.
-fn collector_part<'a>(
+pub(super) fn collector_part<'a>(
     c: &Container<'a>,
     g: usize,
     m: usize,
@@ -214,7 +214,7 @@ fn collector_part<'a>(
 }
 
 /// Whether every value of `a` is a whole number in [0, `max`] (sizes stored as f32).
-fn whole_numbers(a: &ArrayView, max: f32) -> bool {
+pub(super) fn whole_numbers(a: &ArrayView, max: f32) -> bool {
     a.iter()
         .all(|v| v >= 0.0 && v <= max && v == (v as u32) as f32)
 }
@@ -248,98 +248,8 @@ pub fn unpack_u_range(v: f32) -> (f32, f32) {
     ((v / U_STEPS) as f32 * step, (v % U_STEPS) as f32 * step)
 }
 
-impl<'a> TransportTables<'a> {
-    /// Loads the arrays (each of its shape, from the form's sizes and the grids' lengths) and
-    /// checks their values (finite, increasing grids, packed depth ranges, the phase table).
-    pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
-        let mut t = Self::parse(&Container::from_bytes(bytes)?)?;
-        t.check()?;
-        t.mean_cosine = integrate_mean_cosine(&t);
-        Ok(t)
-    }
-
-    /// Finds every array with its shape (from the form's sizes and the grids' lengths), all
-    /// values finite.
-    fn parse(c: &Container<'a>) -> Result<Self, FormatError> {
-        let (form, q) = parse_form(c)?;
-        let count = |name: &'static str| {
-            c.find(name)
-                .map(|a| a.len())
-                .ok_or(FormatError::Missing(name))
-        };
-        let (g, l, m, n) = (
-            count(names::GROUP_FIRST)?,
-            count(names::MU_L_NODES)?,
-            count(names::MU_V_NODES)?,
-            count(names::THICKNESS)?,
-        );
-        if !(1..=MAX_GROUPS).contains(&g) || [l, m, n].iter().any(|k| !(1..=MAX_NODES).contains(k))
-        {
-            return Err(FormatError::BadArray(names::GROUP_FIRST));
-        }
-        let p = form.n_params(m, l);
-        let theta_len = count(names::PHASE_THETA)?;
-        let beta_len = g
-            .checked_mul(p)
-            .and_then(|x| x.checked_mul(q))
-            .ok_or(FormatError::BadArray(names::BETA))?;
-        Ok(TransportTables {
-            collector: collector_part(c, g, m, l)?,
-            form,
-            q,
-            strides: Strides::of(c.version(), g, p, q),
-            group_first: need(c, names::GROUP_FIRST, g)?,
-            mu_l: need(c, names::MU_L_NODES, l)?,
-            mu_v: need(c, names::MU_V_NODES, m)?,
-            thickness: need(c, names::THICKNESS, n)?,
-            ln_t_range: need(c, names::LN_T_RANGE, 2 * g)?,
-            beta: need(c, names::BETA, beta_len)?,
-            u_range: need(
-                c,
-                names::U_RANGE,
-                [n, l, m]
-                    .iter()
-                    .try_fold(g, |acc, &k| acc.checked_mul(k))
-                    .ok_or(FormatError::BadArray(names::U_RANGE))?,
-            )?,
-            t_ceiling: match c.find(names::T_CEILING) {
-                Some(_) => Some(need(c, names::T_CEILING, g * n * l)?),
-                None => None,
-            },
-            phase_theta: need(c, names::PHASE_THETA, theta_len)?,
-            phase: need(c, names::PHASE, theta_len)?,
-            halo: halo_part(c, g, n, l)?,
-            mean_cosine: 0.0,
-        })
-    }
-
-    /// Checks the values the shapes do not: increasing grids, depth ranges packed as exact
-    /// integers, a phase function of at least two non-negative values from 0° to 180°.
-    fn check(&self) -> Result<(), FormatError> {
-        for (a, name) in [
-            (&self.mu_l, names::MU_L_NODES),
-            (&self.mu_v, names::MU_V_NODES),
-            (&self.thickness, names::THICKNESS),
-            (&self.phase_theta, names::PHASE_THETA),
-        ] {
-            if !increasing(a) {
-                return Err(FormatError::BadArray(name));
-            }
-        }
-        if !whole_numbers(&self.u_range, (U_STEPS * U_STEPS - 1) as f32) {
-            return Err(FormatError::BadArray(names::U_RANGE));
-        }
-        let n = self.phase_theta.len();
-        let ends = (self.phase_theta.get(0), self.phase_theta.get(n.max(1) - 1));
-        if n < 2 || ends != (Some(0.0), Some(180.0)) || self.phase.iter().any(|v| v < 0.0) {
-            return Err(FormatError::BadArray(names::PHASE));
-        }
-        Ok(())
-    }
-}
-
 /// The halo's arrays if the file has them: edges increasing from 0, at most `g` groups.
-fn halo_part<'a>(c: &Container<'a>, g: usize, n: usize, l: usize) -> Result<Option<Halo<'a>>, FormatError> {
+pub(super) fn halo_part<'a>(c: &Container<'a>, g: usize, n: usize, l: usize) -> Result<Option<Halo<'a>>, FormatError> {
     let Some(edges) = c.find(names::HALO_EDGES) else {
         return Ok(None);
     };

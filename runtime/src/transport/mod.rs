@@ -25,10 +25,12 @@ mod finite;
 mod geometry;
 mod halo;
 pub mod leakage;
+mod load;
 #[cfg(feature = "std")]
 mod owned;
 mod search;
 pub mod sun_depth;
+mod surface;
 mod thick;
 
 #[cfg(feature = "std")]

@@ -18,10 +18,9 @@
 //! at order 62) by 21.9 mfp. A tap outside the cloud counts τ = 0: light does not reach p from
 //! where there is no cloud.
 
-use super::finite::group_orders;
 use super::leakage::{diffusion_coefficient, lateral_orders};
-use super::search::{LitSurface, SearchOptions, Viewpoint};
-use super::tables::TransportTables;
+use super::surface::{LitSurface, SearchOptions, Viewpoint};
+use super::tables::{group_orders, TransportTables};
 use crate::frame::{orthonormal_basis, Vec3};
 use crate::real::Real;
 

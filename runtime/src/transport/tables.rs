@@ -903,6 +903,15 @@ const ONE_C_SUMS: usize = 16;
 const _: () = assert!(T_SUMS >= MAX_LEGENDRE * MAX_Q);
 const _: () = assert!(C_SUMS >= MAX_COLLECTOR_LEGENDRE * MAX_Q);
 
+/// The orders group `g` holds: its first and its last (None: no end).
+pub(super) fn group_orders(tables: &TransportTables, g: usize) -> (f32, Option<f32>) {
+    let first = tables.group_first_order(g).unwrap_or(2.0);
+    (
+        first,
+        tables.group_first_order(g + 1).map(|next| next - 1.0),
+    )
+}
+
 /// A point's features summed against the parameters of a run of groups at once:
 /// acc[j][(g − first) Q + k] = Σ over the features of depth degree j of v β[col][g][k].
 /// Feature-major β (version 2) makes each feature one contiguous run of (groups × Q) values,

@@ -21,7 +21,7 @@
 use super::march::substeps;
 use crate::render::geometry::{cross, dot, normalize, Vec3};
 use crate::render::medium::Medium;
-use nephele_runtime::simd::Simd;
+use nephele_runtime::fitting::Simd;
 use nephele_runtime::transport::{FilteredSurface, Lateral, LitSurface};
 use rayon::prelude::*;
 use std::ops::ControlFlow;
