@@ -84,7 +84,8 @@ fn nephele_nc_features(stat: u32) {
 }
 
 // One part of a statistic for group g at its depth: Σ_j d_j P_j(x).
-fn nephele_nc_part(g: u32, stat: u32, cols: vec2<u32>, r: NepheleNtT, p_x: array<f32, 16>) -> f32 {
+fn nephele_nc_part(g: u32, stat: u32, cols: vec2<u32>, r: NepheleNtT, p_x: array<f32, 16>)
+    -> f32 {
     let x = nephele_ntt_index;
     var beta = x.sigma_beta;
     var group_stride = x.sigma_group_stride;
@@ -143,7 +144,7 @@ fn nephele_nc_evaluate(g: u32) -> NepheleTransport {
         return out;
     }
     // c and σ are held within the fitted depths.
-    let u = nephele_nt_held(r.range, r.cell.u);
+    let u = nephele_nt_held(r.range, nephele_nt_pt.cell.u);
     let p_x = nephele_nt_legendre(2.0 * u - 1.0, min(x.c_depth_terms, 8u));
     let all = vec2<u32>(0u, 0xffffffffu);
     let sigma = nephele_exp(nephele_nc_part(g, 0u, all, r, p_x));

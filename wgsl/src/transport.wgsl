@@ -255,7 +255,7 @@ fn nephele_nt_prepare(at: NepheleSlabPoint) {
         sk = sk * s_v * s_l;
     }
     let mu_l_r = select(0.05, mu_l, mu_l > 0.05);
-    nephele_nt_pt.reach = s_l * 8.0 * -nephele_exp_m1(-at.depth / (mu_l_r * 8.0)) * 1.0;
+    nephele_nt_pt.reach = s_l * 8.0 * -nephele_exp_m1(-at.depth / (mu_l_r * 8.0));
 }
 
 // Adds every feature of the form at the prepared point to the running sums.
@@ -523,10 +523,10 @@ fn nephele_nt_halo(g: u32, near_t: NepheleLerp, c: NepheleNtCell) -> f32 {
     return nephele_exp(h);
 }
 
-// T of group g at a point, with what the collector needs of it.
+// T of group g at the prepared point, with what the collector needs of it (the point's cell
+// is nephele_nt_pt.cell).
 struct NepheleNtT {
     t: f32,
-    cell: NepheleNtCell,
     range: vec3<f32>,  // the fitted depths (lo, hi, share)
     s: f32,            // the place of ln t in the group's span
 }
@@ -547,12 +547,12 @@ fn nephele_nt_transport(g: u32) -> NepheleNtT {
     let x = nephele_ntt_index;
     var r: NepheleNtT;
     r.t = 0.0;
-    r.cell = nephele_nt_pt.cell;
+    let cell = nephele_nt_pt.cell;
     if g >= x.groups || !nephele_nt_pt.live {
         return r;
     }
     let near_t = nephele_nt_pt.near_t;
-    r.range = nephele_nt_fitted_depths(g, near_t, r.cell);
+    r.range = nephele_nt_fitted_depths(g, near_t, cell);
     if !(r.range.z > 0.0) {
         return r;
     }
@@ -560,11 +560,11 @@ fn nephele_nt_transport(g: u32) -> NepheleNtT {
     nephele_nt_begin(g, NepheleNtPass(x.beta, x.param_stride, x.group_stride, x.q, 0u,
         0xffffffffu), r.s);
     nephele_nt_features();
-    let depth = nephele_nt_depth_polynomial(nephele_nt_acc, x.depth_terms, r.cell.u,
-        r.cell.at.thickness, r.range);
+    let depth = nephele_nt_depth_polynomial(nephele_nt_acc, x.depth_terms, cell.u,
+        cell.at.thickness, r.range);
     let v = r.range.z * nephele_exp(nephele_nt_pt.ln_b + depth);
-    let top = nephele_nt_ceiling(g, near_t, r.cell);
-    r.t = select(v, top, top >= 0.0 && v > top) * nephele_nt_halo(g, near_t, r.cell);
+    let top = nephele_nt_ceiling(g, near_t, cell);
+    r.t = select(v, top, top >= 0.0 && v > top) * nephele_nt_halo(g, near_t, cell);
     return r;
 }
 

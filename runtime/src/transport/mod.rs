@@ -41,9 +41,10 @@ pub use format::MAX_GROUPS;
 pub use geometry::{PointError, SlabPoint, COSINE_SLACK};
 #[cfg(feature = "std")]
 pub use owned::OwnedTables;
-pub use search::{
-    find_collector, find_collectors, local_slab, Clamps, Collector, FilteredSurface, Lateral,
-    LitSurface, LocalSlab, SearchOptions, Unheld, Viewpoint,
-};
+pub use search::{find_collector, find_collectors, local_slab};
 pub use single::{scattering_cosine, single_scattering, PhaseValue};
+pub use surface::{
+    Clamps, Collector, FilteredSurface, Lateral, LitSurface, LocalSlab, SearchOptions, Unheld,
+    Viewpoint,
+};
 pub use tables::{Domain, Outside, OutsideTally, OutsideText, Transport, TransportTables};

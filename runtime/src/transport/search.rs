@@ -30,9 +30,8 @@
 use super::format::MAX_GROUPS;
 use super::geometry::SlabPoint;
 use super::sun_depth::group_viewpoint;
-pub use super::surface::{
-    Clamps, Collector, FilteredSurface, Lateral, LitSurface, LocalSlab, SearchOptions, Unheld,
-    Viewpoint,
+use super::surface::{
+    Clamps, Collector, FilteredSurface, LitSurface, LocalSlab, SearchOptions, Unheld, Viewpoint,
 };
 use super::tables::{Transport, TransportTables};
 use crate::frame::{cross, dot, Vec3};
