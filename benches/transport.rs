@@ -1,15 +1,14 @@
 //! The compressed tables at one point (nephele-runtime, f32, one core), on 4096 fixed random
 //! points over the whole domain (t = 0.5 … 128 mfp log-uniform, any depth, μ_V ∈ [−1, 1],
 //! ψ_V ∈ [0, π], μ_L ∈ [0.1, 1]): T of every group, T of one group, T, c and σ of every group
-//! and of one, and order 1 — each timed per point, for the shipped tables (version 3: β
-//! feature-major, with the halo near the beam), the same without the halo (version 2) and in
-//! the version 1 layout (β group-major), which still loads. Targets (issue 27): T of all 8 groups ≤ 1 µs, one ≤ 0.3 µs, T + c + σ of all
-//! ≤ 2.5 µs.
+//! and of one, and order 1 — each timed per point, for the shipped tables (with the halo near
+//! the beam) and the same without the halo. Targets: T of all 8 groups ≤ 1 µs, one ≤ 0.3 µs,
+//! T + c + σ of all ≤ 2.5 µs.
 //!
 //! `cargo bench --bench transport`
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use nephele::compress::ship::{relayout, without_halo};
+use nephele::compress::ship::without_halo;
 use nephele_runtime::embedded::MIE_10UM;
 use nephele_runtime::transport::{SlabPoint, Transport, TransportTables};
 use std::hint::black_box;
@@ -38,9 +37,8 @@ fn points() -> Vec<SlabPoint<f32>> {
 
 fn bench(c: &mut Criterion) {
     let points = points();
-    let v2 = without_halo(MIE_10UM).expect("the tables without their halo");
-    let v1 = relayout(&v2, 1).expect("the version 1 layout");
-    for (layout, bytes) in [("v3", MIE_10UM), ("v2", &v2[..]), ("v1", &v1[..])] {
+    let bare = without_halo(MIE_10UM).expect("the tables without their halo");
+    for (layout, bytes) in [("shipped", MIE_10UM), ("no_halo", &bare[..])] {
         let tab = TransportTables::from_bytes(bytes).expect("valid tables");
         let mut group = c.benchmark_group(format!("transport_{layout}"));
         group.throughput(Throughput::Elements(points.len() as u64));

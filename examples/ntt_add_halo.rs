@@ -1,4 +1,4 @@
-//! Adds the halo around the transmitted beam (format version 3, docs/compress.md "The halo
+//! Adds the halo around the transmitted beam (docs/compress.md "The halo
 //! term") to transport tables that have none, from a slab run that tallied the aureole: h =
 //! ln(T_annulus / T̄_form) against the file's own form, every other array byte for byte. This is
 //! how the shipped tables got theirs without refitting their form. Prints the near-beam check

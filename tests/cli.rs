@@ -506,6 +506,14 @@ fn slab_quick_config_writes_tables_and_refuses_bad_configs() {
         .as_f64()
         .unwrap();
     assert!((0.0..=1.0).contains(&worst));
+    // Every (t, μ_L) slice's share, the worst among them.
+    let slices = coverage["slices_all_groups"].as_array().unwrap();
+    let shares: Vec<f64> = slices
+        .iter()
+        .map(|s| s["share"].as_f64().unwrap())
+        .collect();
+    assert_eq!(shares.len(), 2 * 2, "every slice of the run: {slices:?}");
+    assert_eq!(worst, shares.iter().copied().fold(0.0, f64::max));
     let errors = report["errors"].as_array().unwrap();
     assert_eq!(errors.len(), 9, "8 groups of orders ≥ 2 and their sum");
     assert!(errors

@@ -20,13 +20,11 @@
 //!   L − 4     4  u32    CRC-32 (IEEE 802.3, as zlib) of bytes [0, L − 4)
 //! ```
 
-/// The version this writer writes. Version 3 may hold the halo around the transmitted beam
-/// (`halo_*` arrays, [`crate::transport::TransportTables`]), which a version-2 reader would
-/// ignore without a word, hence the bump; version 2 stores the transport parameters
-/// feature-major, and version 1 files, group-major, still load.
+/// The version this crate writes and the only one it reads: the transport parameters
+/// feature-major, optionally the halo around the transmitted beam. A file of another version
+/// holds its parameters in another layout, or arrays this reader would ignore: it is refused,
+/// and rebuilt with `nephele compress`.
 pub const FORMAT_VERSION: u32 = 3;
-/// The oldest version this reader loads.
-pub const OLDEST_FORMAT_VERSION: u32 = 1;
 
 use layout::{crc32, ENTRY_BYTES, HEADER_BYTES, MAGIC, MAX_ARRAYS, NAME_BYTES};
 
@@ -86,7 +84,7 @@ impl core::fmt::Display for FormatError {
             FormatError::UnsupportedVersion(v) => {
                 write!(
                     f,
-                    "transport tables version {v} (this reader knows {OLDEST_FORMAT_VERSION} to {FORMAT_VERSION})"
+                    "transport tables version {v}: this reader reads version {FORMAT_VERSION} only (rebuild them with `nephele compress`)"
                 )
             }
             FormatError::BadChecksum => write!(f, "transport tables checksum mismatch (corrupt)"),
@@ -175,7 +173,7 @@ impl<'a> Container<'a> {
         if version > MAX_PLAUSIBLE_VERSION {
             return Err(FormatError::BadMagic);
         }
-        if !(OLDEST_FORMAT_VERSION..=FORMAT_VERSION).contains(&version) {
+        if version != FORMAT_VERSION {
             return Err(FormatError::UnsupportedVersion(version));
         }
         let body = bytes.len() - 4;
@@ -209,7 +207,7 @@ impl<'a> Container<'a> {
         self.arrays
     }
 
-    /// The file's version ([`OLDEST_FORMAT_VERSION`] ..= [`FORMAT_VERSION`]).
+    /// The file's version ([`FORMAT_VERSION`]).
     pub fn version(&self) -> u32 {
         u32_at(self.bytes, 8).unwrap_or(FORMAT_VERSION)
     }

@@ -140,11 +140,22 @@ pub fn coverage(tab: &SlabTables, pred: &[f64], group: Option<usize>) -> Coverag
     }
 }
 
-/// The light of orders ≥ 2 every group drops together, as the largest share of one slice's.
-pub fn worst_slice_of_all(tab: &SlabTables, pred: &[f64]) -> SliceShare {
+/// The slice of `slices` with the largest share (the default where there is none).
+pub fn worst_slice(slices: &[SliceShare]) -> SliceShare {
+    slices.iter().fold(SliceShare::default(), |w, s| {
+        if s.share > w.share {
+            *s
+        } else {
+            w
+        }
+    })
+}
+
+/// The light of orders ≥ 2 every group drops together, per (t, μ_L) slice (t outer).
+pub fn slices_of_all(tab: &SlabTables, pred: &[f64]) -> Vec<SliceShare> {
     let [ng, nt, nl, nd, nm, nk] = tab.shape;
     let slice = nd * nm * nk;
-    let mut worst = SliceShare::default();
+    let mut out = Vec::with_capacity(nt * nl);
     for it in 0..nt {
         for il in 0..nl {
             let (mut all, mut lost) = (0.0, 0.0);
@@ -157,16 +168,14 @@ pub fn worst_slice_of_all(tab: &SlabTables, pred: &[f64]) -> SliceShare {
                     }
                 }
             }
-            if all > 0.0 && lost / all > worst.share {
-                worst = SliceShare {
-                    t: tab.thickness[it],
-                    mu_l: tab.mu_l[il],
-                    share: lost / all,
-                };
-            }
+            out.push(SliceShare {
+                t: tab.thickness[it],
+                mu_l: tab.mu_l[il],
+                share: if all > 0.0 { lost / all } else { 0.0 },
+            });
         }
     }
-    worst
+    out
 }
 
 /// Two indices bracketing `x` among increasing `nodes` (one twice outside them).

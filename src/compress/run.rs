@@ -3,7 +3,7 @@
 //! figures and transport.ntt (loaded back by the runtime and compared with the fit).
 
 use super::collector::{fit_collector, predict_collector, CollectorFit};
-use super::coverage::{coverage, domain_check, worst_slice_of_all, Coverage, SliceShare};
+use super::coverage::{coverage, domain_check, slices_of_all, worst_slice, Coverage, SliceShare};
 use super::figure;
 use super::fit::{fit_all, held_out_l, predict, predict_held_out, GroupFit};
 use super::form::Lerp;
@@ -199,6 +199,8 @@ struct CoverageReport {
     /// The largest share of one (t, μ_L) slice's light of orders ≥ 2 dropped by the groups
     /// together.
     worst_slice_all_groups: SliceShare,
+    /// Every slice's share dropped by the groups together (t outer, μ_L inner).
+    slices_all_groups: Vec<SliceShare>,
     groups: Vec<Coverage>,
 }
 
@@ -208,9 +210,11 @@ impl CoverageReport {
             .map(|g| coverage(tab, pred, Some(g)))
             .collect();
         groups.push(coverage(tab, pred, None));
+        let slices = slices_of_all(tab, pred);
         Self {
             definition: "over every cell with T > 0 (horizon bins, cells next to the faces and noisy cells included): the share of the light in cells where the form is 0 (zero) or off by more than a factor 2 either way (dropped); worst_slice: the largest share of one (t, mu_L) slice's light of orders >= 2 a group drops; rel_rms_all: T-weighted relative RMS over the same cells, noise_all the tables' own, rel_rms_all_net = sqrt(max(0, E^2 - N^2))",
-            worst_slice_all_groups: worst_slice_of_all(tab, pred),
+            worst_slice_all_groups: worst_slice(&slices),
+            slices_all_groups: slices,
             groups,
         }
     }
@@ -722,6 +726,8 @@ struct Domain {
 struct CoverageSummary {
     definition: &'static str,
     worst_slice_all_groups: SliceShare,
+    /// Every (t, μ_L) slice's share dropped by the groups together (t outer).
+    slices_all_groups: Vec<SliceShare>,
     /// Per group then the sum: dropped share, zero share, relative RMS over every cell.
     dropped: Vec<f64>,
     zero: Vec<f64>,
@@ -867,6 +873,7 @@ fn manifest(
         coverage: CoverageSummary {
             definition: m.coverage.definition,
             worst_slice_all_groups: m.coverage.worst_slice_all_groups,
+            slices_all_groups: m.coverage.slices_all_groups.clone(),
             dropped: m.coverage.groups.iter().map(|c| c.dropped).collect(),
             zero: m.coverage.groups.iter().map(|c| c.zero).collect(),
             rel_rms_all: m.coverage.groups.iter().map(|c| c.rel_rms_all).collect(),

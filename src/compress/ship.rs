@@ -6,10 +6,10 @@ use super::collector::CollectorFit;
 use super::joint::JointFit;
 use super::near_beam::HaloTable;
 use super::LogAdditive;
-use crate::io::container::{container_bytes, versioned_container_bytes, Array};
+use crate::io::container::{container_bytes, Array};
 use crate::slab::SlabTables;
 use anyhow::{ensure, Result};
-use nephele_runtime::container::{Container, FORMAT_VERSION};
+use nephele_runtime::container::Container;
 use nephele_runtime::fitting::{names, pack_u_range, CollectorForm, Statistic};
 
 /// Angles (degrees) at which an analytic phase function is stored: 0.02° steps to 5° (a
@@ -121,7 +121,7 @@ pub fn ntt_bytes(
 }
 
 /// The tables `bytes` (without a halo) with the halo `h` appended: every array as it is, then
-/// `halo_edges`, `halo_shape` and `halo` (format version 3; `nephele_runtime`'s
+/// `halo_edges`, `halo_shape` and `halo` (`nephele_runtime`'s
 /// `transport::halo`).
 pub fn with_halo(bytes: &[u8], h: &HaloTable) -> Result<Vec<u8>> {
     let c = Container::from_bytes(bytes).map_err(|e| anyhow::anyhow!("{e}"))?;
@@ -168,15 +168,10 @@ pub fn with_halo(bytes: &[u8], h: &HaloTable) -> Result<Vec<u8>> {
     container_bytes(&views)
 }
 
-/// The tables `bytes` without their halo, as version 2 (every other array as it is): the form
-/// alone, for comparisons and for readers of version 2.
+/// The tables `bytes` without their halo (every other array as it is): the form alone, for
+/// comparisons.
 pub fn without_halo(bytes: &[u8]) -> Result<Vec<u8>> {
     let c = Container::from_bytes(bytes).map_err(|e| anyhow::anyhow!("{e}"))?;
-    ensure!(
-        c.version() >= 2,
-        "version {} tables: relayout them first",
-        c.version()
-    );
     let kept: Vec<(String, Vec<usize>, Vec<f32>)> = (0..c.len())
         .filter_map(|i| c.array(i))
         .filter(|a| ![names::HALO_EDGES, names::HALO_SHAPE, names::HALO].contains(&a.name))
@@ -192,7 +187,7 @@ pub fn without_halo(bytes: &[u8]) -> Result<Vec<u8>> {
         .iter()
         .map(|(name, dims, values)| Array { name, dims, values })
         .collect();
-    versioned_container_bytes(&views, 2)
+    container_bytes(&views)
 }
 
 /// Per-group parameters ([P, Q] each) as one feature-major [P, G, Q] f32 array: one
@@ -214,44 +209,4 @@ fn feature_major(per_group: &[&[f64]], p: usize, q: usize) -> Result<Vec<f32>> {
         }
     }
     Ok(out)
-}
-
-/// The tables `bytes` (any version the runtime loads) rewritten in the layout of `version`
-/// (1: β group-major [G, P, Q]; 2 and 3, the current: feature-major [P, G, Q]); every other
-/// array as it is (`cargo run --release --example ntt_relayout -- OLD.ntt NEW.ntt`). A file
-/// with a halo stays at version 3: an older reader would skip the halo without a word.
-pub fn relayout(bytes: &[u8], version: u32) -> Result<Vec<u8>> {
-    ensure!(
-        (1..=FORMAT_VERSION).contains(&version),
-        "no transport tables layout of version {version} (1 to {FORMAT_VERSION})"
-    );
-    let c = Container::from_bytes(bytes).map_err(|e| anyhow::anyhow!("{e}"))?;
-    ensure!(
-        version >= 3 || c.find(names::HALO).is_none(),
-        "these tables hold a halo around the beam, which readers of version {version} would ignore: they stay at version 3"
-    );
-    let major = |v: u32| v >= 2;
-    let mut arrays: Vec<(String, Vec<usize>, Vec<f32>)> = Vec::with_capacity(c.len());
-    for i in 0..c.len() {
-        let a = c.array(i).expect("a validated container's array");
-        let mut dims = a.dims[..a.rank].to_vec();
-        let mut values: Vec<f32> = a.iter().collect();
-        let is_beta = a.name == names::BETA || names::COLLECTOR_BETA.contains(&a.name);
-        if is_beta && a.rank == 3 && major(c.version()) != major(version) {
-            let (d0, d1, q) = (dims[0], dims[1], dims[2]);
-            let old = std::mem::take(&mut values);
-            for i in 0..d1 {
-                for k in 0..d0 {
-                    values.extend_from_slice(&old[(k * d1 + i) * q..(k * d1 + i + 1) * q]);
-                }
-            }
-            dims = vec![d1, d0, q];
-        }
-        arrays.push((a.name.to_string(), dims, values));
-    }
-    let views: Vec<Array> = arrays
-        .iter()
-        .map(|(name, dims, values)| Array { name, dims, values })
-        .collect();
-    versioned_container_bytes(&views, version)
 }

@@ -19,12 +19,6 @@ pub struct Array<'a> {
 
 /// The bytes of a container holding `arrays`, in this order.
 pub fn container_bytes(arrays: &[Array]) -> Result<Vec<u8>> {
-    versioned_container_bytes(arrays, FORMAT_VERSION)
-}
-
-/// [`container_bytes`] stamped with another `version` (to write the older layout a test
-/// reads back).
-pub fn versioned_container_bytes(arrays: &[Array], version: u32) -> Result<Vec<u8>> {
     if arrays.len() > MAX_ARRAYS {
         bail!(
             "{} arrays: a container holds at most {MAX_ARRAYS}",
@@ -34,7 +28,7 @@ pub fn versioned_container_bytes(arrays: &[Array], version: u32) -> Result<Vec<u
     let mut data_at = HEADER_BYTES + arrays.len() * ENTRY_BYTES;
     let mut out = Vec::with_capacity(data_at);
     out.extend_from_slice(&MAGIC);
-    out.extend_from_slice(&version.to_le_bytes());
+    out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
     out.extend_from_slice(&(arrays.len() as u32).to_le_bytes());
     for (i, a) in arrays.iter().enumerate() {
         check_array(a)?;

@@ -143,7 +143,7 @@ pub struct NttGpu {
 pub fn ntt_for_gpu(bytes: &[u8]) -> Result<NttGpu, String> {
     use nephele_runtime::container::Container;
     use nephele_runtime::fitting::log_additive::LogAdditive;
-    use nephele_runtime::fitting::{names, CollectorForm, Statistic};
+    use nephele_runtime::fitting::{names, CollectorForm};
     let err = |e: &dyn std::fmt::Display| format!("transport tables: {e}");
     let tables =
         nephele_runtime::transport::TransportTables::from_bytes(bytes).map_err(|e| err(&e))?;
@@ -165,13 +165,8 @@ pub fn ntt_for_gpu(bytes: &[u8]) -> Result<NttGpu, String> {
     let (mu_v, n_v) = word_of(names::MU_V_NODES)?;
     let (thickness, n_t) = word_of(names::THICKNESS)?;
     let (group_first, groups) = word_of(names::GROUP_FIRST)?;
-    let p = shape.n_params(n_v as usize, n_l as usize);
-    // β is [P, G, Q] from version 2 on, [G, P, Q] before.
-    let (param_stride, group_stride) = if c.version() >= 2 {
-        (groups as usize * q, q)
-    } else {
-        (q, p * q)
-    };
+    // β is feature-major, [P, G, Q].
+    let (param_stride, group_stride) = (groups as usize * q, q);
     let ceiling = word_of(names::T_CEILING).ok();
     let (ln_t_range, _) = word_of(names::LN_T_RANGE)?;
     let (beta, _) = word_of(names::BETA)?;
@@ -179,7 +174,7 @@ pub fn ntt_for_gpu(bytes: &[u8]) -> Result<NttGpu, String> {
     let (phase_theta, n_phase) = word_of(names::PHASE_THETA)?;
     let (phase, _) = word_of(names::PHASE)?;
     let collector_beta = names::COLLECTOR_BETA.map(|name| word_of(name).map(|(at, _)| at));
-    // The halo (format version 3): edges, then h; its shape as two index words.
+    // The halo: edges, then h; its shape as two index words.
     let halo = match c.find(names::HALO_SHAPE) {
         Some(shape) => {
             let (edges, n_edges) = word_of(names::HALO_EDGES)?;
@@ -211,17 +206,11 @@ pub fn ntt_for_gpu(bytes: &[u8]) -> Result<NttGpu, String> {
             let q_c = size(3);
             let (n_v, n_l) = (n_v as usize, n_l as usize);
             let mut beta = [0u32; 3];
-            let mut group_stride = [0u32; 3];
-            for (k, stat) in Statistic::ALL.iter().enumerate() {
-                beta[k] = collector_beta[k].clone()?;
-                let p = form.n_params(*stat, n_v, n_l);
-                group_stride[k] = (if c.version() >= 2 { q_c } else { p * q_c }) as u32;
+            for (k, at) in collector_beta.iter().enumerate() {
+                beta[k] = at.clone()?;
             }
-            let param = if c.version() >= 2 {
-                groups as usize * q_c
-            } else {
-                q_c
-            };
+            let group_stride = [q_c as u32; 3];
+            let param = groups as usize * q_c;
             [
                 1,
                 form.legendre as u32,

@@ -107,11 +107,27 @@ fn nephele_tables_domain() -> NepheleDomain {
 
 // Where a point lies outside the grid, as C's `nephele_outside`: t past the thickest slab
 // (continued by diffusion theory), t below the thinnest (held), the sun below the lowest (held).
+// A point that is not in the slab at all (t not finite and > 0, μ_L ∉ (0, 1], d ∉ [0, t],
+// |μ_V| > 1, ψ_V not finite) has NEPHELE_NOT_IN_SLAB alone: where C, Python and the CLI refuse
+// the point, a shader has no error path, and the evaluators' values there mean nothing.
 const NEPHELE_OUTSIDE_THICKER: u32 = 1u;
 const NEPHELE_OUTSIDE_THINNER: u32 = 2u;
 const NEPHELE_OUTSIDE_LOWER_SUN: u32 = 4u;
+const NEPHELE_NOT_IN_SLAB: u32 = 8u;
+
+// The runtime's `SlabPoint::check`: cosines up to 1 + 10⁻⁶ (f32 rounding of unit vectors).
+fn nephele_is_slab_point(at: NepheleSlabPoint) -> bool {
+    let top = NEPHELE_F32_MAX;
+    let one = 1.0 + 1e-6;
+    return at.thickness > 0.0 && at.thickness <= top && at.mu_l > 0.0 && at.mu_l <= one
+        && at.depth >= 0.0 && at.depth <= at.thickness && abs(at.mu_v) <= one
+        && abs(at.psi_v) <= top;
+}
 
 fn nephele_outside(at: NepheleSlabPoint) -> u32 {
+    if !nephele_is_slab_point(at) {
+        return NEPHELE_NOT_IN_SLAB;
+    }
     let d = nephele_tables_domain();
     var bits = 0u;
     if !(at.thickness >= d.thickness.x && at.thickness <= d.thickness.y) {

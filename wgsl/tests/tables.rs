@@ -78,7 +78,7 @@ struct Wide {
     halo: Option<WideHalo>,
 }
 
-/// The halo around the transmitted beam (format version 3), in f64.
+/// The halo around the transmitted beam, in f64.
 struct WideHalo {
     edges: Vec<f64>,
     groups: usize,
@@ -543,6 +543,31 @@ fn the_domain_and_the_outside_flags_on_the_gpu_are_the_runtimes() {
     for (i, p) in pts.iter_mut().enumerate().step_by(5) {
         p.mu_l = 0.005 + 0.2 * (i % 7) as f32 / 7.0;
     }
+    // Points that are not in the slab: every coordinate out in turn, NaN and ±∞ included.
+    let at = |thickness, mu_l, depth, mu_v, psi_v| SlabPoint {
+        depth,
+        thickness,
+        mu_v,
+        psi_v,
+        mu_l,
+    };
+    let (nan, inf) = (f32::NAN, f32::INFINITY);
+    let bad = [
+        at(nan, 0.5, 1.0, 0.3, 0.1),
+        at(inf, 0.5, 1.0, 0.3, 0.1),
+        at(-4.0, 0.5, 1.0, 0.3, 0.1),
+        at(4.0, 1.5, 1.0, 0.3, 0.1),
+        at(4.0, 0.0, 1.0, 0.3, 0.1),
+        at(4.0, nan, 1.0, 0.3, 0.1),
+        at(4.0, 0.5, 4.5, 0.3, 0.1),
+        at(4.0, 0.5, -0.1, 0.3, 0.1),
+        at(4.0, 0.5, 1.0, 2.0, 0.1),
+        at(4.0, 0.5, 1.0, nan, 0.1),
+        at(4.0, 0.5, 1.0, 0.3, inf),
+        at(4.0, 0.5, 1.0, 0.3, nan),
+    ];
+    let within = pts.len();
+    pts.extend(bad);
     let flat: Vec<f32> = pts
         .iter()
         .flat_map(|p| [p.thickness, p.mu_l, p.depth, p.mu_v, p.psi_v])
@@ -599,7 +624,11 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         )
     );
     let mut kinds = [0usize; 8];
-    for (i, p) in pts.iter().enumerate() {
+    for (i, p) in pts.iter().enumerate().skip(within) {
+        assert!(p.check().is_err(), "{p:?}");
+        assert_eq!(words[5 + i], 8, "not in the slab: {p:?}");
+    }
+    for (i, p) in pts.iter().enumerate().take(within) {
         let want = dom.outside(p).bits(&dom);
         assert_eq!(words[5 + i], want, "{p:?}");
         kinds[want as usize] += 1;

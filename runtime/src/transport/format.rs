@@ -14,14 +14,14 @@
 //! | `mu_v_nodes` | [M] | view cosines of the μ_V parameters |
 //! | `thickness` | [N] | thicknesses of the depth ranges |
 //! | `ln_t_range` | [G, 2] | ln t span of each group's polynomials in ln t |
-//! | `beta` | [P, G, Q] | the parameters' Legendre coefficients in s(ln t), feature-major (version 1 files: [G, P, Q]) |
+//! | `beta` | [P, G, Q] | the parameters' Legendre coefficients in s(ln t), feature-major |
 //! | `u_range` | [G, N, L·M] | per thickness and (μ_L, μ_V) pair, the stretched depths fitted: [`U_STEPS`]-step integers lo · 4096 + hi (u = step/4095, widened outward; lo > hi: none) |
 //! | `t_ceiling` | [G, N, L] | optional: per thickness and sun cosine, the largest T of the fitted cells; T is capped at [`super::tables::CEILING_FACTOR`] × the largest of the nodes a point draws on |
 //! | `phase_theta` | [n] | phase function nodes (degrees, increasing, 0 … 180); between them 2π p sin θ is linear in θ, as the tabulated model samples |
 //! | `phase` | [n] | phase function p(θ) (sr⁻¹) |
 //! | `collector_form` | [4] | optional: the collector form's J, K, Θ nodes, Q |
 //! | `sigma_beta`, `cz_beta`, `cx_beta` | [P_s, G, Q] | with it: ln σ, c_z/σ̂, c_x/σ̂ ([`super::collector`]), feature-major as `beta` |
-//! | `halo_edges` | [B + 1] | optional (version 3): the halo's annulus edges Θ (degrees from the transmitted beam, increasing from 0) |
+//! | `halo_edges` | [B + 1] | optional: the halo's annulus edges Θ (degrees from the transmitted beam, increasing from 0) |
 //! | `halo_shape` | [2] | with it: the groups it covers (the first H ≤ G), the depth planes D (≥ 2) |
 //! | `halo` | [H, N, L, D·B] | with it: h = ln(T_annulus / T̄_form) per plane d and annulus b at d·B + b (transport/halo.rs) |
 //!
@@ -133,32 +133,22 @@ pub(super) fn parse_form(c: &Container) -> Result<(LogAdditive, usize), FormatEr
     Ok((form, q))
 }
 
-/// Where group g's Q coefficients of parameter p start in a β array: version 1 files store β
-/// group-major [G, P, Q]; version 2 feature-major [P, G, Q], so that one feature's
-/// coefficients for every group lie together and a point's features are read once for all of
-/// them ([`Sums`]).
+/// Where group g's Q coefficients of parameter p start in a β array, stored feature-major
+/// [P, G, Q], so that one feature's coefficients for every group lie together and a point's
+/// features are read once for all of them ([`Sums`]).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Strides {
     pub(super) param: usize,
     pub(super) group: usize,
-    pub(super) feature_major: bool,
 }
 
 impl Strides {
-    /// The layout of a file of `version` holding `g` groups of `p` parameters of `q` terms.
-    pub(super) fn of(version: u32, g: usize, p: usize, q: usize) -> Self {
-        if version >= 2 {
-            Self {
-                param: g * q,
-                group: q,
-                feature_major: true,
-            }
-        } else {
-            Self {
-                param: q,
-                group: p * q,
-                feature_major: false,
-            }
+    /// The layout of `g` groups of parameters of `q` terms, feature-major: a parameter's
+    /// coefficients for every group side by side.
+    pub(super) fn of(g: usize, q: usize) -> Self {
+        Self {
+            param: g * q,
+            group: q,
         }
     }
 
@@ -200,8 +190,7 @@ pub(super) fn collector_part<'a>(
     {
         *slot = Some(need(c, name, g * form.n_params(*stat, m, l) * q)?);
     }
-    let strides =
-        Statistic::ALL.map(|stat| Strides::of(c.version(), g, form.n_params(stat, m, l), q));
+    let strides = [Strides::of(g, q); 3];
     match beta {
         [Some(a), Some(b), Some(x)] => Ok(Some(CollectorPart {
             form,

@@ -47,7 +47,7 @@ impl<'a> TransportTables<'a> {
             collector: collector_part(c, g, m, l)?,
             form,
             q,
-            strides: Strides::of(c.version(), g, p, q),
+            strides: Strides::of(g, q),
             group_first: need(c, names::GROUP_FIRST, g)?,
             mu_l: need(c, names::MU_L_NODES, l)?,
             mu_v: need(c, names::MU_V_NODES, m)?,

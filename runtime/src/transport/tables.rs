@@ -247,7 +247,8 @@ impl<'a> TransportTables<'a> {
     }
 
     /// T = L/E⊥ (sr⁻¹) of group `g` at `at`; 0 where the tables resolve nothing or `g` is not
-    /// a group. For several groups at one point, [`Self::transport_all`] shares the work.
+    /// a group; NaN where `at` is not a point of the slab ([`SlabPoint::check`] says why).
+    /// For several groups at one point, [`Self::transport_all`] shares the work.
     pub fn transport(&self, g: usize, at: &SlabPoint<f32>) -> f32 {
         let mut out = [0.0];
         if g < self.groups() {
@@ -256,7 +257,8 @@ impl<'a> TransportTables<'a> {
         out[0]
     }
 
-    /// T of every group at `at` into `out[..groups()]` (the rest untouched): the features
+    /// T of every group at `at` into `out[..groups()]` (the rest untouched; NaN where `at` is
+    /// not a point of the slab): the features
     /// (geometry, single-scattering factor, scattering angle) are computed once and summed
     /// against every group's parameters together.
     pub fn transport_all(&self, at: &SlabPoint<f32>, out: &mut [f32]) {
@@ -271,6 +273,10 @@ impl<'a> TransportTables<'a> {
     /// T of the groups `first .. first + count` at `at` into `out[..count]` (the run fits one
     /// [`Sums`]).
     fn transport_run(&self, at: &SlabPoint<f32>, run: (usize, usize), out: &mut [f32]) {
+        if at.check().is_err() {
+            out.iter_mut().for_each(|v| *v = f32::NAN);
+            return;
+        }
         if let Some(c) = self.continued(at) {
             self.transport_run_within(&c.at, run, out);
             for (g, v) in (run.0..).zip(out.iter_mut()) {
@@ -358,7 +364,8 @@ impl<'a> TransportTables<'a> {
     }
 
     /// T, c and σ of group `g` at `at`; c and σ are 0 where T is, or when the file holds no
-    /// collector; all 0 when `g` is not a group.
+    /// collector; all 0 when `g` is not a group; all NaN where `at` is not a point of the slab
+    /// ([`SlabPoint::check`] says why).
     pub fn evaluate(&self, g: usize, at: &SlabPoint<f32>) -> Transport {
         let mut out = [Transport::default()];
         if g < self.groups() {
@@ -368,7 +375,8 @@ impl<'a> TransportTables<'a> {
     }
 
     /// T, c and σ of every group at `at` into `out[..groups()]` (the rest untouched); c and σ
-    /// are 0 where T is, or when the file holds no collector. The features are computed once
+    /// are 0 where T is, or when the file holds no collector; NaN where `at` is not a point of
+    /// the slab. The features are computed once
     /// and summed against every group's parameters together.
     pub fn evaluate_all(&self, at: &SlabPoint<f32>, out: &mut [Transport]) {
         let groups = self.groups().min(out.len());
@@ -384,6 +392,18 @@ impl<'a> TransportTables<'a> {
 
     /// T, c and σ of the groups `first .. first + count` at `at` into `out[..count]`.
     fn evaluate_run(&self, at: &SlabPoint<f32>, run: (usize, usize), out: &mut [Transport]) {
+        if at.check().is_err() {
+            let nan = f32::NAN;
+            out.iter_mut().for_each(|v| {
+                *v = Transport {
+                    t: nan,
+                    c_x: nan,
+                    c_z: nan,
+                    sigma: nan,
+                }
+            });
+            return;
+        }
         if let Some(c) = self.continued(at) {
             self.evaluate_run_within(&c.at, run, out);
             for (g, v) in (run.0..).zip(out.iter_mut()) {
@@ -536,11 +556,11 @@ impl<'a> TransportTables<'a> {
         self.phase_at(Cosine::from_mu(mu.clamp(-1.0, 1.0)))
     }
 
-    /// Order 1 (single scattering of the sun beam, sr⁻¹) at `at`, albedo 1; 0 outside the
-    /// slab ([`SlabPoint::in_slab`]), as T is.
+    /// Order 1 (single scattering of the sun beam, sr⁻¹) at `at`, albedo 1; NaN where `at` is
+    /// not a point of the slab ([`SlabPoint::check`] says why), as T is.
     pub fn order1(&self, at: &SlabPoint<f32>) -> f32 {
-        if !at.in_slab() {
-            return 0.0;
+        if at.check().is_err() {
+            return f32::NAN;
         }
         single_scattering(&StoredPhase(self), 1.0, at)
     }
@@ -914,8 +934,8 @@ pub(super) fn group_orders(tables: &TransportTables, g: usize) -> (f32, Option<f
 
 /// A point's features summed against the parameters of a run of groups at once:
 /// acc[j][(g − first) Q + k] = Σ over the features of depth degree j of v β[col][g][k].
-/// Feature-major β (version 2) makes each feature one contiguous run of (groups × Q) values,
-/// one vectorised multiply-add; group-major β (version 1) is gathered group by group. The sums
+/// Feature-major β makes each feature one contiguous run of (groups × Q) values, one
+/// vectorised multiply-add. The sums
 /// are linear in β, so the Legendre terms in ln t, which differ per group, are applied after
 /// ([`Sums::depth_sums`], [`Sums::dot`]).
 #[derive(Clone, Copy)]
@@ -934,7 +954,6 @@ impl<const N: usize> Sums<N> {
         strides: Strides {
             param: 0,
             group: 0,
-            feature_major: true,
         },
         first: 0,
         groups: 0,
@@ -979,18 +998,9 @@ impl<const N: usize> Sums<N> {
         let Some(acc) = self.acc.get_mut(j * width..(j + 1) * width) else {
             return;
         };
-        if self.strides.feature_major {
-            let start = self.strides.at(self.first, col);
-            if let Some(run) = beta.get(4 * start..4 * (start + width)) {
-                multiply_add(acc, v, run);
-            }
-        } else {
-            for (i, acc) in acc.chunks_exact_mut(self.q).enumerate() {
-                let start = self.strides.at(self.first + i, col);
-                if let Some(run) = beta.get(4 * start..4 * (start + self.q)) {
-                    multiply_add(acc, v, run);
-                }
-            }
+        let start = self.strides.at(self.first, col);
+        if let Some(run) = beta.get(4 * start..4 * (start + width)) {
+            multiply_add(acc, v, run);
         }
     }
 
@@ -1017,16 +1027,14 @@ impl<const N: usize> Sums<N> {
     /// [`Self::add_row`] for the target's baseline.
     #[inline(always)]
     fn add_row_any(&mut self, beta: &[u8], row: &[(u32, f32)]) {
-        if self.strides.feature_major {
-            // The shipped forms' widths: 8 groups × Q = 5 (T) and 8 × 4 (the collector), and
-            // one group of each (what a search's later reads take).
-            match self.groups * self.q {
-                40 => return self.add_runs::<40>(beta, row),
-                32 => return self.add_runs::<32>(beta, row),
-                5 => return self.add_runs::<5>(beta, row),
-                4 => return self.add_runs::<4>(beta, row),
-                _ => {}
-            }
+        // The shipped forms' widths: 8 groups × Q = 5 (T) and 8 × 4 (the collector), and one
+        // group of each (what a search's later reads take).
+        match self.groups * self.q {
+            40 => return self.add_runs::<40>(beta, row),
+            32 => return self.add_runs::<32>(beta, row),
+            5 => return self.add_runs::<5>(beta, row),
+            4 => return self.add_runs::<4>(beta, row),
+            _ => {}
         }
         self.add_each(beta, row);
     }
