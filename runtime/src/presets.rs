@@ -30,7 +30,7 @@
 //! optima jump between lobe shapes no smooth curve follows; see docs/fit.md. Below 0.1 µm it is the paper's Rayleigh-limit branch (not refitted).
 
 use crate::phase::HgDraine;
-use crate::real::Real;
+use crate::real::{Math, Real};
 
 /// The four parameters of the blend (1 − w_D) HG(g_HG) + w_D Draine(g_D, α).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -58,7 +58,7 @@ impl HgDraineParams {
 }
 
 fn cos(x: f64) -> f64 {
-    Real::sin_cos(x).1
+    Math::sin_cos(x).1
 }
 
 impl<F: Real> HgDraine<F> {
@@ -80,7 +80,7 @@ pub const FIT_MAX_DIAMETER_UM: f64 = 50.0;
 /// [`FIT_MAX_DIAMETER_UM`]).
 pub fn jendersie_deon(d_um: f64) -> HgDraineParams {
     let d = d_um;
-    let exp = |x: f64| Real::exp(x);
+    let exp = |x: f64| Math::exp(x);
     if d >= 5.0 {
         return HgDraineParams {
             g_hg: exp(-0.0990567 / (d - 1.67154)),
@@ -89,10 +89,10 @@ pub fn jendersie_deon(d_um: f64) -> HgDraineParams {
             w_d: exp(-0.599085 / (d - 0.641583) - 0.665888),
         };
     }
-    let l = Real::ln(d);
+    let l = Math::ln(d);
     if d >= 1.5 {
-        let (s, c) = Real::sin_cos(l);
-        let ln_l = Real::ln(l);
+        let (s, c) = Math::sin_cos(l);
+        let ln_l = Math::ln(l);
         return HgDraineParams {
             g_hg: 0.0604931 * ln_l + 0.940256,
             g_d: 0.500411 - 0.081287 / (-2.0 * l + s / c + 1.27551),
@@ -113,7 +113,7 @@ pub fn jendersie_deon(d_um: f64) -> HgDraineParams {
     }
     HgDraineParams {
         g_hg: 13.8 * d * d,
-        g_d: 1.1456 * d * Real::sin_cos(9.29044 * d).0,
+        g_d: 1.1456 * d * Math::sin_cos(9.29044 * d).0,
         alpha: 250.0,
         w_d: 0.252977 - 312.983 * exp(4.3 * l),
     }
@@ -131,10 +131,10 @@ enum Curve {
 impl Curve {
     fn at(self, d: f64) -> f64 {
         match self {
-            Curve::ExpRational { a, b, c } => Real::exp(a - b / (d + c)),
+            Curve::ExpRational { a, b, c } => Math::exp(a - b / (d + c)),
             // Horner in x = ln d − l0.
             Curve::PolyLnD { l0, c } => {
-                let x = Real::ln(d) - l0;
+                let x = Math::ln(d) - l0;
                 c.iter().rev().fold(0.0, |acc, ck| acc * x + ck)
             }
         }

@@ -5,7 +5,9 @@
 
 use core::ops::{Add, Div, Mul, Neg, Sub};
 
-/// `f32` or `f64`.
+/// `f32` or `f64`: what the evaluators are generic over. Sealed: no other type implements it,
+/// and its math (the runtime's own, from `std`, `libm` or the built-in fallback) is not part of
+/// the crate's interface.
 pub trait Real:
     Copy
     + PartialOrd
@@ -15,6 +17,7 @@ pub trait Real:
     + Mul<Output = Self>
     + Div<Output = Self>
     + Neg<Output = Self>
+    + sealed::Math
 {
     /// π.
     const PI: Self;
@@ -24,28 +27,36 @@ pub trait Real:
     fn of(v: f64) -> Self;
     /// Converts to f64 (exact).
     fn f64(self) -> f64;
-    /// √x.
-    fn sqrt(self) -> Self;
-    /// eˣ.
-    fn exp(self) -> Self;
-    /// ln x.
-    fn ln(self) -> Self;
-    /// |x|.
-    fn abs(self) -> Self;
-    /// (sin x, cos x).
-    fn sin_cos(self) -> (Self, Self);
-    /// ∛x.
-    fn cbrt(self) -> Self;
-    /// asin x.
-    fn asin(self) -> Self;
-    /// Clamps to [lo, hi].
-    fn clamp_to(self, lo: Self, hi: Self) -> Self {
-        if self < lo {
-            lo
-        } else if self > hi {
-            hi
-        } else {
-            self
+}
+
+pub(crate) use sealed::Math;
+
+mod sealed {
+    /// The few math functions the evaluators need, on f32 and f64 alike.
+    pub trait Math: Sized + PartialOrd {
+        /// √x.
+        fn sqrt(self) -> Self;
+        /// eˣ.
+        fn exp(self) -> Self;
+        /// ln x.
+        fn ln(self) -> Self;
+        /// |x|.
+        fn abs(self) -> Self;
+        /// (sin x, cos x).
+        fn sin_cos(self) -> (Self, Self);
+        /// ∛x.
+        fn cbrt(self) -> Self;
+        /// asin x.
+        fn asin(self) -> Self;
+        /// Clamps to [lo, hi].
+        fn clamp_to(self, lo: Self, hi: Self) -> Self {
+            if self < lo {
+                lo
+            } else if self > hi {
+                hi
+            } else {
+                self
+            }
         }
     }
 }
@@ -63,6 +74,9 @@ macro_rules! impl_real {
             fn f64(self) -> f64 {
                 self as f64
             }
+        }
+
+        impl sealed::Math for $t {
             #[inline]
             fn sqrt(self) -> Self {
                 $sqrt(self)

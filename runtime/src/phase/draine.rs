@@ -16,7 +16,7 @@
 //! bound is below 1e-14, else inside a shrinking bracket to |F − ξ| ≤ 1e-14.
 
 use super::{invert_cdf, Cosine, HenyeyGreenstein, PhaseFunction};
-use crate::real::Real;
+use crate::real::{Math, Real};
 use crate::soft_math::pow2;
 
 /// Draine's phase function with asymmetry-like g ∈ (−1, 1) and α ≥ 0.
@@ -269,7 +269,7 @@ fn cdf_and_inverse_density(g: f64, alpha: f64, mu: f64) -> (f64, f64) {
     } else {
         (1.0 + g) * (1.0 + g) - 2.0 * g * (1.0 + mu)
     };
-    let v = Real::sqrt(d.max(0.0));
+    let v = Math::sqrt(d.max(0.0));
     let v0 = 1.0 + g;
     let r1 = 1.0 / (v + 1.0);
     let w = 1.0 / (v * (v0 + v));

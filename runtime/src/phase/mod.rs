@@ -68,7 +68,7 @@ pub use vmf::VonMisesFisher;
 pub use xlf::{Xlf, XLF_G_MAX};
 
 use crate::frame::{direction_from_cosine, Vec3};
-use crate::real::Real;
+use crate::real::{Math, Real};
 
 /// A sampled scattering cosine with 1 − μ carried separately: near a strong forward peak
 /// (HG with g = 0.998 at 50 µm) f32 cannot tell μ from 1, while 1 − μ keeps full precision.
@@ -171,7 +171,7 @@ pub(crate) fn invert_cdf(
     let mut mu = start.clamp(-1.0, 1.0);
     for _ in 0..100 {
         let f = cdf(mu) - xi;
-        if Real::abs(f) <= 1e-14 {
+        if Math::abs(f) <= 1e-14 {
             break;
         }
         if f > 0.0 {

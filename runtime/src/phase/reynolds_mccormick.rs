@@ -9,7 +9,7 @@
 //!   K = 2α g (1 − g²)^{2α}/((1 + g)^{2α} − (1 − g)^{2α})  (ln(u₊/u₋) for the last term at α = 1).
 
 use super::{Cosine, PhaseFunction};
-use crate::real::Real;
+use crate::real::{Math, Real};
 
 /// Reynolds–McCormick with |g| < 1 and α > 0.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -23,7 +23,7 @@ pub struct ReynoldsMcCormick<F> {
 }
 
 fn pow(x: f64, y: f64) -> f64 {
-    Real::exp(y * Real::ln(x))
+    Math::exp(y * Math::ln(x))
 }
 
 /// Below this |g| the first-order expansion in g is used.
@@ -33,7 +33,7 @@ impl<F: Real> ReynoldsMcCormick<F> {
     /// RM(g, α).
     pub fn new(g: F, alpha: F) -> Self {
         let (gd, a) = (g.f64(), alpha.f64());
-        let norm = if Real::abs(gd) < SMALL_G {
+        let norm = if Math::abs(gd) < SMALL_G {
             0.25 / core::f64::consts::PI
         } else {
             a * gd * pow(1.0 - gd * gd, 2.0 * a)
@@ -54,7 +54,7 @@ impl<F: Real> PhaseFunction<F> for ReynoldsMcCormick<F> {
 
     fn pdf_cosine(&self, c: Cosine<F>) -> F {
         let (g, a, one) = (self.g, self.alpha, F::of(1.0));
-        if Real::abs(g.f64()) < SMALL_G {
+        if Math::abs(g.f64()) < SMALL_G {
             return self.norm * (one + F::of(2.0) * (a + one) * g * c.mu);
         }
         let d = if c.mu > F::of(0.0) {
@@ -67,7 +67,7 @@ impl<F: Real> PhaseFunction<F> for ReynoldsMcCormick<F> {
 
     fn sample_cosine(&self, xi: F) -> Cosine<F> {
         let (g, a, xi) = (self.g.f64(), self.alpha.f64(), xi.f64());
-        if Real::abs(g) < SMALL_G {
+        if Math::abs(g) < SMALL_G {
             let m0 = 2.0 * xi - 1.0;
             return Cosine::from_mu(F::of(m0 + (a + 1.0) * g * (1.0 - m0 * m0)));
         }
@@ -83,15 +83,15 @@ impl<F: Real> PhaseFunction<F> for ReynoldsMcCormick<F> {
 
     fn mean_cosine(&self) -> Option<F> {
         let (g, a) = (self.g.f64(), self.alpha.f64());
-        if Real::abs(g) < 1e-3 {
+        if Math::abs(g) < 1e-3 {
             return Some(F::of(2.0 * (a + 1.0) * g / 3.0));
         }
         let (up, um) = ((1.0 + g) * (1.0 + g), (1.0 - g) * (1.0 - g));
         let k = 2.0 * a * g * pow(1.0 - g * g, 2.0 * a)
             / (pow(1.0 + g, 2.0 * a) - pow(1.0 - g, 2.0 * a));
         let first = (1.0 + g * g) * (pow(um, -a) - pow(up, -a)) / a;
-        let second = if Real::abs(1.0 - a) < 1e-9 {
-            Real::ln(up / um)
+        let second = if Math::abs(1.0 - a) < 1e-9 {
+            Math::ln(up / um)
         } else {
             (pow(up, 1.0 - a) - pow(um, 1.0 - a)) / (1.0 - a)
         };

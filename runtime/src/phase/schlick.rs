@@ -4,7 +4,7 @@
 //! sampled by μ = (2ξ + k − 1)/(2kξ − k + 1), the exact inverse CDF.
 
 use super::{inv_four_pi, Cosine, PhaseFunction};
-use crate::real::Real;
+use crate::real::{Math, Real};
 
 /// Schlick's phase function with k ∈ (−1, 1).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -58,7 +58,7 @@ impl<F: Real> PhaseFunction<F> for Schlick<F> {
         let m = if k.abs() < 1e-3 {
             2.0 * k / 3.0 + 2.0 * k * k * k / 15.0
         } else {
-            1.0 / k - (1.0 - k * k) / (2.0 * k * k) * Real::ln((1.0 + k) / (1.0 - k))
+            1.0 / k - (1.0 - k * k) / (2.0 * k * k) * Math::ln((1.0 + k) / (1.0 - k))
         };
         Some(F::of(m))
     }

@@ -4,7 +4,7 @@
 //! sampled by μ = 1 + ln(ξ + (1 − ξ) e^{−2κ})/κ (Wenzel 1994 / Jakob 2012).
 
 use super::{inv_four_pi, Cosine, PhaseFunction};
-use crate::real::Real;
+use crate::real::{Math, Real};
 
 /// von Mises–Fisher lobe with concentration κ ≥ 0 around the forward direction.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -56,7 +56,7 @@ impl<F: Real> PhaseFunction<F> for VonMisesFisher<F> {
         let m = if k < 1e-3 {
             k / 3.0 - k * k * k / 45.0
         } else {
-            let e = Real::exp(-2.0 * k);
+            let e = Math::exp(-2.0 * k);
             (1.0 + e) / (1.0 - e) - 1.0 / k
         };
         Some(F::of(m))

@@ -15,7 +15,7 @@
 //! ⟨μ⟩ = [A K(g) + 2g/3] / (A I(g)) with K = ∫ μ(1 + μ²)/(a − bμ) dμ.
 
 use super::{invert_cdf, Cosine, PhaseFunction};
-use crate::real::Real;
+use crate::real::{Math, Real};
 
 /// Largest |g| for which the normalised XLF stays non-negative.
 pub const XLF_G_MAX: f64 = 0.476955;
@@ -31,11 +31,11 @@ pub struct Xlf<F> {
 
 /// ∫_{−1}^{μ} tⁿ (1 + t²)/(a − bt) dt for n = 0, 1 (see the module notes).
 fn series(g: f64, mu: f64, n: u32) -> f64 {
-    if Real::abs(g) >= 0.1 {
+    if Math::abs(g) >= 0.1 {
         let (a, b) = (1.0 + g * g, 2.0 * g);
         let j0 = -(mu * mu - 1.0) / (2.0 * b)
             - a * (mu + 1.0) / (b * b)
-            - (1.0 + a * a / (b * b)) * Real::ln((a - b * mu) / (a + b)) / b;
+            - (1.0 + a * a / (b * b)) * Math::ln((a - b * mu) / (a + b)) / b;
         return if n == 0 {
             j0
         } else {
@@ -55,7 +55,7 @@ fn series(g: f64, mu: f64, n: u32) -> f64 {
         let term = rk * (prim(n + k) + prim(n + k + 2));
         sum += term;
         rk *= r;
-        if Real::abs(rk) < 1e-18 {
+        if Math::abs(rk) < 1e-18 {
             break;
         }
     }
@@ -74,7 +74,7 @@ impl<F: Real> Xlf<F> {
     /// XLF with parameter g; `None` if |g| > [`XLF_G_MAX`] (p would turn negative).
     pub fn new(g: F) -> Option<Self> {
         let gd = g.f64();
-        if !(Real::abs(gd) <= XLF_G_MAX) {
+        if !(Math::abs(gd) <= XLF_G_MAX) {
             return None;
         }
         let norm = 2.0 * core::f64::consts::PI * amplitude(gd) * series(gd, 1.0, 0);

@@ -22,7 +22,7 @@ use super::leakage::{
 };
 use super::surface::{Collector, LitSurface};
 use super::tables::{group_orders, TransportTables};
-use crate::real::Real;
+use crate::real::{Math, Real};
 
 /// Which corrections apply, and the medium's constants.
 #[derive(Clone, Copy, Debug, PartialEq)]

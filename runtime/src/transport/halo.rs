@@ -19,7 +19,7 @@
 
 use super::log_additive::{Cell, Lerp};
 use crate::container::ArrayView;
-use crate::real::Real;
+use crate::real::Math;
 
 /// The halo correction of a `.ntt` (arrays `halo_edges`, `halo_shape`, `halo`).
 #[derive(Clone, Copy, Debug)]
@@ -51,7 +51,7 @@ impl Halo<'_> {
             self.edges.get(b).unwrap_or(0.0),
             self.edges.get(b + 1).unwrap_or(0.0),
         );
-        Real::sqrt(0.5 * (a * a + c * c))
+        Math::sqrt(0.5 * (a * a + c * c))
     }
 
     /// The annuli a view `deg` degrees from the beam reads, with weights (short of 1 in all
@@ -123,6 +123,6 @@ impl HaloAt {
         let h = self.taps[..self.n].iter().fold(0.0f32, |s, &(k, w)| {
             s + w * halo.values.get(base + k).unwrap_or(0.0)
         });
-        Real::exp(h)
+        Math::exp(h)
     }
 }

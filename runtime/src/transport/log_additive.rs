@@ -25,7 +25,7 @@ use super::geometry::SlabPoint;
 use super::single::{beam_scattered_once, scattering_cosine};
 use crate::legendre::Legendre;
 use crate::phase::{Cosine, HenyeyGreenstein, PhaseFunction};
-use crate::real::{exp_m1, Real};
+use crate::real::{exp_m1, Math, Real};
 
 /// Most Legendre terms in depth.
 pub const MAX_LEGENDRE: usize = 16;
@@ -716,7 +716,7 @@ pub fn theta_hats<F: Real>(
     };
     // The first node at or beyond Θ (from 1, at most n − 1): found from Θ's square root, then
     // settled by the nodes themselves, so that rounding cannot move it.
-    let guess = (theta.f64() / core::f64::consts::PI).max(0.0).sqrt() * top;
+    let guess = Math::sqrt((theta.f64() / core::f64::consts::PI).max(0.0)) * top;
     let mut i = (guess as usize).clamp(1, n - 1);
     while i > 1 && node(i - 1) >= theta {
         i -= 1;

@@ -35,7 +35,7 @@ use super::surface::{
 };
 use super::tables::{Transport, TransportTables};
 use crate::frame::{cross, dot, Vec3};
-use crate::real::Real;
+use crate::real::{Math, Real};
 
 fn add(a: Vec3<f32>, b: Vec3<f32>, s: f32) -> Vec3<f32> {
     [a[0] + s * b[0], a[1] + s * b[1], a[2] + s * b[2]]

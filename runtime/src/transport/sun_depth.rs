@@ -22,14 +22,14 @@ use super::leakage::{diffusion_coefficient, lateral_orders};
 use super::surface::{LitSurface, SearchOptions, Viewpoint};
 use super::tables::{group_orders, TransportTables};
 use crate::frame::{orthonormal_basis, Vec3};
-use crate::real::Real;
+use crate::real::Math;
 
 /// The lateral spread (mfp) of the light of the orders `first ..= last` (None: no end) for a
 /// phase function of mean cosine `g`: √(4 D n⊥(n̄)), n̄ = (first + last)/2 or 2 first.
 pub fn group_spread(first: f32, last: Option<f32>, g: f32) -> f32 {
     let middle = last.map_or(2.0 * first, |b| 0.5 * (first + b));
     let across = lateral_orders(middle, g);
-    Real::sqrt((4.0 * diffusion_coefficient(g) * across).max(0.0))
+    Math::sqrt((4.0 * diffusion_coefficient(g) * across).max(0.0))
 }
 
 /// The viewpoint group `g`'s search reads: `v` with p's depth to the sun averaged over the

@@ -20,7 +20,7 @@ use super::thick::{continued, Continued};
 use crate::container::ArrayView;
 use crate::legendre::LegendreLanes;
 use crate::phase::{angle, phase_between, Cosine};
-use crate::real::Real;
+use crate::real::{Math, Real};
 use core::mem::MaybeUninit;
 
 /// A group's T never exceeds this factor times the largest value its fitted cells hold at the
@@ -124,7 +124,7 @@ impl core::fmt::Display for OutsideText<'_> {
             sep = "; ";
         }
         if let Some(m) = o.mu_l {
-            let deg = |mu: f32| Real::asin(mu as f64) * 180.0 / f64::PI;
+            let deg = |mu: f32| Math::asin(mu as f64) * 180.0 / f64::PI;
             write!(
                 f,
                 "{sep}mu_L = {m} (sun {:.1} deg up) is below the tables' lowest sun ({} = {:.1} deg up): held there",
@@ -571,7 +571,7 @@ impl<'a> TransportTables<'a> {
         if !at.in_slab() {
             return None;
         }
-        let ln_t = Real::ln(t);
+        let ln_t = Math::ln(t);
         let stretch = Stretch::with_ln_t(t, ln_t);
         let (nt, nl, nm) = (self.thickness.len(), self.mu_l.len(), self.mu_v.len());
         let cell = Cell::new(
@@ -718,7 +718,7 @@ impl<'a> TransportTables<'a> {
                 let d_i: [f32; MAX_LEGENDRE] = core::array::from_fn(|j| d[j][i]);
                 depth_polynomial_in(&d_i, depth_terms, u, &mut faces, range)
             };
-            let v = range.share * Real::exp(pt.offset + depth);
+            let v = range.share * Math::exp(pt.offset + depth);
             t[i] = match top[i] {
                 Some(top) if v > top => top,
                 _ => v,
@@ -864,7 +864,7 @@ impl<'a> TransportTables<'a> {
                 let d = &parts[part];
                 d.iter().zip(&p_x).take(depth).map(|(d, p)| d[i] * p).sum()
             };
-            let sigma = Real::exp(dot(0));
+            let sigma = Math::exp(dot(0));
             let cz = dot(1) + dot(2) / sigma;
             slot.c_x = sigma * dot(3);
             slot.c_z = sigma * cz;
@@ -881,7 +881,7 @@ impl<'a> TransportTables<'a> {
         let node = |k: usize| {
             let t = self.phase_theta.get(k).unwrap_or(0.0) * to_rad;
             let p = self.phase.get(k).unwrap_or(0.0);
-            (t, 2.0 * core::f32::consts::PI * p * Real::sin_cos(t).0)
+            (t, 2.0 * core::f32::consts::PI * p * Math::sin_cos(t).0)
         };
         phase_between(node(i), node(i + 1), theta, sin)
     }
@@ -1372,7 +1372,7 @@ pub(super) fn integrate_mean_cosine(tables: &TransportTables) -> f32 {
     let h = f64::PI / n as f64;
     let mut sum = 0.0f64;
     for k in 0..n {
-        let (sin, cos) = Real::sin_cos((k as f64 + 0.5) * h);
+        let (sin, cos) = Math::sin_cos((k as f64 + 0.5) * h);
         sum += 2.0 * f64::PI * cos * tables.phase(cos as f32) as f64 * sin * h;
     }
     sum as f32

@@ -31,7 +31,7 @@
 
 use super::geometry::SlabPoint;
 use super::leakage::extrapolation_length;
-use crate::real::Real;
+use crate::real::Math;
 
 /// Where a point past the grid reads the tables, and how its values scale.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -85,9 +85,9 @@ pub(super) fn continued(at: &SlabPoint<f32>, t_max: f32, g: f32) -> Option<Conti
         },
         diffuse,
         spread,
-        spread_diffuse: Real::sqrt(t / t_max)
+        spread_diffuse: Math::sqrt(t / t_max)
             * if depth > 0.0 {
-                Real::sqrt(d / depth)
+                Math::sqrt(d / depth)
             } else {
                 1.0
             },
