@@ -311,7 +311,9 @@ fn the_halo_changes_the_tables_only_within_its_reach() {
             assert_eq!(new.transport(g, &at), b[g].t, "group {g} at {at:?}");
         }
         shipped.evaluate_all(&at, &mut c);
-        let cos = from_beam(at.mu_l as f64, at.mu_v as f64, at.psi_v as f64).mu;
+        // The beam of the sun the tables read: the lowest sun's below it.
+        let read_mu_l = at.mu_l.max(shipped.domain().mu_l.0);
+        let cos = from_beam(read_mu_l as f64, at.mu_v as f64, at.psi_v as f64).mu;
         let edge = reach.to_radians().cos();
         if at.mu_v < 0.0 && cos > edge + 1e-5 {
             inside += 1;

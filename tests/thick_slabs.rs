@@ -6,6 +6,9 @@
 //! μ_V and ψ_V), per group and per region: near the lit face (d ≤ 8 mfp), between the faces,
 //! and on the far face. The t = 128 walk measures the compression's own error in each
 //! region; past the grid the continuation may add little to it.
+//!
+//! Below the grid's lowest sun the same comparison runs against walks of t = 10 under the sun
+//! 1°, 3° and 6° up (fit-configs/low-sun/, kept in tests/data/low_sun/).
 
 use nephele_runtime::embedded::mie_10um;
 use nephele_runtime::transport::{SlabPoint, Transport, TransportTables};
@@ -34,7 +37,14 @@ fn array<T: npyz::Deserialize>(
 }
 
 fn walk(t: u32) -> Walk {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("tests/data/thick/t{t}.npz"));
+    walk_file(&format!("thick/t{t}.npz"))
+}
+
+/// A walk kept in tests/data/`name`.
+fn walk_file(name: &str) -> Walk {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(name);
     let mut z = npyz::npz::NpzArchive::open(&path).unwrap();
     Walk {
         t: array::<f64>(&mut z, "thickness")[0],
@@ -298,6 +308,40 @@ fn past_the_grid_the_tables_agree_with_the_walk_as_well_as_at_the_thickest_slab(
                     own.sigma_bias
                 );
             }
+        }
+    }
+}
+
+/// Below the tables' lowest sun μ₀ (0.125, 7.2° up) they hold T/μ_L, the radiance per unit
+/// irradiance on the lit face: against walks of t = 10 under the sun 6°, 3° and 1° up, every
+/// group of orders 2 … 31+ (T summed over every cell the walk resolves to 30 %) is within
+/// 10 %, 30 % and 60 %, where holding T itself is more than 20 %, 150 % and 400 % too bright.
+#[test]
+fn below_the_lowest_sun_the_tables_hold_t_over_mu_l() {
+    let tables = mie_10um();
+    let lowest = tables.domain().mu_l.0 as f64;
+    for (deg, within, held_above) in [(6, 0.10, 0.20), (3, 0.30, 1.5), (1, 0.60, 4.0)] {
+        let w = walk_file(&format!("low_sun/sun{deg}.npz"));
+        assert!(w.mu_l < lowest, "the sun {deg} deg up lies below the grid");
+        let pred = w.predicted(&tables);
+        let (nd, nm, nk) = w.dims();
+        for g in 0..GROUPS {
+            let (mut want, mut got) = (0.0f64, 0.0f64);
+            for i in g * nd * nm * nk..(g + 1) * nd * nm * nk {
+                if w.t_cells[i] > 0.0 && w.se[i] < 0.3 * w.t_cells[i] {
+                    want += w.t_cells[i] as f64;
+                    got += pred.0[i] as f64;
+                }
+            }
+            let bias = got / want - 1.0;
+            let held = got * (lowest / w.mu_l) / want - 1.0;
+            eprintln!(
+                "sun {deg} deg up, group {g}: T/mu_L held {:+.1} %, T held {:+.1} %",
+                100.0 * bias,
+                100.0 * held
+            );
+            assert!(bias.abs() <= within, "sun {deg} deg, group {g}: {bias}");
+            assert!(held > held_above, "sun {deg} deg, group {g}: {held}");
         }
     }
 }

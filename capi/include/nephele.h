@@ -70,7 +70,7 @@
 #define NEPHELE_OUTSIDE_THINNER 2
 
 /**
- * A sun below the tables' lowest: the form's parameters held at it.
+ * A sun below the tables' lowest μ₀: read under μ₀, T scaled by μ_L/μ₀ (T/μ_L held).
  */
 #define NEPHELE_OUTSIDE_LOWER_SUN 4
 

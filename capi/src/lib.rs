@@ -56,7 +56,7 @@ pub const NEPHELE_ABI_VERSION: u32 = 2;
 pub const NEPHELE_OUTSIDE_THICKER: u32 = 1;
 /// A point below the tables' thinnest slab: the form's parameters held at it.
 pub const NEPHELE_OUTSIDE_THINNER: u32 = 2;
-/// A sun below the tables' lowest: the form's parameters held at it.
+/// A sun below the tables' lowest μ₀: read under μ₀, T scaled by μ_L/μ₀ (T/μ_L held).
 pub const NEPHELE_OUTSIDE_LOWER_SUN: u32 = 4;
 const _: () = assert!(
     NEPHELE_OUTSIDE_THICKER == Outside::THICKER

@@ -189,8 +189,8 @@ impl Tables {
 
     /// {"t": (lo, hi), "mu_l": (lo, hi), "mean_cosine": g}: the grid the tables were fitted
     /// on, and g of their phase function. Past the thickest slab the tables continue by
-    /// diffusion theory; below the thinnest and below the lowest sun they hold the grid's end
-    /// (outside() flags such points).
+    /// diffusion theory; below the thinnest they hold the grid's end; below the lowest sun
+    /// they hold T/mu_L (outside() flags such points).
     #[getter]
     fn domain<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let (d, g) = self.with(|t| (t.domain(), t.mean_cosine()))?;

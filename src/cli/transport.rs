@@ -148,7 +148,7 @@ fn batch(points: &Path, out: &Path, collector: bool, tab: &TransportTables) -> R
         "units": "T = L / E_perp (1/sr); c_x, c_z, sigma in mean free paths (0 where T is 0); order 1 in closed form, orders >= 2 per group from the compressed form",
         "input_columns": names,
         "outside_the_grid": outside_json(&tally),
-        "outside_flags": "the .outside.npy beside this file, one uint8 a row: 1 t past the thickest slab (continued by diffusion theory), 2 t below the thinnest (held), 4 mu_L below the lowest sun (held)",
+        "outside_flags": "the .outside.npy beside this file, one uint8 a row: 1 t past the thickest slab (continued by diffusion theory), 2 t below the thinnest (held), 4 mu_L below the lowest sun (read there, T scaled by mu_L)",
         "domain": {"t": [dom.thickness.0, dom.thickness.1], "mu_l": [dom.mu_l.0, dom.mu_l.1], "mean_cosine": tab.mean_cosine()},
         "seconds": seconds,
         "points_per_second": n as f64 / seconds.max(1e-12),

@@ -885,7 +885,7 @@ fn manifest(
             mu_v: [-1.0, 1.0],
             psi_v: [0.0, std::f64::consts::PI],
             depth: "[0, t]",
-            outside: "t or mu_L outside their ranges: past the thickest slab the tables continue by diffusion theory (docs/compress.md, 'Past the thickest slab'); below the thinnest slab and below the lowest sun the form's parameters are held at the grid's end while the geometry (boundary factor, single-scattering factor, scattering angle) follows the point; Domain::outside tells a caller which coordinate and by how much",
+            outside: "t or mu_L outside their ranges: past the thickest slab the tables continue by diffusion theory (docs/compress.md, 'Past the thickest slab'); below the thinnest slab the form's parameters are held at the grid's end while the geometry (boundary factor, single-scattering factor, scattering angle) follows the point; below the lowest sun mu_0 the point is read under mu_0 and T scaled by mu_L/mu_0 (T/mu_L held); Domain::outside tells a caller which coordinate and by how much",
         },
     })
 }

@@ -106,7 +106,8 @@ fn nephele_tables_domain() -> NepheleDomain {
 }
 
 // Where a point lies outside the grid, as C's `nephele_outside`: t past the thickest slab
-// (continued by diffusion theory), t below the thinnest (held), the sun below the lowest (held).
+// (continued by diffusion theory), t below the thinnest (held), the sun below the lowest (read
+// there, T scaled by μ_L/μ₀).
 // A point that is not in the slab at all (t not finite and > 0, μ_L ∉ (0, 1], d ∉ [0, t],
 // |μ_V| > 1, ψ_V not finite) has NEPHELE_NOT_IN_SLAB alone: where C, Python and the CLI refuse
 // the point, a shader has no error path, and the evaluators' values there mean nothing.

@@ -89,6 +89,16 @@ struct NepheleLocalSlab {
     z_axis: vec3<f32>,
     x_axis: vec3<f32>,
     extinction: f32,
+    mu_l_unheld: f32,  // n̄·ω_L before it was held (≤ 0 on a face turned from the sun)
+}
+
+// The point the tables are read at (the runtime's `LocalSlab::read_at`): the slab's, under the
+// sun's own μ_L where it lies below the tables' lowest (they scale T for it); a face turned
+// from the sun under 10⁻⁶ (`GRAZING_FLOOR`), next to no light.
+fn nephele_ns_read_at(slab: NepheleLocalSlab) -> NepheleSlabPoint {
+    var at = slab.at;
+    at.mu_l = nephele_ns_clamp(slab.mu_l_unheld, 1e-6, slab.at.mu_l);
+    return at;
 }
 
 // Vector steps in the runtime's order of operations.
@@ -293,7 +303,7 @@ fn nephele_local_slab(s: NepheleLitSample, v: NepheleViewpoint,
     }
     return NepheleLocalSlab(NepheleSlabPoint(thickness_v, mu_l, depth_v, mu_v,
         nephele_ns_angle(cos_psi, al)), clamps,
-        nephele_ns_add(p, n, below), z_axis, x_axis, extinction);
+        nephele_ns_add(p, n, below), z_axis, x_axis, extinction, mu_l_raw);
 }
 
 // The surface at c; where no cloud covers it, halfway back toward the last collector, at
@@ -338,7 +348,7 @@ fn nephele_find_collector(g: u32, v_in: NepheleViewpoint, sun: vec3<f32>,
             return last;
         }
         let slab = nephele_local_slab(s, v, sun);
-        let tr = nephele_evaluate(g, slab.at);
+        let tr = nephele_evaluate(g, nephele_ns_read_at(slab));
         reads += 1u;
         if !(tr.t > 0.0 && tr.sigma > 0.0 && slab.extinction > 0.0) {
             return last;

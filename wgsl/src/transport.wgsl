@@ -569,13 +569,16 @@ fn nephele_nt_transport(g: u32) -> NepheleNtT {
 }
 
 // A point of a slab thicker than the tables' thickest, continued into it by diffusion theory
-// (the runtime's transport/thick.rs, step for step): where it reads the tables, and how T and
-// σ scale. Within the grid: the point itself, every scale 1.
+// (the runtime's transport/thick.rs, step for step), and a point under a sun below the
+// grid's lowest, read under it with T scaled by μ_L/μ₀ (the runtime's `lowest_sun`: T/μ_L
+// held): where it reads the tables, and how T and σ scale. Within the grid: the point
+// itself, every scale 1.
 struct NepheleNtContinued {
     at: NepheleSlabPoint,
     diffuse: f32,         // φ_t(d)/φ_tmax(d'): the open-ended group's T; the others' min(1, it)
     spread: f32,          // σ's scale for the groups of few orders, d/d' past t_max/2
     spread_diffuse: f32,  // the open-ended group's, √(t d / (t_max d'))
+    sun: f32,             // μ_L/μ₀ below the lowest sun μ₀, else 1
 }
 
 // The diffusion fluence at depth z of a slab t thick lit at depth z_s, zero at z_e outside
@@ -584,9 +587,16 @@ fn nephele_nt_fluence(z: f32, t: f32, z_s: f32, z_e: f32) -> vec2<f32> {
     return vec2<f32>(min(z, z_s) + z_e, (t + z_e - max(z, z_s)) / (t + 2.0 * z_e));
 }
 
-fn nephele_nt_continued(at: NepheleSlabPoint) -> NepheleNtContinued {
+fn nephele_nt_continued(point: NepheleSlabPoint) -> NepheleNtContinued {
     let x = nephele_ntt_index;
-    var c = NepheleNtContinued(at, 1.0, 1.0, 1.0);
+    var at = point;
+    var sun = 1.0;
+    let lowest = nephele_ntt_f32(x.mu_l);
+    if at.mu_l < lowest {
+        sun = at.mu_l / lowest;
+        at.mu_l = lowest;
+    }
+    var c = NepheleNtContinued(at, 1.0, 1.0, 1.0, sun);
     let t_max = nephele_ntt_f32(x.thickness + x.n_t - 1u);
     let t = at.thickness;
     if !(t > t_max) || !nephele_in_slab(at) {
@@ -615,12 +625,12 @@ fn nephele_nt_continued(at: NepheleSlabPoint) -> NepheleNtContinued {
     return c;
 }
 
-// How group g's T scales past the thickest slab.
+// How group g's T scales past the thickest slab and below the lowest sun.
 fn nephele_nt_diffuse_scale(g: u32, c: NepheleNtContinued) -> f32 {
     if g + 1u == nephele_ntt_index.groups {
-        return c.diffuse;
+        return c.diffuse * c.sun;
     }
-    return min(c.diffuse, 1.0);
+    return min(c.diffuse, 1.0) * c.sun;
 }
 
 // T (sr⁻¹) of group g at `at`; 0 where the tables resolve nothing or g is not a group. Past

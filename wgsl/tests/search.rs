@@ -257,13 +257,20 @@ fn the_search_on_the_gpu_follows_the_runtime() {
             let rel = |a: f32, b: f32| ((a - b) / b).abs() as f64;
             d_t.push(rel(o[4], t.t));
             // T at the GPU's own slab point, by the runtime: the evaluation apart from the
-            // geometry (ψ_V from a Cephes asin, a few ulps from the runtime's).
+            // geometry (ψ_V from a Cephes asin, a few ulps from the runtime's). Where the sun
+            // lay below the tables' lowest, the tables were read under the sun's own μ_L (the
+            // runtime's, which the port's search shares: `LocalSlab::read_at`).
+            let mu_l = if c.clamps.mu_l {
+                c.unheld.mu_l.clamp(1e-6, o[12])
+            } else {
+                o[12]
+            };
             let at = nephele_runtime::transport::SlabPoint {
                 depth: o[8],
                 thickness: o[9],
                 mu_v: o[10],
                 psi_v: o[11],
-                mu_l: o[12],
+                mu_l,
             };
             d_t_same.push(rel(o[4], tables.evaluate(g, &at).t));
             d_slab.push(

@@ -169,10 +169,22 @@ impl Wide {
         }
     }
 
-    /// T of group `g` at `at`; past the thickest slab continued as the runtime does
+    /// T of group `g` at `at`; under a sun below the grid's lowest μ₀ read under μ₀ with T
+    /// scaled by μ_L/μ₀, past the thickest slab continued as the runtime does
     /// (runtime/src/transport/thick.rs), in f64 with g of the tables' phase function.
     fn transport(&self, g: usize, at: &SlabPoint<f32>) -> f64 {
-        let p = at.to_f64();
+        let mut p = at.to_f64();
+        let mut sun = 1.0;
+        if p.mu_l > 0.0 && p.mu_l < self.mu_l[0] {
+            sun = p.mu_l / self.mu_l[0];
+            p.mu_l = self.mu_l[0];
+        }
+        sun * self.transport_held_sun(g, &p)
+    }
+
+    /// [`Self::transport`] under a sun within the grid.
+    fn transport_held_sun(&self, g: usize, p: &SlabPoint<f64>) -> f64 {
+        let p = *p;
         let t_max = *self.thickness.last().unwrap();
         if !(p.thickness > t_max) || !(p.depth >= 0.0 && p.depth <= p.thickness) || !(p.mu_l > 0.0)
         {

@@ -218,7 +218,7 @@ pub fn find_collector<S: LitSurface + ?Sized>(
     let s = start.first_surface(surface, opts)?;
     let v = group_viewpoint(tables, g, surface, v, sun, extinction_of(&s), opts);
     let slab = local_slab(tables, &s, &v, sun);
-    let first = tables.evaluate(g, &slab.at);
+    let first = tables.evaluate(g, &slab.read_at());
     start.continue_after(first, &slab, tables, g, (surface, &v, sun), opts)
 }
 
@@ -257,10 +257,10 @@ pub fn find_collectors<S: LitSurface + ?Sized>(
     let mut first = [Transport::default(); MAX_GROUPS];
     // Groups whose spread sun depth cuts or grows the slab otherwise than the first group's
     // read their own alone (the same bits: one group of `evaluate_all` is `evaluate`'s).
-    tables.evaluate_all(&slabs[0].at, &mut first[..groups]);
+    tables.evaluate_all(&slabs[0].read_at(), &mut first[..groups]);
     for (g, slot) in first[..groups].iter_mut().enumerate().skip(1) {
         if slabs[g].at != slabs[0].at {
-            *slot = tables.evaluate(g, &slabs[g].at);
+            *slot = tables.evaluate(g, &slabs[g].read_at());
         }
     }
     for (g, slot) in out[..groups].iter_mut().enumerate() {
@@ -354,7 +354,7 @@ impl Search {
                 return self.last;
             };
             let slab = local_slab(tables, &s, v, sun);
-            let tr = tables.evaluate(g, &slab.at);
+            let tr = tables.evaluate(g, &slab.read_at());
             if let Step::Done(c) = self.advance(tr, &slab, sun, opts) {
                 return c;
             }

@@ -6,6 +6,7 @@
 use super::geometry::SlabPoint;
 use super::tables::{Transport, TransportTables};
 use crate::frame::Vec3;
+use crate::real::Math;
 
 /// The lit surface filtered at one place and scale, as a renderer's light-space maps give it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -209,3 +210,20 @@ pub struct LocalSlab {
     /// κ̄ (1/m): mfp per metre of this slab.
     pub extinction: f32,
 }
+
+impl LocalSlab {
+    /// The point the tables are read at: the slab's, under the sun's own μ_L where it lies
+    /// below the tables' lowest (they scale T for it); a face turned from the sun (μ_L ≤ 0)
+    /// under μ_L = 10⁻⁶, next to no light.
+    pub fn read_at(&self) -> SlabPoint<f32> {
+        SlabPoint {
+            mu_l: self.unheld.mu_l.clamp_to(GRAZING_FLOOR, self.at.mu_l),
+            ..self.at
+        }
+    }
+}
+
+/// The sun cosine a face turned from the sun is read under: T scaled by 10⁻⁶/μ₀, next to no
+/// light, in normal f32 numbers whatever T is (a GPU may flush subnormals to 0, the CPU does
+/// not: the two would part).
+const GRAZING_FLOOR: f32 = 1e-6;

@@ -52,10 +52,11 @@ pub struct Transport {
 /// Where the tables hold information: the thicknesses and sun cosines of their grid. Every
 /// other coordinate is covered whole (d ∈ [0, t], μ_V ∈ [−1, 1] with the horizon, any ψ_V).
 /// Past the thickest slab the tables continue by diffusion theory ([`super::thick`]); below
-/// the thinnest slab and the lowest sun the form's parameters are held at the grid's end
-/// while the geometry (the boundary factor, the single-scattering factor, the scattering
-/// angle) follows the point: finite and bounded, an extrapolation a caller detects with
-/// [`Domain::outside`].
+/// the thinnest slab the form's parameters are held at the grid's end while the geometry (the
+/// boundary factor, the single-scattering factor, the scattering angle) follows the point;
+/// below the lowest sun μ₀ the point is read under μ₀ and T scaled by μ_L/μ₀ (T/μ_L, the
+/// radiance per unit irradiance on the lit face, is held). Finite and bounded, an
+/// extrapolation a caller detects with [`Domain::outside`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Domain {
     /// Smallest and largest thickness (mfp).
@@ -66,8 +67,8 @@ pub struct Domain {
 
 /// Where a point in the slab lies outside the tables' grid, and by how much: each coordinate
 /// past its end, None where it is within. Past the thickest slab the tables continue by
-/// diffusion theory (docs/compress.md, "Past the thickest slab"); below the thinnest and
-/// below the lowest sun the form's parameters are held at the grid's end.
+/// diffusion theory (docs/compress.md, "Past the thickest slab"); below the thinnest the
+/// form's parameters are held at the grid's end; below the lowest sun T/μ_L is held.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Outside {
     /// The point's t when it is outside the grid's thicknesses (mfp).
@@ -81,7 +82,7 @@ impl Outside {
     pub const THICKER: u32 = 1;
     /// t below the thinnest slab (held).
     pub const THINNER: u32 = 2;
-    /// μ_L below the lowest sun cosine (held).
+    /// μ_L below the lowest sun cosine (read under it, T scaled by μ_L/μ₀).
     pub const LOWER_SUN: u32 = 4;
 
     /// Whether the point is within the grid.
@@ -127,7 +128,7 @@ impl core::fmt::Display for OutsideText<'_> {
             let deg = |mu: f32| Math::asin(mu as f64) * 180.0 / f64::PI;
             write!(
                 f,
-                "{sep}mu_L = {m} (sun {:.1} deg up) is below the tables' lowest sun ({} = {:.1} deg up): held there",
+                "{sep}mu_L = {m} (sun {:.1} deg up) is below the tables' lowest sun ({} = {:.1} deg up): read there, T scaled by mu_L",
                 deg(m),
                 d.mu_l.0,
                 deg(d.mu_l.0)
@@ -277,14 +278,30 @@ impl<'a> TransportTables<'a> {
             out.iter_mut().for_each(|v| *v = f32::NAN);
             return;
         }
-        if let Some(c) = self.continued(at) {
+        let (at, sun) = self.lowest_sun(at);
+        if let Some(c) = self.continued(&at) {
             self.transport_run_within(&c.at, run, out);
             for (g, v) in (run.0..).zip(out.iter_mut()) {
-                *v *= self.diffuse_scale(g, &c);
+                *v *= self.diffuse_scale(g, &c) * sun;
             }
             return;
         }
-        self.transport_run_within(at, run, out);
+        self.transport_run_within(&at, run, out);
+        out.iter_mut().for_each(|v| *v *= sun);
+    }
+
+    /// A point under a sun lower than the grid's lowest, μ_L < μ₀, read under μ₀ (every
+    /// coordinate else the point's) with the factor μ_L/μ₀ on T: below the grid the tables hold
+    /// T/μ_L, the radiance per unit irradiance on the lit face, which varies slowly toward the
+    /// horizon while T itself falls like μ_L (docs/compress.md, "Outside the grid"). Within the
+    /// grid, the point itself and 1.
+    fn lowest_sun(&self, at: &SlabPoint<f32>) -> (SlabPoint<f32>, f32) {
+        let lowest = self.domain().mu_l.0;
+        if at.mu_l < lowest {
+            (SlabPoint { mu_l: lowest, ..*at }, at.mu_l / lowest)
+        } else {
+            (*at, 1.0)
+        }
     }
 
     /// [`Self::transport_run`] at a point within the grid's thicknesses.
@@ -404,10 +421,11 @@ impl<'a> TransportTables<'a> {
             });
             return;
         }
-        if let Some(c) = self.continued(at) {
+        let (at, sun) = self.lowest_sun(at);
+        if let Some(c) = self.continued(&at) {
             self.evaluate_run_within(&c.at, run, out);
             for (g, v) in (run.0..).zip(out.iter_mut()) {
-                v.t *= self.diffuse_scale(g, &c);
+                v.t *= self.diffuse_scale(g, &c) * sun;
                 v.sigma *= if g + 1 == self.groups() {
                     c.spread_diffuse
                 } else {
@@ -416,7 +434,8 @@ impl<'a> TransportTables<'a> {
             }
             return;
         }
-        self.evaluate_run_within(at, run, out);
+        self.evaluate_run_within(&at, run, out);
+        out.iter_mut().for_each(|v| v.t *= sun);
     }
 
     /// The point past the thickest slab continued into it ([`super::thick`]), or None within
