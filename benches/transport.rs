@@ -11,16 +11,12 @@ use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use nephele::compress::ship::without_halo;
 use nephele_runtime::embedded::MIE_10UM;
 use nephele_runtime::transport::{SlabPoint, Transport, TransportTables};
+use nephele_stats::XorShift32;
 use std::hint::black_box;
 
 fn points() -> Vec<SlabPoint<f32>> {
-    let mut x: u32 = 12345;
-    let mut next = || {
-        x ^= x << 13;
-        x ^= x >> 17;
-        x ^= x << 5;
-        x as f32 / u32::MAX as f32
-    };
+    let mut rng = XorShift32::new(12345);
+    let mut next = || rng.unit_f32();
     (0..4096)
         .map(|_| {
             let t = 0.5 * 256f32.powf(next());

@@ -9,22 +9,20 @@ use nephele_runtime::phase::{
 };
 use nephele_runtime::presets::jendersie_deon;
 use nephele_runtime::{PhaseFunction, Real};
+use nephele_stats::XorShift64;
 use std::hint::black_box;
 use std::time::Instant;
 
-struct Rng(u64);
+struct Rng(XorShift64);
 impl Rng {
     #[inline]
     fn next<F: Real>(&mut self) -> F {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        F::of((self.0 >> 40) as f64 * (1.0 / 16_777_216.0))
+        F::of(f64::from(self.0.unit_f32()))
     }
 }
 
 fn time<F: Real>(name: &str, n: usize, mut op: impl FnMut(&mut Rng) -> F) {
-    let mut rng = Rng(0x853c49e6748fea9b);
+    let mut rng = Rng(XorShift64::new(0x853c49e6748fea9b));
     let t0 = Instant::now();
     let mut acc = F::of(0.0);
     for _ in 0..n {

@@ -830,11 +830,9 @@ fn transport_tables_answer_and_refuse(ntt: &Path) {
     for cut in (0..bytes.len()).step_by(97) {
         assert!(TransportTables::from_bytes(&bytes[..cut]).is_err());
     }
-    let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
+    let mut rng = nephele_stats::XorShift64::new(0x9E37_79B9_7F4A_7C15);
     for _ in 0..3000 {
-        x ^= x << 13;
-        x ^= x >> 7;
-        x ^= x << 17;
+        let x = rng.next_u64();
         let bit = (x % (8 * bytes.len() as u64)) as usize;
         let mut b = bytes.clone();
         b[bit / 8] ^= 1 << (bit % 8);

@@ -278,13 +278,8 @@ fn the_halo_changes_the_tables_only_within_its_reach() {
     let bare = nephele::compress::ship::without_halo(MIE_10UM).unwrap();
     let new = TransportTables::from_bytes(&bare).unwrap();
     let shipped = mie_10um();
-    let mut x: u32 = 99;
-    let mut next = || {
-        x ^= x << 13;
-        x ^= x >> 17;
-        x ^= x << 5;
-        x as f32 / u32::MAX as f32
-    };
+    let mut rng = nephele_stats::XorShift32::new(99);
+    let mut next = || rng.unit_f32();
     let (mut inside, mut changed) = (0, 0);
     let reach = halo_reach();
     for i in 0..4000 {

@@ -22,13 +22,8 @@ fn points() -> Vec<[f64; 5]> {
         [500.0, 0.02, 10.0, 0.5, 45.0], // thicker than the grid, the sun below it
         [0.25, 0.5, 0.1, 0.3, 0.0],     // thinner than the grid
     ];
-    let mut s = 0x2545F4914F6CDD1Du64;
-    let mut r = || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        (s >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rng = nephele_stats::XorShift64::new(0x2545F4914F6CDD1D);
+    let mut r = || rng.unit_f64();
     for _ in 0..3000 {
         let t = 0.5 * 256f64.powf(r());
         p.push([

@@ -8,13 +8,8 @@ use nephele_runtime::transport::{SlabPoint, Transport};
 use std::hint::black_box;
 
 fn points() -> Vec<NepheleSlabPoint> {
-    let mut s = 0x9E3779B97F4A7C15u64;
-    let mut r = || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        (s >> 40) as f32 / (1u64 << 24) as f32
-    };
+    let mut rng = nephele_stats::XorShift64::new(0x9E3779B97F4A7C15);
+    let mut r = || rng.unit_f32();
     (0..4096)
         .map(|_| {
             let t = 0.5 * 256f32.powf(r());

@@ -87,13 +87,8 @@ fn points() -> Vec<[f32; 5]> {
         [500.0, 0.02, 10.0, 0.5, 0.7],
         [4.0, 0.5, 5.0, 0.3, 0.0],
     ];
-    let mut s = 0x9E3779B97F4A7C15u64;
-    let mut r = || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        (s >> 40) as f32 / (1u64 << 24) as f32
-    };
+    let mut rng = nephele_stats::XorShift64::new(0x9E3779B97F4A7C15);
+    let mut r = || rng.unit_f32();
     for _ in 0..500 {
         let t = 0.5 * 256f32.powf(r());
         p.push([
@@ -578,7 +573,7 @@ fn truncated_and_corrupt_tables_are_refused_without_a_crash() {
             message()
         );
     }
-    let mut state = 0x2545F4914F6CDD1Du64;
+    let mut rng = nephele_stats::XorShift64::new(0x2545F4914F6CDD1D);
     let at = NepheleSlabPoint {
         thickness: 8.0,
         mu_l: 0.6,
@@ -588,9 +583,7 @@ fn truncated_and_corrupt_tables_are_refused_without_a_crash() {
     };
     let mut loaded = 0;
     for _ in 0..3000 {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
+        let state = rng.next_u64();
         let mut bytes = MIE_10UM.to_vec();
         let bit = (state % (8 * bytes.len() as u64)) as usize;
         bytes[bit / 8] ^= 1 << (bit % 8);

@@ -1,7 +1,8 @@
 //! The statistics nephele's stages and its ports share: the chi-square test every sampling
-//! routine is held to, the adaptive quadrature its expected counts come from, and the seed
-//! mixer that derives independent random streams. A crate of its own so that a port's tests
-//! (nephele-wgsl) can use the same test without building the whole toolchain.
+//! routine is held to, the adaptive quadrature its expected counts come from, the seed
+//! mixer that derives independent random streams, and the tests' point generators. A crate of
+//! its own so that a port's tests (nephele-wgsl) can use the same test without building the
+//! whole toolchain.
 
 pub mod chi2;
 
@@ -12,6 +13,70 @@ pub fn splitmix64(mut z: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
+}
+
+/// Marsaglia's xorshift64 (shifts 13, 7, 17): the point generator of the tests and benches, a
+/// stream fixed by its seed and cheap enough to sit inside a timing loop. Not for estimators
+/// (they use rand's generators).
+#[derive(Clone, Debug)]
+pub struct XorShift64(u64);
+
+impl XorShift64 {
+    /// The stream from `seed` (0 is replaced by a fixed odd constant: xorshift stays at 0).
+    pub fn new(seed: u64) -> Self {
+        Self(if seed == 0 {
+            0x9E37_79B9_7F4A_7C15
+        } else {
+            seed
+        })
+    }
+
+    /// The next 64 bits.
+    #[inline]
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        self.0
+    }
+
+    /// Uniform on [0, 1) in steps of 2⁻²⁴ (the top 24 bits).
+    #[inline]
+    pub fn unit_f32(&mut self) -> f32 {
+        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
+    }
+
+    /// Uniform on [0, 1) in steps of 2⁻⁵³ (the top 53 bits).
+    #[inline]
+    pub fn unit_f64(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// Marsaglia's xorshift32 (shifts 13, 17, 5), the 32-bit form of [`XorShift64`].
+#[derive(Clone, Debug)]
+pub struct XorShift32(u32);
+
+impl XorShift32 {
+    /// The stream from `seed` (0 is replaced by 1).
+    pub fn new(seed: u32) -> Self {
+        Self(seed.max(1))
+    }
+
+    /// The next 32 bits.
+    #[inline]
+    pub fn next_u32(&mut self) -> u32 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 17;
+        self.0 ^= self.0 << 5;
+        self.0
+    }
+
+    /// Uniform on [0, 1]: the bits over u32::MAX, in f32.
+    #[inline]
+    pub fn unit_f32(&mut self) -> f32 {
+        self.next_u32() as f32 / u32::MAX as f32
+    }
 }
 
 /// ∫_a^b f by adaptive Simpson to absolute tolerance `tol` (never below what f64 resolves).

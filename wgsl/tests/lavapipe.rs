@@ -191,13 +191,8 @@ fn cases() -> Vec<Case> {
 /// 10⁵ / models cosines per model: uniform in μ, log-uniform in 1 − μ from 1e-8 (the peak),
 /// and the poles, as (μ, 1 − μ).
 fn cosines(n: usize) -> Vec<[f32; 2]> {
-    let mut s = 0x9E37_79B9_7F4A_7C15u64;
-    let mut r = || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        (s >> 40) as f64 / (1u64 << 24) as f64
-    };
+    let mut rng = nephele_stats::XorShift64::new(0x9E37_79B9_7F4A_7C15);
+    let mut r = || f64::from(rng.unit_f32());
     let mut v = vec![[1.0, 0.0], [-1.0, 2.0], [0.0, 1.0]];
     while v.len() < n {
         if v.len() % 2 == 0 {

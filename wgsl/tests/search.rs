@@ -73,13 +73,8 @@ impl LitSurface for Sphere {
 /// second half knows the view ray's medium beyond p (1 to 2 mfp) and p's depth to the sun
 /// through the sphere, so the slab holds the view's medium and is cut to the sun's depth there.
 fn viewpoints(n: usize) -> Vec<[f32; 9]> {
-    let mut s = 0x5DEE_CE66_D1CE_4E5Bu64;
-    let mut r = || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        2.0 * ((s >> 40) as f32 / (1u64 << 24) as f32) - 1.0
-    };
+    let mut rng = nephele_stats::XorShift64::new(0x5DEE_CE66_D1CE_4E5B);
+    let mut r = || 2.0 * rng.unit_f32() - 1.0;
     const UNKNOWN: f32 = f32::MAX;
     let mut v = vec![
         [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, UNKNOWN, UNKNOWN],

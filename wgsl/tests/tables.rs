@@ -19,13 +19,8 @@ const KERNEL: &str = include_str!("tables_kernel.wgsl");
 /// Points over the whole domain (xorshift, fixed seed): both faces, the horizon (±0), views
 /// straight up and down, overhead and grazing suns, t = 0.3 … 200, every azimuth.
 fn points(n: usize) -> Vec<SlabPoint<f32>> {
-    let mut s = 0x2545_F491_4F6C_DD1Du64;
-    let mut r = || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        (s >> 40) as f32 / (1u64 << 24) as f32
-    };
+    let mut rng = nephele_stats::XorShift64::new(0x2545_F491_4F6C_DD1D);
+    let mut r = || rng.unit_f32();
     (0..n)
         .map(|i| {
             let t = [0.3, 128.0, 200.0]

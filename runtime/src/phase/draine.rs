@@ -433,15 +433,14 @@ mod tests {
             let d32 = Draine::<f32>::new(g as f32, alpha as f32);
             let d64 = Draine::<f64>::new((g as f32) as f64, (alpha as f32) as f64);
             let n = 100_000;
-            let (mut from_guess, mut state) = (0, 0x9e37_79b9_7f4a_7c15u64);
+            let mut from_guess = 0;
+            let mut rng = nephele_stats::XorShift64::new(0x9e37_79b9_7f4a_7c15);
             for i in 0..n + 2 {
-                state ^= state << 13;
-                state ^= state >> 7;
-                state ^= state << 17;
+                let u = rng.unit_f32();
                 let xi = match i {
                     0 => 0.0,
                     1 => 1.0,
-                    _ => (state >> 40) as f32 / 16_777_216.0,
+                    _ => u,
                 };
                 let (guess, miss) = d32.guess.at(xi as f64);
                 from_guess += usize::from(miss * pow2(i64::from(f32::DIGITS) + 4) <= guess.abs());

@@ -1358,11 +1358,9 @@ mod tests {
         if !std::is_x86_feature_detected!("avx2") {
             return;
         }
-        let mut x: u32 = 7;
+        let mut rng = nephele_stats::XorShift32::new(7);
         let mut next = move || {
-            x ^= x << 13;
-            x ^= x >> 17;
-            x ^= x << 5;
+            let x = rng.next_u32();
             match x % 13 {
                 0 => 0.0,
                 1 => -0.0,
