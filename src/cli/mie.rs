@@ -2,12 +2,12 @@
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
+use nephele::io::text::short;
 use nephele::io::{plot, AtomicFiles};
 use nephele::mie::colour::Illuminant;
 use nephele::mie::distribution::SizeDistribution;
 use nephele::mie::grid::angles_from_spec;
 use nephele::mie::index::RefractiveIndex;
-use nephele::mie::limits::short;
 use nephele::mie::output::write_table;
 use nephele::mie::polydisperse::{JobStats, CONVERGED_DEFAULT, DEFAULT_WAVELENGTHS};
 use nephele::mie::{MieJob, PhaseTable, SizeRule};

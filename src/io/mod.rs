@@ -1,11 +1,13 @@
 //! Outputs: every file is written to a temporary name beside its target and renamed into
-//! place, so a failed or interrupted run never leaves a partial file behind.
+//! place, so a failed or interrupted run never leaves a partial file behind; and numbers as
+//! messages show them (`text`).
 
 pub mod atomic;
 pub mod container;
 pub mod npy;
 pub mod npz;
 pub mod plot;
+pub mod text;
 
 pub use atomic::{write_atomic, AtomicFiles};
 pub use npz::Npz;

@@ -3,7 +3,7 @@
 //! Every distribution is handled through its number density per unit ln d, f(ln d) (for a
 //! density n(d) per unit diameter, f = d · n(d)), on a finite support [ln d_lo, ln d_hi].
 
-use super::limits::short;
+use crate::io::text::short;
 use anyhow::{bail, Result};
 use serde::{Deserialize, Serialize};
 

@@ -6,6 +6,7 @@
 use super::distribution::{SizeDistribution, PRODUCT_RULE_Z};
 use super::sphere::n_terms;
 use super::{MieJob, SizeRule};
+use crate::io::text::short;
 use anyhow::{bail, Result};
 use std::f64::consts::PI;
 
@@ -17,26 +18,6 @@ pub const X_MAX: f64 = 2e4;
 /// Plausible vacuum wavelengths, nm: far UV to far infrared. Outside, the number was almost
 /// certainly meant in other units.
 pub const WAVELENGTH_RANGE_NM: (f64, f64) = (100.0, 1e5);
-
-/// `v` with about three significant digits, in scientific notation outside [10⁻³, 10⁵), for
-/// messages: 0.4, 15, 1.2e5.
-pub fn short(v: f64) -> String {
-    let a = v.abs();
-    if a == 0.0 || !a.is_finite() {
-        return format!("{v}");
-    }
-    if !(1e-3..1e5).contains(&a) {
-        let s = format!("{v:.1e}");
-        return s.replace(".0e", "e");
-    }
-    let decimals = (2 - a.log10().floor() as i32).max(0) as usize;
-    let s = format!("{v:.decimals$}");
-    if s.contains('.') {
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        s
-    }
-}
 
 /// Memory and work of a job, estimated from the rule alone (nothing allocated).
 #[derive(Clone, Copy, Debug, Default)]
@@ -235,15 +216,6 @@ fn bytes(b: f64) -> String {
 mod tests {
     use super::*;
     use crate::mie::polydisperse::CONVERGED_DEFAULT;
-
-    #[test]
-    fn short_keeps_three_digits() {
-        assert_eq!(short(15.000000000000002), "15");
-        assert_eq!(short(0.4), "0.4");
-        assert_eq!(short(117809.7), "1.2e5");
-        assert_eq!(short(1.5e-5), "1.5e-5");
-        assert_eq!(short(2251.0), "2251");
-    }
 
     #[test]
     fn footprint_counts_the_spheres_of_the_shared_grid() {
