@@ -1,7 +1,7 @@
 //! `nephele render`: renders a scene with the ground-truth path tracer or a fast method.
 
 use anyhow::Result;
-use clap::{ArgMatches, Args};
+use clap::{ArgMatches, Args, ValueEnum};
 use nephele::render::fast::{
     prepare, render_fast, FastOptions, Finite, Method, Octaves, RayPattern,
 };
@@ -27,7 +27,7 @@ pub struct RenderArgs {
     /// (orders ≥ 2 from the transport tables, docs/collector.md), order 1 only, or the
     /// multi-octave approximation of real-time engines.
     #[arg(long, value_enum, default_value = "path-tracer")]
-    pub method: Method,
+    pub method: MethodArg,
     /// Path tracer: samples per pixel, overriding the scene's (per pass with a time budget).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     pub spp: Option<u32>,
@@ -95,7 +95,7 @@ pub struct FastArgs {
     /// grid than the rooks' two, and a search a corner ray starts serves every pixel that
     /// chooses it (docs/collector.md, "Frame cost").
     #[arg(long, value_enum, default_value = "grid", value_name = "PATTERN")]
-    pub ray_pattern: RayPattern,
+    pub ray_pattern: RayPatternArg,
     /// Collector: search once per block of N × N pixels, at the block's most opaque ray, each
     /// pixel weighing the light found by its own opacity (1: once per pixel; fewer searches,
     /// docs/collector.md, "Frame cost").
@@ -225,7 +225,7 @@ impl FastArgs {
             step: self.march_step,
             surface_density: self.surface_density,
             rays: self.rays,
-            pattern: self.ray_pattern,
+            pattern: self.ray_pattern.into(),
             search_block: self.search_block,
             search_block_opacity: self.search_block_opacity,
             search_every_ray: self.search_every_ray,
@@ -365,15 +365,67 @@ fn refuse_flags_of_other_methods(m: &ArgMatches, method: Method, fast: &FastArgs
 
 /// The method's command-line name.
 fn method_name(method: Method) -> String {
-    use clap::ValueEnum;
-    method
-        .to_possible_value()
+    let arg = match method {
+        Method::PathTracer => MethodArg::PathTracer,
+        Method::Collector => MethodArg::Collector,
+        Method::Single => MethodArg::Single,
+        Method::Octaves => MethodArg::Octaves,
+    };
+    arg.to_possible_value()
         .map_or("?".into(), |v| v.get_name().to_string())
+}
+
+/// `--method`: how a frame is rendered ([`Method`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum MethodArg {
+    /// The Monte Carlo path tracer (the reference).
+    PathTracer,
+    /// The collector renderer: orders ≥ 2 from the transport tables.
+    Collector,
+    /// Order 1 only (plus the sky term).
+    Single,
+    /// The multi-octave approximation of real-time engines.
+    Octaves,
+}
+
+impl From<MethodArg> for Method {
+    fn from(m: MethodArg) -> Self {
+        match m {
+            MethodArg::PathTracer => Method::PathTracer,
+            MethodArg::Collector => Method::Collector,
+            MethodArg::Single => Method::Single,
+            MethodArg::Octaves => Method::Octaves,
+        }
+    }
+}
+
+/// `--ray-pattern`: where a pixel's rays go ([`RayPattern`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum RayPatternArg {
+    /// n² rays, at the centres of an n × n grid of sub-pixels.
+    Grid,
+    /// n rays, one in each row and each column of that grid (n-rooks): half the march of the
+    /// 2 × 2 grid.
+    Rooks,
+    /// A ray through each pixel corner, shared by the four pixels that meet there (⅛ each),
+    /// and one through the pixel's centre (½): about two marches a pixel (n is not used).
+    Quincunx,
+}
+
+impl From<RayPatternArg> for RayPattern {
+    fn from(p: RayPatternArg) -> Self {
+        match p {
+            RayPatternArg::Grid => RayPattern::Grid,
+            RayPatternArg::Rooks => RayPattern::Rooks,
+            RayPatternArg::Quincunx => RayPattern::Quincunx,
+        }
+    }
 }
 
 /// Runs `nephele render`; `m` tells which flags were given.
 pub fn run(args: RenderArgs, m: &ArgMatches) -> Result<()> {
-    refuse_flags_of_other_methods(m, args.method, &args.fast)?;
+    let method = Method::from(args.method);
+    refuse_flags_of_other_methods(m, method, &args.fast)?;
     no_transparent_huge_pages();
     let mut scene = Scene::load(&args.scene)?;
     if let Some(spp) = args.spp {
@@ -397,9 +449,9 @@ pub fn run(args: RenderArgs, m: &ArgMatches) -> Result<()> {
     if let Some(n) = args.orbit {
         return render_orbit(&scene, &args, n as usize, &out);
     }
-    let r = render_with(&scene, args.method, &args.fast)?;
+    let r = render_with(&scene, method, &args.fast)?;
     write_outputs_with(&out, &scene, &r, args.exposure)?;
-    if args.method == Method::PathTracer {
+    if method == Method::PathTracer {
         println!(
             "{}×{} pixels, {} spp: {} camera paths in {} ({:.0} paths/s); wrote {}/beauty.png, \
              beauty.exr, beauty.npy, groups.npy, halves.npy, unscattered.npy, transmittance.npy, \
@@ -449,7 +501,7 @@ fn render_orbit(scene: &Scene, args: &RenderArgs, n: usize, out: &Path) -> Resul
     for w in scene.warnings() {
         eprintln!("warning: {w}");
     }
-    let opts = args.fast.options(args.method)?;
+    let opts = args.fast.options(args.method.into())?;
     let bar = super::progress::work_bar("render", (n * 1000) as u64);
     bar.set_message("preparing the phase function, the medium and the light maps");
     bar.enable_steady_tick(std::time::Duration::from_millis(200));
@@ -485,7 +537,7 @@ fn render_orbit(scene: &Scene, args: &RenderArgs, n: usize, out: &Path) -> Resul
     let reused: Vec<f64> = views.iter().skip(1).map(|v| v.1).collect();
     let mean_reused = reused.iter().sum::<f64>() / reused.len().max(1) as f64;
     let doc = serde_json::json!({
-        "method": method_name(args.method),
+        "method": method_name(args.method.into()),
         "views": views.iter().enumerate().map(|(k, (cam, s, stages))| serde_json::json!({
             "dir": format!("view_{k:03}"), "camera": cam, "frame_seconds": s,
             "maps_reused": k > 0, "seconds_per_stage": stages,
@@ -511,7 +563,7 @@ fn render_orbit(scene: &Scene, args: &RenderArgs, n: usize, out: &Path) -> Resul
     println!(
         "{n} views of {w}×{h} pixels, {}: light maps {} once, the first frame {}{others}; wrote \
          {}/view_000 … view_{:03}, views.json",
-        method_name(args.method),
+        method_name(args.method.into()),
         super::seconds(maps + sky),
         super::seconds(views[0].1),
         out.display(),

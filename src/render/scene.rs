@@ -287,11 +287,6 @@ impl Scene {
             "camera.width and camera.height must be 1…16384 pixels"
         );
         ensure!((1..=1 << 20).contains(&self.spp), "spp must be 1…1048576");
-        ensure!(
-            self.sun_lobe_steps <= super::path::sun_lobe::MAX_STEPS,
-            "sun_lobe_steps must be 0…{}",
-            super::path::sun_lobe::MAX_STEPS
-        );
         if let Some(b) = self.time_budget_s {
             ensure!(
                 b > 0.0 && b.is_finite(),

@@ -66,7 +66,7 @@ use table_check::{check_tables, mean_cosine};
 use view_march::ViewRay;
 
 /// How a frame is rendered.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Method {
     /// The Monte Carlo path tracer (the reference).

@@ -12,7 +12,7 @@
 use serde::Serialize;
 
 /// Where a pixel's rays go, with n = `rays`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum RayPattern {
     /// n² rays, at the centres of an n × n grid of sub-pixels.

@@ -13,7 +13,7 @@ use super::medium::Medium;
 use super::scene::Scene;
 use super::surface::Surfaces;
 use crate::phase::Phase;
-use anyhow::Result;
+use anyhow::{ensure, Result};
 use integrator::{channel_tables, trace, Volume};
 use nephele_runtime::PhaseFunction;
 use rand::{Rng, SeedableRng};
@@ -80,6 +80,13 @@ pub fn render(scene: &Scene, progress: &(dyn Fn(f64) + Sync)) -> Result<Rendered
 /// predicted to fit (at least one): each pixel's stream continues across passes, so k passes
 /// give the same bits as one render at k · spp.
 pub fn render_reporting(scene: &Scene, progress: &(dyn Fn(&Progress) + Sync)) -> Result<Rendered> {
+    // The path tracer's own limit: the scene knows no renderer.
+    ensure!(
+        scene.sun_lobe_steps <= sun_lobe::MAX_STEPS,
+        "sun_lobe_steps must be 0…{} (the scene has {})",
+        sun_lobe::MAX_STEPS,
+        scene.sun_lobe_steps
+    );
     let medium = scene.build_medium()?;
     let surfaces = Surfaces::build(&scene.surfaces)?;
     let models = Phase::build_channels(&scene.phase)?;
