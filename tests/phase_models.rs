@@ -184,7 +184,7 @@ fn xlf_is_non_negative_up_to_its_limit_and_refused_beyond() {
         let min = (0..=2000)
             .map(|i| p.eval(-1.0 + i as f64 / 1000.0))
             .fold(f64::INFINITY, f64::min);
-        assert!(min >= 0.0 && min < 1e-4, "g = {g}: min p = {min}");
+        assert!((0.0..1e-4).contains(&min), "g = {g}: min p = {min}");
     }
     assert!(Xlf::new(0.48).is_none() && Xlf::new(-0.9).is_none() && Xlf::new(f64::NAN).is_none());
     // The published form is not normalised: ∮ p̃ dΩ ≠ 1 (1.07 at g = 0.3).

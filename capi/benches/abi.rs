@@ -18,7 +18,7 @@ fn points() -> Vec<NepheleSlabPoint> {
                 mu_l: 0.125 + 0.875 * r(),
                 depth: t * r(),
                 mu_v: 2.0 * r() - 1.0,
-                psi_v: 3.1416 * r(),
+                psi_v: std::f32::consts::PI * r(),
             }
         })
         .collect()

@@ -683,7 +683,7 @@ impl BatchLayout {
     ///
     /// # Safety
     /// As [`Self::point`].
-    unsafe fn answers(&self, i: usize, groups: usize) -> &mut [NepheleTransport] {
+    unsafe fn answers(&mut self, i: usize, groups: usize) -> &mut [NepheleTransport] {
         unsafe {
             std::slice::from_raw_parts_mut(
                 self.out.add(i * self.out_stride).cast::<NepheleTransport>(),
@@ -731,7 +731,7 @@ pub unsafe extern "C" fn nephele_evaluate_batch(
             return fail(NepheleStatus::NullPointer, format!("{what} is null"));
         }
         let groups = t.groups();
-        let layout =
+        let mut layout =
             match BatchLayout::new((points, point_stride), (out, out_stride), count, groups) {
                 Ok(l) => l,
                 Err(s) => return s,

@@ -85,7 +85,7 @@ proptest! {
     // or change the seed to explore further).
     #![proptest_config(ProptestConfig {
         cases: 2000,
-        rng_seed: proptest::test_runner::RngSeed::Fixed(0x6e65_7068_656c_65),
+        rng_seed: proptest::test_runner::RngSeed::Fixed(0x6e_65_70_68_65_6c_65),
         ..ProptestConfig::default()
     })]
 

@@ -151,9 +151,11 @@ impl Tables {
             // bytes(n) would make n zero bytes of an int: only buffers are taken.
             let buffer = !data.is_instance_of::<pyo3::types::PyInt>();
             let builtins = data.py().import("builtins")?;
-            let made = buffer
-                .then(|| builtins.getattr("bytes")?.call1((data,)))
-                .unwrap_or_else(|| Err(PyTypeError::new_err("an int")));
+            let made = if buffer {
+                builtins.getattr("bytes").and_then(|b| b.call1((data,)))
+            } else {
+                Err(PyTypeError::new_err("an int"))
+            };
             let b = made.map_err(|_| {
                 PyTypeError::new_err(format!(
                     "data: the bytes of a .ntt expected (bytes, bytearray, memoryview, a uint8 \

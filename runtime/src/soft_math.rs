@@ -7,7 +7,7 @@
 //! dense sweeps below); `sin_cos` reduces by a three-part π/2, exact for |x| ≲ 10⁵, which covers
 //! every argument the evaluators pass (azimuths in [0, 2π)).
 
-const LN2_HI: f64 = 6.931_471_803_691_238_2e-1; // ln 2 to 32 bits: k·LN2_HI is exact
+const LN2_HI: f64 = 6.931_471_803_691_238e-1; // ln 2 to 32 bits: k·LN2_HI is exact
 const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;
 const INV_LN2: f64 = core::f64::consts::LOG2_E;
 // π/2 in three 33-bit pieces (fdlibm's pio2_1, pio2_2, pio2_3): n·piece is exact for n < 2²⁰.

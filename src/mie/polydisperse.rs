@@ -256,7 +256,7 @@ impl MieJob {
             bail!("medium index must be positive, got {}", self.medium_index);
         }
         match self.rule {
-            SizeRule::Product { sizes } if sizes == 0 => bail!("--sizes must be at least 1"),
+            SizeRule::Product { sizes: 0 } => bail!("--sizes must be at least 1"),
             SizeRule::Converged {
                 ln_step,
                 x_step,

@@ -199,7 +199,7 @@ mod tests {
         assert!(Aureole::new(vec![1.0, 2.0]).is_err());
         assert!(Aureole::new(vec![0.0, 2.0, 2.0]).is_err());
         // The views turned about the beam are at Θ from it (the runtime's angle).
-        for mu_l in [0.125, 0.5, 0.7071, 1.0] {
+        for mu_l in [0.125, 0.5, std::f64::consts::FRAC_1_SQRT_2, 1.0] {
             for turn in [0.0, 1.0, 2.5, 4.0] {
                 let (mu_v, psi_v) = view_near_beam(mu_l, 0.1, turn);
                 let theta = from_beam(mu_l, mu_v, psi_v).mu.acos();

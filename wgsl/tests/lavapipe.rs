@@ -77,7 +77,7 @@ fn run(mode: u32, model: u32, p: [f32; 4], inputs: &[[f32; 2]]) -> Vec<[f32; 4]>
 /// (0.01° steps to 5° through the forward peak, 0.25° beyond: 1 100 nodes).
 fn table() -> &'static TabulatedTable<f32> {
     static TABLE: OnceLock<TabulatedTable<f32>> = OnceLock::new();
-    TABLE.get_or_init(|| table_of::<f32>())
+    TABLE.get_or_init(table_of::<f32>)
 }
 
 fn table_of<F: nephele_runtime::Real>() -> TabulatedTable<F> {

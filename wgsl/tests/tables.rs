@@ -181,8 +181,7 @@ impl Wide {
     fn transport_held_sun(&self, g: usize, p: &SlabPoint<f64>) -> f64 {
         let p = *p;
         let t_max = *self.thickness.last().unwrap();
-        if !(p.thickness > t_max) || !(p.depth >= 0.0 && p.depth <= p.thickness) || !(p.mu_l > 0.0)
-        {
+        if !(p.thickness > t_max && p.depth >= 0.0 && p.depth <= p.thickness && p.mu_l > 0.0) {
             return self.transport_within(g, &p);
         }
         let tables = nephele_runtime::transport::TransportTables::from_bytes(SHIPPED).unwrap();

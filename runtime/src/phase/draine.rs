@@ -335,12 +335,12 @@ fn one_step(g: f64, alpha: f64, xi: f64, mu0: f64) -> Result<f64, f64> {
 
 /// Draine's p(μ) (sr⁻¹) without building the sampler's table: for callers that only evaluate
 /// at ever-changing (g, α), such as the fits of `nephele fit`. One division: Draine's factor
-/// and normalisation ride on HG's ([`HenyeyGreenstein::from_d_over`]).
+/// and normalisation ride on HG's ([`HenyeyGreenstein::p_from_d_over`]).
 #[inline]
 pub fn phase_draine<F: Real>(g: F, alpha: F, mu: F) -> F {
     let hg = HenyeyGreenstein::new(g);
     let one = F::of(1.0);
-    hg.from_d_over(hg.d_of(mu), one + alpha * mu * mu, norm(g, alpha))
+    hg.p_from_d_over(hg.d_of(mu), one + alpha * mu * mu, norm(g, alpha))
 }
 
 /// Draine's normalisation 1 + α(1 + 2g²)/3 (the mean of 1 + αμ² under HG(g)).
@@ -360,7 +360,7 @@ impl<F: Real> PhaseFunction<F> for Draine<F> {
     fn pdf_cosine(&self, c: Cosine<F>) -> F {
         let (hg, mu) = (HenyeyGreenstein::new(self.g), c.mu);
         let num = F::of(1.0) + self.alpha * mu * mu;
-        hg.from_d_over(hg.d_of_cosine(c), num, self.norm())
+        hg.p_from_d_over(hg.d_of_cosine(c), num, self.norm())
     }
 
     fn sample_cosine(&self, xi: F) -> Cosine<F> {

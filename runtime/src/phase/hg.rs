@@ -30,7 +30,7 @@ impl<F: Real> HenyeyGreenstein<F> {
     /// own factor and normalisation in here instead of dividing again: the divider is what
     /// bounds a loop of evaluations. With num = den = 1 it is HG's p, bit for bit.
     #[inline]
-    pub(crate) fn from_d_over(&self, d: F, num: F, den: F) -> F {
+    pub(crate) fn p_from_d_over(&self, d: F, num: F, den: F) -> F {
         let one = F::of(1.0);
         inv_four_pi::<F>() * (one - self.g) * (one + self.g) * num / (den * (d * d.sqrt()))
     }
@@ -73,13 +73,13 @@ impl<F: Real> HenyeyGreenstein<F> {
 impl<F: Real> PhaseFunction<F> for HenyeyGreenstein<F> {
     #[inline]
     fn eval(&self, mu: F) -> F {
-        self.from_d_over(self.d_of(mu), F::of(1.0), F::of(1.0))
+        self.p_from_d_over(self.d_of(mu), F::of(1.0), F::of(1.0))
     }
 
     /// As `eval`, with 1 − μ taken from the cosine (exact near the forward peak).
     #[inline]
     fn pdf_cosine(&self, c: Cosine<F>) -> F {
-        self.from_d_over(self.d_of_cosine(c), F::of(1.0), F::of(1.0))
+        self.p_from_d_over(self.d_of_cosine(c), F::of(1.0), F::of(1.0))
     }
 
     #[inline]

@@ -200,7 +200,7 @@ impl CollectorForm {
 
     /// Legendre terms in x = 2u − 1 the features use (the J depth terms, the Θ table's slope).
     pub fn depth_terms(&self) -> usize {
-        self.legendre.max(2).min(MAX_LEGENDRE)
+        self.legendre.clamp(2, MAX_LEGENDRE)
     }
 
     /// As [`Self::for_each_feature`], split as `f(column, value, j)`: the feature is

@@ -536,7 +536,7 @@ impl<F: Real> FaceDistances<F> {
 
     /// The distances to the far face (`far`) or to the lit face from stretched depths `a`, `b`
     /// and from the point itself.
-    pub(crate) fn to_face(&mut self, far: bool, a: F, b: F) -> [F; 3] {
+    pub(crate) fn distances(&mut self, far: bool, a: F, b: F) -> [F; 3] {
         let s = self.stretch;
         let em1 = *self.em1.get_or_insert_with(|| s.exp_m1_beta());
         let at = |u: F| s.t * s.fraction_with(far, u, em1);
@@ -601,7 +601,7 @@ pub(crate) fn depth_polynomial_in<F: Real>(
     }
     // Distances (mfp) to the face ahead: the far face d = t beyond `hi`, the lit face d = 0
     // below `lo`.
-    let [h_inside, h_edge, h] = faces.to_face(far, inside, edge);
+    let [h_inside, h_edge, h] = faces.distances(far, inside, edge);
     value + continued_toward_face(inner - value, (h_inside, h_edge, h))
 }
 
@@ -843,7 +843,7 @@ mod tests {
     fn continuation_toward_a_face_follows_diffusion_and_fast_decay() {
         let (h_inside, h_edge) = (29.0, 17.0);
         for z0 in [0.5, 5.0, 20.0] {
-            let rise = ((h_inside + z0) / (h_edge + z0) as f64).ln();
+            let rise = ((h_inside + z0) / (h_edge + z0)).ln();
             for h in [0.0, 0.5, 1.3, 8.0, 16.0] {
                 let got = continued_toward_face(rise, (h_inside, h_edge, h));
                 let want = ((h + z0) / (h_edge + z0)).ln();

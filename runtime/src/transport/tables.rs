@@ -1299,7 +1299,7 @@ fn lane_sums<const L: usize>(d: &[[f32; L]], p: &[f32], n: usize, zero: f32) -> 
     let mut s = [zero; L];
     for (d, &p) in d.iter().zip(p).take(n) {
         for i in 0..L {
-            s[i] = s[i] + d[i] * p;
+            s[i] += d[i] * p;
         }
     }
     s

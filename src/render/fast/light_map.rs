@@ -95,7 +95,7 @@ impl LightFrame {
 
     /// (u, v, s) of a world point.
     #[inline(always)]
-    fn to_light(&self, p: Vec3) -> (f64, f64, f64) {
+    fn to_light(self, p: Vec3) -> (f64, f64, f64) {
         let r: Vec3 = std::array::from_fn(|k| p[k] - self.origin[k]);
         (
             dot(r, self.e1),
@@ -105,7 +105,7 @@ impl LightFrame {
     }
 
     /// The world point at (u, v, s).
-    fn to_world(&self, u: f64, v: f64, s: f64) -> Vec3 {
+    fn to_world(self, u: f64, v: f64, s: f64) -> Vec3 {
         let a = self.s_origin - s;
         std::array::from_fn(|k| self.origin[k] + u * self.e1[k] + v * self.e2[k] + a * self.sun[k])
     }
