@@ -11,7 +11,7 @@ rounds=${3:-8}
 runs=${4:-5}
 cargo build --release --locked -q -p nephele-c
 exe=$(mktemp -d)/nephele_threads
-cc -O2 -std=c99 -I capi/include examples/c/nephele_threads.c target/release/libnephele_c.a \
+cc -O2 -std=c99 -I capi/include examples/c/nephele_threads.c ${CARGO_TARGET_DIR:-target}/release/libnephele_c.a \
     -lm -lpthread -ldl -o "$exe"
 for _ in $(seq "$runs"); do
     "$exe" runtime/tables/mie10um/transport.ntt "$points" "$threads" "$rounds" | tr '\n' ' '

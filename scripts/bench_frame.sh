@@ -17,15 +17,15 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 echo "cores: $(nproc); CPU: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')"
 # The Mie phase function of the scene is computed once and cached (src/mie/cache.rs).
-target/release/nephele render --scene fit-configs/scenes/cloud.json --method "$method" \
+${CARGO_TARGET_DIR:-target}/release/nephele render --scene fit-configs/scenes/cloud.json --method "$method" \
     --size 40 30 --out "$tmp/warm" > /dev/null
 for size in "320 240" "640 480"; do
     read -r w h <<< "$size"
     start=$(date +%s%N)
-    target/release/nephele render --scene fit-configs/scenes/cloud.json --method "$method" \
+    ${CARGO_TARGET_DIR:-target}/release/nephele render --scene fit-configs/scenes/cloud.json --method "$method" \
         --size "$w" "$h" "${extra[@]}" --out "$tmp/one" > /dev/null
     wall_ms=$(( ($(date +%s%N) - start) / 1000000 ))
-    target/release/nephele render --scene fit-configs/scenes/cloud.json --method "$method" \
+    ${CARGO_TARGET_DIR:-target}/release/nephele render --scene fit-configs/scenes/cloud.json --method "$method" \
         --size "$w" "$h" --orbit "$views" "${extra[@]}" --out "$tmp/orbit" > /dev/null
     python3 - "$tmp/orbit/views.json" "$w" "$h" "$wall_ms" "${extra[*]}" <<'PY'
 import json, sys

@@ -23,7 +23,7 @@ echo "== benches/baselines/phase_ref.c (f32 closed forms, d = 20 µm blend)"
 "$tmp/phase_ref" "$n"
 echo
 echo "== nephele-runtime (same loop shape; models behind a trait object)"
-target/release/examples/bench_phase "$n"
+${CARGO_TARGET_DIR:-target}/release/examples/bench_phase "$n"
 echo
 echo "== $rounds rounds in one process: phase_ref.c (compiled unchanged) and nephele alternately"
 cargo run --release --quiet -p nephele-refbench -- phase "$calls" "$rounds"

@@ -24,12 +24,12 @@ cargo build --release --quiet --example bench_slab
 echo "== benches/baselines/slab_ref.c (analog walk, totals and 10 μ bins), once:"
 "$tmp/slab_ref" 4 0.9 "$n" | head -2
 echo "== nephele slab walk (16 planes × 16 μ_V × 12 ψ_V × 9 groups, collector moments, 9 aureole annuli), once:"
-target/release/examples/bench_slab "$n"
+${CARGO_TARGET_DIR:-target}/release/examples/bench_slab "$n"
 echo "== $rounds rounds in one process: slab_ref.c (compiled unchanged) and nephele's walk alternately"
 cargo run --release --quiet -p nephele-refbench -- slab "$n" "$rounds"
 echo
 echo "== the same at mu_L = 0.5 (the plain tally; slab_ref.c has normal incidence only)"
-target/release/examples/bench_slab "$n" 0.5
+${CARGO_TARGET_DIR:-target}/release/examples/bench_slab "$n" 0.5
 echo
 echo "== the Mie phase function of 10 µm droplets at mu_L = 0.5 (the default tables' walk)"
-target/release/examples/bench_slab "$n" 0.5 mie10
+${CARGO_TARGET_DIR:-target}/release/examples/bench_slab "$n" 0.5 mie10

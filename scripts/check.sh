@@ -45,7 +45,7 @@ if [[ $BUILD == 1 ]]; then
     step "cargo build --release --locked"
     cargo build --release --locked
 fi
-BIN="$ROOT/target/release/nephele"
+BIN="${CARGO_TARGET_DIR:-$ROOT/target}/release/nephele"
 if [[ ! -x "$BIN" ]]; then
     echo "check.sh: $BIN not found (run without --no-build)" >&2
     exit 2

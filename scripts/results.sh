@@ -31,11 +31,15 @@ trap 'rm -rf "$work"' EXIT
 if [[ -z "$OUT" ]]; then
     if (( QUICK )); then OUT="$work/results.md"; else OUT="$ROOT/docs/results.md"; fi
 fi
+# The figures go beside the page (docs/img/ for the committed page).
+IMG="$(dirname "$OUT")/img"
+(( QUICK )) && [[ "$OUT" == "$ROOT/docs/results.md" ]] && IMG="$work/img"
+mkdir -p "$IMG"
 
 source "$ROOT/scripts/python_env.sh"
 step "cargo build --release --locked"
 cargo build --release --locked --quiet
-BIN=target/release/nephele
+BIN="${CARGO_TARGET_DIR:-target}/release/nephele"
 PYR=".venv/bin/python"
 q() { (( QUICK )) && echo "$1" || echo "$2"; }
 
@@ -84,7 +88,9 @@ headline() {
     "$BIN" render --scene fit-configs/scenes/cloud.json --size $size --method octaves \
         --rays 2 --octaves $(octaves_fitted) --out "$dir/octaves" >/dev/null &&
     "$BIN" compare --reference "$dir/path" --candidate "$dir/collector" \
-        --candidate "$dir/octaves" --out "$dir/compare"
+        --candidate "$dir/octaves" --out "$dir/compare" &&
+    cp "$dir/compare/panel.png" "$IMG/results_panel.png" &&
+    cp "$dir/compare/errors.png" "$IMG/results_errors.png"
 }
 octaves_fitted() {
     "$PY" -c 'import json; c = json.load(open("fit-configs/octaves-fitted.json")); print(*[c[k] for k in ("n", "a", "b", "c")])'
@@ -107,6 +113,16 @@ result fog "The path tracer against Mitsuba 3 (fog and ground)" \
     "$PYR" scripts/check_fog_mitsuba.py --bin "$BIN" $QARG
 result collector "The collector and the octaves against the path tracer: the default cloud with its sky" \
     headline $(q "40 30" "160 120") $(q 4 120)
+cat >>"$sections" <<'EOF'
+Rows: beauty, order 1, orders ≥ 2 and each order group; columns: the path tracer, the
+collector with its default correction, the octaves fitted on another scene (the same
+exposure per row). Then the signed relative error of order 1 and of orders ≥ 2.
+
+![the default cloud: path tracer, collector, octaves, per order group](img/results_panel.png)
+
+![their signed relative error](img/results_errors.png)
+
+EOF
 result speed-phase "Speed: phase models against renderer-style C (benches/baselines/phase_ref.c)" \
     bash scripts/bench_phase.sh $(q "1000000 3 1000000" "")
 result speed-slab "Speed: the slab walk against a scalar C walk (benches/baselines/slab_ref.c)" \

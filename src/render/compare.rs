@@ -576,12 +576,24 @@ fn split_variance(q: Quantity, halves: &[f32], n: usize) -> Vec<f64> {
         .collect()
 }
 
-/// A render's method as render.json names it, with the collector's finite-cloud correction
-/// when it has one ("collector (leakage)").
+/// A render's method as render.json names it, with what tells two renders of one method
+/// apart: the collector's finite-cloud correction ("collector (leakage)"), the octaves' a, b
+/// and c ("octaves (a 0.28, b 0.96, c 0.81)").
 fn method_name(meta: &serde_json::Value) -> String {
     let method = meta["method"].as_str().unwrap_or("path_tracer");
-    match meta["details"]["correction"].as_str() {
-        Some(c) if method == "collector" => format!("{method} ({c})"),
+    let details = &meta["details"];
+    match method {
+        "collector" => match details["correction"].as_str() {
+            Some(c) => format!("{method} ({c})"),
+            None => method.to_string(),
+        },
+        "octaves" => {
+            let o = &details["options"]["octaves"];
+            match (o["a"].as_f64(), o["b"].as_f64(), o["c"].as_f64()) {
+                (Some(a), Some(b), Some(c)) => format!("{method} (a {a:.2}, b {b:.2}, c {c:.2})"),
+                _ => method.to_string(),
+            }
+        }
         _ => method.to_string(),
     }
 }
