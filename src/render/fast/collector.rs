@@ -13,7 +13,7 @@
 //! in the view ray's chord, its orders moved by what the sides take from a walk from the eye
 //! (under a uniform sky the sides gain what they leak, so the sum stays), absorption after.
 
-use super::view_march::ViewRay;
+use super::view_ray::ViewRay;
 use super::{Frame, Pixel};
 use crate::render::image::GROUP_FIRST;
 use nephele_runtime::transport::leakage::lateral_rate;

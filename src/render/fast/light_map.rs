@@ -18,7 +18,7 @@
 //! crowded there (quadratic spacing: order 1 comes from the first mean free paths), linear
 //! between them, for the sun's transmittance at any point (order 1 and the octave baseline).
 
-use super::march::substeps;
+use super::substeps::substeps;
 use crate::render::geometry::{cross, dot, normalize, Vec3};
 use crate::render::medium::Medium;
 use nephele_runtime::fitting::Simd;

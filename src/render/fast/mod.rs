@@ -4,7 +4,7 @@
 //! multi-octave approximation of real-time engines (Wrenninge et al. 2013; Hillaire 2016).
 //!
 //! Per pixel, one ray through the pixel's centre (or an n × n grid of them) is marched through
-//! the medium ([`march`], [`view_march`]) in sub-steps of length h with extinction σ, view
+//! the medium ([`substeps`], [`view_ray`]) in sub-steps of length h with extinction σ, view
 //! transmittance T_v, and the sun's optical depth τ_sun from the light-space map, linear over
 //! a sub-step (τ_a → τ_b):
 //!
@@ -24,7 +24,7 @@
 //! - the march stops where T_v < 10⁻⁴ (what lies behind adds < 10⁻⁴ of the pixel).
 //!
 //! Files: this one drives a frame (options, pixels, one ray's order 1 and the baselines);
-//! [`view_march`] marches a view ray, [`collector`] is the collector's branch with its search
+//! [`view_ray`] marches a view ray, [`collector`] is the collector's branch with its search
 //! statistics, [`table_check`] checks the tables against the scene; the sun's side of the
 //! scene ([`sun_side`](mod@sun_side)) comes from light-space maps ([`light_map`]), the sky term
 //! from [`sky`], the octave baseline from [`octaves`]. The camera, the image and its regions
@@ -32,13 +32,13 @@
 
 pub mod collector;
 pub mod light_map;
-pub mod march;
 pub mod octaves;
 pub mod rays;
 pub mod sky;
+pub mod substeps;
 pub mod sun_side;
 pub mod table_check;
-pub mod view_march;
+pub mod view_ray;
 
 use super::camera::Pinhole;
 use super::geometry::{dot, Vec3};
@@ -63,7 +63,7 @@ use std::time::Instant;
 use sun_side::sun_side;
 pub use sun_side::SunSide;
 use table_check::{check_tables, mean_cosine};
-use view_march::ViewRay;
+use view_ray::ViewRay;
 
 /// How a frame is rendered.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]

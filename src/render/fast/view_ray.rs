@@ -1,14 +1,14 @@
 //! The view ray's march (docs/collector.md, "March"): one ray of a pixel through the medium in
-//! sub-steps ([`super::march`]), gathering its transmittance T_v, the integrals
+//! sub-steps ([`super::substeps`]), gathering its transmittance T_v, the integrals
 //! I_{aⁱ} = ∫ σ T_v e^{−aⁱ τ_sun} ds of order 1 and the octaves (closed form per sub-step, τ_sun
 //! linear over it), and the surface point p where it first crosses the lit surface's iso-level
 //! ρ₀ (interpolated between sub-steps; where it never does, the sub-step of largest σ), with
 //! what it knows of the medium beyond p and p's optical depth to the sun: what the collector
 //! search takes as its viewpoint; and the ray's optical depth along its chord, for the sky term.
 
-use super::march::substeps;
 use super::octaves::MAX_OCTAVES;
 use super::sky::CHORD_ENOUGH;
+use super::substeps::substeps;
 use super::{Frame, Method};
 use crate::render::geometry::Vec3;
 use nephele_runtime::transport::Viewpoint;
