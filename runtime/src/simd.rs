@@ -2,6 +2,35 @@
 //! them: every loop compiled for several levels (the phase models' many samples, the slab
 //! walk) takes the best one this returns.
 
+/// `$avx2` (an unsafe call of a copy compiled with `#[target_feature(enable = "avx2")]`) where
+/// the CPU has AVX2, else `$any`: the runtime's one hand-off to such copies. Without `std` or
+/// off x86-64, `$any` alone (the AVX2 copies are not compiled there).
+macro_rules! avx2_or {
+    ($avx2:expr, $any:expr) => {{
+        #[cfg(all(feature = "std", target_arch = "x86_64"))]
+        {
+            if $crate::simd::avx2() {
+                // SAFETY: the CPU has AVX2, checked just above.
+                unsafe { $avx2 }
+            } else {
+                $any
+            }
+        }
+        #[cfg(not(all(feature = "std", target_arch = "x86_64")))]
+        {
+            $any
+        }
+    }};
+}
+pub(crate) use avx2_or;
+
+/// Whether the CPU has AVX2 (one cached feature test: the hand-offs run per point).
+#[cfg(all(feature = "std", target_arch = "x86_64"))]
+#[inline]
+pub(crate) fn avx2() -> bool {
+    std::is_x86_feature_detected!("avx2")
+}
+
 /// A level of x86-64 vector units, the best first.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 // Without std (no feature detection) or off x86-64 only the baseline is ever picked.

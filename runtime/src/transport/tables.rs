@@ -306,12 +306,7 @@ impl<'a> TransportTables<'a> {
 
     /// [`Self::transport_run`] at a point within the grid's thicknesses.
     fn transport_run_within(&self, at: &SlabPoint<f32>, run: (usize, usize), out: &mut [f32]) {
-        #[cfg(all(feature = "std", target_arch = "x86_64"))]
-        if std::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2, checked just above.
-            return unsafe { self.transport_run_avx2(at, run, out) };
-        }
-        self.transport_run_any(at, run, out);
+        crate::simd::avx2_or!(self.transport_run_avx2(at, run, out), self.transport_run_any(at, run, out))
     }
 
     /// [`Self::transport_run`] compiled for AVX2: the groups' lanes ([`LANES`]) in one
@@ -459,12 +454,7 @@ impl<'a> TransportTables<'a> {
 
     /// [`Self::evaluate_run`] at a point within the grid's thicknesses.
     fn evaluate_run_within(&self, at: &SlabPoint<f32>, run: (usize, usize), out: &mut [Transport]) {
-        #[cfg(all(feature = "std", target_arch = "x86_64"))]
-        if std::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2, checked just above.
-            return unsafe { self.evaluate_run_avx2(at, run, out) };
-        }
-        self.evaluate_run_any(at, run, out);
+        crate::simd::avx2_or!(self.evaluate_run_avx2(at, run, out), self.evaluate_run_any(at, run, out))
     }
 
     /// [`Self::evaluate_run`] compiled for AVX2 (as [`Self::transport_run_avx2`]).
@@ -1028,12 +1018,7 @@ impl<const N: usize> Sums<N> {
     /// all groups (8 × 5 for T) take half the vector adds. Each accumulator gets the same
     /// products in the same order either way (no FMA), so the answers are bit-identical.
     fn add_row(&mut self, beta: &[u8], row: &[(u32, f32)]) {
-        #[cfg(all(feature = "std", target_arch = "x86_64"))]
-        if std::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2, checked just above.
-            return unsafe { self.add_row_avx2(beta, row) };
-        }
-        self.add_row_any(beta, row);
+        crate::simd::avx2_or!(self.add_row_avx2(beta, row), self.add_row_any(beta, row))
     }
 
     /// [`Self::add_row`] compiled for AVX2.
