@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # Independent cross-checks of nephele against reference implementations.
 #
-# Usage: scripts/check.sh [--no-build] [--quick]
-#   --no-build  use the existing target/release/nephele instead of running cargo
-#   --quick     pass --quick to every check script
+# Usage: scripts/check.sh [--no-build] [--quick] [--log-dir DIR]
+#   --no-build     use the existing target/release/nephele instead of running cargo
+#   --quick        pass --quick to every check script
+#   --log-dir DIR  also keep each check's output, exit status and seconds in DIR (as
+#                  scripts/results.sh --checks-from reads them)
 #
 # Creates .venv at the repository root if missing, installs scripts/requirements.txt into it
 # (skipped when the requirements file is unchanged since the last install, or when pip freeze
@@ -30,11 +32,15 @@ CHECKS=(
 
 BUILD=1
 ARGS=()
-for arg in "$@"; do
+LOG_DIR=""
+while (( $# )); do
+    arg=$1
+    shift
     case "$arg" in
         --no-build) BUILD=0 ;;
         --quick) ARGS+=(--quick) ;;
-        -h|--help) sed -n '2,11p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+        --log-dir) LOG_DIR=${1:?--log-dir needs a directory}; shift; mkdir -p "$LOG_DIR" ;;
+        -h|--help) sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
         *) echo "check.sh: unknown option '$arg'" >&2; exit 2 ;;
     esac
 done
@@ -69,9 +75,17 @@ rm -rf "$WHEELS"
 for check in "${CHECKS[@]}"; do
     echo
     step "scripts/$check"
-    if ! "$PY" "$ROOT/scripts/$check" --bin "$BIN" ${ARGS[@]+"${ARGS[@]}"}; then
-        failed+=("$check")
+    t0=$(date +%s)
+    rc=0
+    if [[ -n "$LOG_DIR" ]]; then
+        "$PY" "$ROOT/scripts/$check" --bin "$BIN" ${ARGS[@]+"${ARGS[@]}"} 2>&1 \
+            | tee "$LOG_DIR/$check.txt" || rc=$?
+        echo "$rc" >"$LOG_DIR/$check.rc"
+        echo $(( $(date +%s) - t0 )) >"$LOG_DIR/$check.s"
+    else
+        "$PY" "$ROOT/scripts/$check" --bin "$BIN" ${ARGS[@]+"${ARGS[@]}"} || rc=$?
     fi
+    (( rc == 0 )) || failed+=("$check")
 done
 
 echo

@@ -4,11 +4,13 @@
 # speed ratios against the named baselines, every result under the command that produced it,
 # with the machine and the date of the run.
 #
-# Usage: scripts/results.sh [--quick] [--out FILE]
-#   --quick     small sizes and few rounds (CI, a few minutes); writes to a temporary file
-#               unless --out is given, and checks that the page has the sections of
-#               docs/results.md, each with its command and output, every command exiting 0
-#   --out FILE  write the page to FILE instead of docs/results.md
+# Usage: scripts/results.sh [--quick] [--out FILE] [--checks-from DIR]
+#   --quick            small sizes and few rounds (CI); writes to a temporary file unless --out
+#                      is given, and checks that the page has the sections of docs/results.md,
+#                      each with its command and output, every command exiting 0
+#   --out FILE         write the page to FILE instead of docs/results.md
+#   --checks-from DIR  take the cross-checks' outputs from `scripts/check.sh --log-dir DIR`
+#                      (their full runs) instead of running them again
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 ROOT=$(pwd)
@@ -17,11 +19,13 @@ step() { echo "== [$(( $(date +%s) - start )) s] $*" >&2; }
 
 QUICK=0
 OUT=""
+CHECKS_FROM=""
 while (( $# )); do
     case "$1" in
         --quick) QUICK=1 ;;
         --out) OUT=${2:?--out needs a file}; shift ;;
-        -h|--help) sed -n '2,11p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+        --checks-from) CHECKS_FROM=${2:?--checks-from needs a directory}; shift ;;
+        -h|--help) sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
         *) echo "results.sh: unknown option '$1' (see --help)" >&2; exit 2 ;;
     esac
     shift
@@ -57,10 +61,20 @@ result() {
     shift 2
     local shown="$*"
     step "$stage: $shown"
-    local t0 rc=0
+    local t0 rc=0 secs
     t0=$(date +%s)
-    "$@" >"$work/out.txt" 2>&1 || rc=$?
-    local secs=$(( $(date +%s) - t0 ))
+    local script=${2:-}
+    if [[ -n "$CHECKS_FROM" && "$script" == scripts/check_*.py ]]; then
+        # The full run check.sh made: its output, exit status and seconds.
+        script=${script#scripts/}
+        cp "$CHECKS_FROM/$script.txt" "$work/out.txt"
+        rc=$(cat "$CHECKS_FROM/$script.rc")
+        secs=$(cat "$CHECKS_FROM/$script.s")
+        shown="$1 scripts/$script --bin $BIN (run in full by scripts/check.sh)"
+    else
+        "$@" >"$work/out.txt" 2>&1 || rc=$?
+        secs=$(( $(date +%s) - t0 ))
+    fi
     (( rc == 0 )) || failed+=("$stage: $shown")
     echo "| $stage | \`$shown\` | $rc | $secs |" >>"$summary"
     {
@@ -71,26 +85,32 @@ result() {
         echo '```text'
         # Progress bars and build noise are not results.
         grep -v -e '^\s*Compiling ' -e '^\s*Finished ' -e '^\s*Running ' -e $'\r' "$work/out.txt" \
-            | sed -e 's/[[:space:]]*$//'
+            | sed -e 's/[[:space:]]*$//' -e "s#$work/##g"
         echo '```'
         echo
     } >>"$sections"
 }
 
-# The collector and the octaves against the path tracer on the default cloud with its sky.
+# The collector (as published, and corrected for the finite cloud) and the fitted octaves
+# against the path tracer on the default cloud with its sky; the README's picture.
 headline() {
-    local size=$1 budget=$2 dir="$work/headline"
+    local size="$1 $2" budget=$3 dir="$work/headline" scene=fit-configs/scenes/cloud.json
     rm -rf "$dir"
-    "$BIN" render --scene fit-configs/scenes/cloud.json --size $size --time-budget "$budget" \
-        --out "$dir/path" >/dev/null &&
-    "$BIN" render --scene fit-configs/scenes/cloud.json --size $size --method collector \
-        --rays 2 --out "$dir/collector" >/dev/null &&
-    "$BIN" render --scene fit-configs/scenes/cloud.json --size $size --method octaves \
-        --rays 2 --octaves $(octaves_fitted) --out "$dir/octaves" >/dev/null &&
-    "$BIN" compare --reference "$dir/path" --candidate "$dir/collector" \
-        --candidate "$dir/octaves" --out "$dir/compare" &&
+    "$BIN" render --scene $scene --size $size --time-budget "$budget" --out "$dir/path" \
+        >/dev/null &&
+    "$BIN" render --scene $scene --size $size --method collector --rays 2 --correction none \
+        --out "$dir/collector_as_published" >/dev/null &&
+    "$BIN" render --scene $scene --size $size --method collector --rays 2 \
+        --out "$dir/collector_corrected" >/dev/null &&
+    "$BIN" render --scene $scene --size $size --method octaves --rays 2 \
+        --octaves $(octaves_fitted) --out "$dir/octaves_fitted" >/dev/null &&
+    "$BIN" compare --reference "$dir/path" --candidate "$dir/collector_as_published" \
+        --candidate "$dir/collector_corrected" --candidate "$dir/octaves_fitted" \
+        --out "$dir/compare" &&
     cp "$dir/compare/panel.png" "$IMG/results_panel.png" &&
-    cp "$dir/compare/errors.png" "$IMG/results_errors.png"
+    cp "$dir/compare/errors.png" "$IMG/results_errors.png" &&
+    "$PY" scripts/compare_flip.py "$dir/compare" &&
+    "$PY" scripts/figure_collector.py "$dir/compare" "$IMG/collector.png"
 }
 octaves_fitted() {
     "$PY" -c 'import json; c = json.load(open("fit-configs/octaves-fitted.json")); print(*[c[k] for k in ("n", "a", "b", "c")])'
@@ -115,8 +135,10 @@ result collector "The collector and the octaves against the path tracer: the def
     headline $(q "40 30" "160 120") $(q 4 120)
 cat >>"$sections" <<'EOF'
 Rows: beauty, order 1, orders ≥ 2 and each order group; columns: the path tracer, the
-collector with its default correction, the octaves fitted on another scene (the same
-exposure per row). Then the signed relative error of order 1 and of orders ≥ 2.
+collector as published, the collector with its default finite-cloud correction, the octaves
+fitted on another scene (fit-configs/octaves-fitted.json), each row at one exposure. Then the
+signed relative error of order 1 and of orders ≥ 2. The README's picture is drawn from the
+same renders (`scripts/figure_collector.py`).
 
 ![the default cloud: path tracer, collector, octaves, per order group](img/results_panel.png)
 
@@ -124,13 +146,13 @@ exposure per row). Then the signed relative error of order 1 and of orders ≥ 2
 
 EOF
 result speed-phase "Speed: phase models against renderer-style C (benches/baselines/phase_ref.c)" \
-    bash scripts/bench_phase.sh $(q "1000000 3 1000000" "")
+    bash scripts/bench_phase.sh $(q "200000 2 200000" "")
 result speed-slab "Speed: the slab walk against a scalar C walk (benches/baselines/slab_ref.c)" \
-    bash scripts/bench_slab.sh $(q "50000 3" "")
+    bash scripts/bench_slab.sh $(q "20000 2" "")
 result speed-capi "Speed: the C ABI's batch entry on 2 threads against 1" \
     bash scripts/bench_capi_threads.sh $(q "20000 2 2 1" "")
 result speed-frame "Speed: the collector's frame (320 × 240 and 640 × 480)" \
-    bash scripts/bench_frame.sh $(q 1 5)
+    bash scripts/bench_frame.sh $(q 2 5)
 result speed-wgsl "Speed: the WGSL port on this machine's Vulkan device" \
     bash scripts/bench_wgsl.sh
 
