@@ -110,7 +110,9 @@ headline() {
     cp "$dir/compare/panel.png" "$IMG/results_panel.png" &&
     cp "$dir/compare/errors.png" "$IMG/results_errors.png" &&
     "$PY" scripts/compare_flip.py "$dir/compare" &&
-    "$PY" scripts/figure_collector.py "$dir/compare" "$IMG/collector.png"
+    if (( ! QUICK )); then
+        "$PY" scripts/figure_collector.py "$dir/compare" "$IMG/collector.png"
+    fi
 }
 octaves_fitted() {
     "$PY" -c 'import json; c = json.load(open("fit-configs/octaves-fitted.json")); print(*[c[k] for k in ("n", "a", "b", "c")])'
@@ -132,13 +134,13 @@ result render "The path tracer against Mitsuba 3 (cloud)" \
 result fog "The path tracer against Mitsuba 3 (fog and ground)" \
     "$PYR" scripts/check_fog_mitsuba.py --bin "$BIN" $QARG
 result collector "The collector and the octaves against the path tracer: the default cloud with its sky" \
-    headline $(q "40 30" "160 120") $(q 4 120)
+    headline $(q "80 60" "160 120") $(q 10 120)
 cat >>"$sections" <<'EOF'
 Rows: beauty, order 1, orders ≥ 2 and each order group; columns: the path tracer, the
 collector as published, the collector with its default finite-cloud correction, the octaves
 fitted on another scene (fit-configs/octaves-fitted.json), each row at one exposure. Then the
-signed relative error of order 1 and of orders ≥ 2. The README's picture is drawn from the
-same renders (`scripts/figure_collector.py`).
+signed relative error of order 1 and of orders ≥ 2. A full run (not `--quick`) also draws the
+README's picture from these renders (`scripts/figure_collector.py`).
 
 ![the default cloud: path tracer, collector, octaves, per order group](img/results_panel.png)
 
