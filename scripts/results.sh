@@ -168,7 +168,7 @@ cpu=$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')
     echo
     echo "- Run: $(date -u '+%Y-%m-%d %H:%M UTC'), $(( $(date +%s) - start )) s$( (( QUICK )) && echo ', quick')."
     echo "- Machine: $cpu, $(nproc) cores, $(awk '/MemTotal/ {printf "%.0f GiB", $2 / 1048576}' /proc/meminfo); $(uname -sr)."
-    echo "- Commit: $(git rev-parse --short HEAD)$(git diff --quiet HEAD -- . ':!docs/results.md' || echo ' (with local changes)')."
+    echo "- Commit: $(git rev-parse --short HEAD)$(git diff --quiet HEAD -- . ':!docs/results.md' ':!docs/img' || echo ' (with local changes)')."
     echo
     echo "| result | command | exit | s |"
     echo "|---|---|---|---|"
