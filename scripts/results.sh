@@ -63,14 +63,12 @@ result() {
     step "$stage: $shown"
     local t0 rc=0 secs
     t0=$(date +%s)
-    local script=${2:-}
-    if [[ -n "$CHECKS_FROM" && "$script" == scripts/check_*.py ]]; then
-        # The full run check.sh made: its output, exit status and seconds.
-        script=${script#scripts/}
-        cp "$CHECKS_FROM/$script.txt" "$work/out.txt"
-        rc=$(cat "$CHECKS_FROM/$script.rc")
-        secs=$(cat "$CHECKS_FROM/$script.s")
-        shown="$1 scripts/$script --bin $BIN (run in full by scripts/check.sh)"
+    if [[ $1 == from-check-sh ]]; then
+        # The full run check.sh made of script $2: its output, exit status and seconds.
+        cp "$CHECKS_FROM/$2.txt" "$work/out.txt"
+        rc=$(cat "$CHECKS_FROM/$2.rc")
+        secs=$(cat "$CHECKS_FROM/$2.s")
+        shown="$PYR scripts/$2 --bin $BIN (run in full by scripts/check.sh)"
     else
         "$@" >"$work/out.txt" 2>&1 || rc=$?
         secs=$(( $(date +%s) - t0 ))
@@ -118,21 +116,22 @@ octaves_fitted() {
     "$PY" -c 'import json; c = json.load(open("fit-configs/octaves-fitted.json")); print(*[c[k] for k in ("n", "a", "b", "c")])'
 }
 
-QARG=$(q --quick "")
-result mie "Mie: nephele against miepython and colour-science" \
-    "$PYR" scripts/check_mie.py --bin "$BIN" $QARG
-result phase "Phase models: sampling and values against Mitsuba 3" \
-    "$PYR" scripts/check_mitsuba.py --bin "$BIN" $QARG
-result fit "Fitted phase functions against the Mie tables" \
-    "$PYR" scripts/check_fit.py --bin "$BIN" $QARG
-result slab "Slab transport against independent references" \
-    "$PYR" scripts/check_slab.py --bin "$BIN" $QARG
-result tables "Compressed tables against the slab walk" \
-    "$PYR" scripts/check_transport.py --bin "$BIN" $QARG
-result render "The path tracer against Mitsuba 3 (cloud)" \
-    "$PYR" scripts/check_render_mitsuba.py --bin "$BIN" $QARG
-result fog "The path tracer against Mitsuba 3 (fog and ground)" \
-    "$PYR" scripts/check_fog_mitsuba.py --bin "$BIN" $QARG
+# A cross-check of scripts/check.sh: run here, or taken from its full run (--checks-from).
+check() {
+    if [[ -n "$CHECKS_FROM" ]]; then
+        result "$1" "$2" from-check-sh "$3"
+    else
+        result "$1" "$2" "$PYR" "scripts/$3" --bin "$BIN" $(q --quick "")
+    fi
+}
+
+check mie "Mie: nephele against miepython and colour-science" check_mie.py
+check phase "Phase models: sampling and values against Mitsuba 3" check_mitsuba.py
+check fit "Fitted phase functions against the Mie tables" check_fit.py
+check slab "Slab transport against independent references" check_slab.py
+check tables "Compressed tables against the slab walk" check_transport.py
+check render "The path tracer against Mitsuba 3 (cloud)" check_render_mitsuba.py
+check fog "The path tracer against Mitsuba 3 (fog and ground)" check_fog_mitsuba.py
 result collector "The collector and the octaves against the path tracer: the default cloud with its sky" \
     headline $(q "80 60" "160 120") $(q 10 120)
 cat >>"$sections" <<'EOF'
