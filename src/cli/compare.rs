@@ -26,9 +26,10 @@ pub struct CompareArgs {
 
 /// Runs `nephele compare`.
 pub fn run(args: CompareArgs) -> Result<()> {
+    nephele::io::output_dir(&args.out)?;
     let report = compare_with(&args.reference, &args.candidate, &args.out, args.exposure)?;
     print_table(&report);
-    println!(
+    outln!(
         "wrote {}/report.json, panel.png, errors.png, reference.png, candidate*.png (mean FLIP: \
          scripts/compare_flip.py {})",
         args.out.display(),
@@ -40,8 +41,8 @@ pub fn run(args: CompareArgs) -> Result<()> {
 /// The table on stdout: a legend, then per candidate and quantity, over the opaque pixels,
 /// then the regions of orders ≥ 2.
 pub fn print_table(report: &Report) {
-    println!("{LEGEND}");
-    println!(
+    outln!("{LEGEND}");
+    outln!(
         "reference {} ({}, {} spp, {}); images at exposure {:.3}",
         report.reference,
         report.reference_method,
@@ -50,19 +51,24 @@ pub fn print_table(report: &Report) {
         report.exposure
     );
     for c in &report.candidates {
-        println!(
+        outln!(
             "\n{} ({}): {} a frame, beauty PSNR {:.1} dB",
             c.dir,
             c.method,
             super::seconds(c.seconds),
             c.psnr_db
         );
-        println!(
+        outln!(
             "  {:<22} {:>8} {:>8} {:>9} {:>8} {:>15}",
-            "opaque pixels", "bias", "(noise)", "rel RMSE", "(noise)", "corrected"
+            "opaque pixels",
+            "bias",
+            "(noise)",
+            "rel RMSE",
+            "(noise)",
+            "corrected"
         );
         let row = |name: &str, s: &Stats| {
-            println!(
+            outln!(
                 "  {:<22} {:>+7.1}% {:>7.1}% {:>8.1}% {:>7.1}% {:>7.1}% ± {:.1}",
                 name,
                 100.0 * s.bias,

@@ -97,6 +97,7 @@ pub fn run(args: CompressArgs, m: &clap::ArgMatches) -> Result<()> {
         collector_q: args.collector_smooth_t,
     };
     opt.check()?;
+    nephele::io::output_dir(&args.out)?;
     let o = compress_with_spinner(&args.tables, &args.out, &opt)?;
     print_outcome(&o, &args.out);
     Ok(())
@@ -111,10 +112,10 @@ fn print_near_beam(nb: &NearBeamCheck, whose: &str) {
         if rows.is_empty() {
             continue;
         }
-        println!("near the beam, {what}, {whose}: group  cells  bias  E (noise), cell means against the tables");
+        outln!("near the beam, {what}, {whose}: group  cells  bias  E (noise), cell means against the tables");
         for r in rows.iter() {
             let name = r.group.map_or("all ≥ 2".to_string(), |g| g.to_string());
-            println!(
+            outln!(
                 "{name:>40} {:>6} {:>+7.1} % {:>6.1} % ({:.1} %)",
                 r.cells,
                 100.0 * r.bias,
@@ -137,20 +138,20 @@ pub fn print_outcome(o: &Outcome, out: &Path) {
         print_errors("held-out slices", &h.errors);
         print_collector("held-out slices", &h.collector);
     }
-    println!(
+    outln!(
         "{} parameters of T and {} of c, σ ({:.0} KB as f32), fitted in {:.1} s",
         o.params,
         o.collector_params,
         (o.params + o.collector_params) as f64 * 4.0 / 1024.0,
         o.fit_seconds
     );
-    println!(
+    outln!(
         "wrote {}/report.json, manifest.json, compressed.npz, fit_vs_tables.png, \
          error_by_thickness.png, error_map.png",
         out.display()
     );
     if let Some(n) = &o.ntt {
-        println!(
+        outln!(
             "wrote {} ({:.0} KB); the runtime's f32 evaluation against the fit: T within {:.1e}, \
              σ within {:.1e}, c within {:.1e} σ; order 1 from the stored phase table within {:.1e} \
              of the phase function's; {} cells where only one of them is 0 (T of the cells below \
@@ -179,7 +180,7 @@ pub fn print_outcome(o: &Outcome, out: &Path) {
         }
     }
     let (worst, groups) = &o.coverage;
-    println!(
+    outln!(
         "coverage over every cell with light: group  orders  dropped (0 or off > 2x)  zero     \
          worst slice   E all cells (noise)"
     );
@@ -188,7 +189,7 @@ pub fn print_outcome(o: &Outcome, out: &Path) {
             (Some(g), Some(f)) => (g.to_string(), format!("{f}+")),
             _ => ("all".to_string(), "sum ≥ 2".to_string()),
         };
-        println!(
+        outln!(
             "{name:>41} {orders:>7}  {:>8.3} %  {:>20.4} %  {:>7.3} %   {:>6.2} % ({:.2} %)",
             100.0 * c.dropped,
             100.0 * c.zero,
@@ -197,7 +198,7 @@ pub fn print_outcome(o: &Outcome, out: &Path) {
             100.0 * c.noise_all
         );
     }
-    println!(
+    outln!(
         "light of orders ≥ 2 the groups drop together: at most {:.3} % of a slice's (t = {}, mu_L = {})",
         100.0 * worst.share,
         worst.t,
@@ -206,13 +207,13 @@ pub fn print_outcome(o: &Outcome, out: &Path) {
 }
 
 fn print_errors(what: &str, errors: &[GroupError]) {
-    println!("{what}: group  orders   E (T-weighted rel RMS)   noise    cells");
+    outln!("{what}: group  orders   E (T-weighted rel RMS)   noise    cells");
     for e in errors {
         let name = e
             .first_order
             .map_or("sum ≥ 2".to_string(), |o| format!("{o:>4}+"));
         let group = e.group.map_or("all".into(), |g| g.to_string());
-        println!(
+        outln!(
             "{:>w$}  {group:>5}  {name:>7}   {:>8.2} %               {:>5.2} %  {:>7}",
             "",
             100.0 * e.rel_rms,
@@ -227,9 +228,9 @@ fn print_collector(what: &str, errors: &[CollectorError]) {
     if errors.is_empty() {
         return;
     }
-    println!("{what}: group  orders   σ rel RMS (noise)    |Δc|/σ RMS (noise)   cells");
+    outln!("{what}: group  orders   σ rel RMS (noise)    |Δc|/σ RMS (noise)   cells");
     for e in errors {
-        println!(
+        outln!(
             "{:>w$}  {:>5}  {:>6}+   {:>6.2} % ({:>5.2} %)   {:>6.2} % ({:>5.2} %)  {:>7}",
             "",
             e.group,

@@ -27,6 +27,7 @@ pub struct ExportGpuArgs {
 
 /// Runs `nephele export-gpu`.
 pub fn run(a: ExportGpuArgs) -> Result<()> {
+    nephele::io::output_dir(&a.out)?;
     let (bytes, name) = match &a.tables {
         Some(p) => (
             std::fs::read(p).with_context(|| format!("cannot read tables '{}'", p.display()))?,
@@ -90,7 +91,7 @@ pub fn run(a: ExportGpuArgs) -> Result<()> {
             ("layout.json", serde_json::to_vec_pretty(&layout)?),
         ],
     )?;
-    println!(
+    outln!(
         "wrote {}/tables.bin ({} words), index.bin ({} words), nephele_tables.wgsl and layout.json \
          (group {}, bindings {} and {})",
         a.out.display(),

@@ -71,6 +71,7 @@ impl FitFile {
 pub fn run(args: FitArgs) -> Result<()> {
     let file = FitFile::load(&args.config)?;
     let out = args.out.unwrap_or_else(|| PathBuf::from("outputs/fit"));
+    nephele::io::output_dir(&out)?;
     let mie_out = out.join("mie");
     run_file(&file, &out, &mie_out, !args.no_plot)
 }
@@ -143,7 +144,7 @@ fn print_summary(report: &FitReport, cfg: &FitConfig, out: &Path) {
         head += &format!(" {:>12}", m.label());
     }
     head += &format!(" {:>12} {:>12}", "paper curve", "our curve");
-    println!("{head}");
+    outln!("{head}");
     // One screen: about ten rows (every row is in fits.json).
     let stride = report.fits.len().div_ceil(10).max(1);
     let last = report.fits.len() - 1;
@@ -163,7 +164,7 @@ fn print_summary(report: &FitReport, cfg: &FitConfig, out: &Path) {
             .find(|p| p.d_um == report.diameters_um[i])
             .map_or("-".to_string(), |p| format!("{:.4e}", p.loss_curve));
         row += &format!(" {:>12.4e} {:>12}", f.paper.loss, ours);
-        println!("{row}");
+        outln!("{row}");
     }
     let not_converged: usize = report
         .fits
@@ -171,7 +172,7 @@ fn print_summary(report: &FitReport, cfg: &FitConfig, out: &Path) {
         .flat_map(|f| f.models.values())
         .filter(|m| !m.optimum.converged)
         .count();
-    println!(
+    outln!(
         "loss per model at its per-diameter optimum ({} marked * did not meet the convergence test); \
          warm-start sweeps: {}, optima improved by them: {}",
         not_converged, report.sweeps, report.improved_by_warm_starts
@@ -182,7 +183,7 @@ fn print_summary(report: &FitReport, cfg: &FitConfig, out: &Path) {
             .iter()
             .map(|p| p.extra_loss_relative)
             .fold(0.0, f64::max);
-        println!(
+        outln!(
             "curves {:?} µm: loss ≤ the paper's curves at {}/{} diameters; largest extra loss over the optimum {:.1}%",
             b.range_um,
             b.curve_beats_paper[0],
@@ -190,8 +191,8 @@ fn print_summary(report: &FitReport, cfg: &FitConfig, out: &Path) {
             100.0 * worst
         );
         for (name, c) in &b.curves {
-            println!("  {name:>6}(d) = {}", c.expression);
+            outln!("  {name:>6}(d) = {}", c.expression);
         }
     }
-    println!("wrote {}/fits.json, fits.npz and figures", out.display());
+    outln!("wrote {}/fits.json, fits.npz and figures", out.display());
 }

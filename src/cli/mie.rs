@@ -319,6 +319,7 @@ pub fn run(args: MieArgs) -> Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("outputs/mie"));
+    nephele::io::output_dir(&out)?;
     compute_and_write(&job, &args, &out)
 }
 
@@ -431,13 +432,17 @@ fn table_dir(out: &Path, t: &PhaseTable, n_tables: usize) -> PathBuf {
 }
 
 fn report(tables: &[PhaseTable], stats: &JobStats, compute_s: f64, write_s: f64, out: &Path) {
-    println!(
+    outln!(
         "{:>10} {:>10} {:>12} {:>10} {:>12}",
-        "d (µm)", "g", "C_sca (µm²)", "Q_sca", "d_eff (µm)"
+        "d (µm)",
+        "g",
+        "C_sca (µm²)",
+        "Q_sca",
+        "d_eff (µm)"
     );
     for t in tables {
         // Significant digits: tiny droplets' cross-sections would print as 0.0000.
-        println!(
+        outln!(
             "{:>10} {:>10.6} {:>12} {:>10} {:>12}",
             short(t.distribution.nominal_diameter_um()),
             t.g,
@@ -446,7 +451,7 @@ fn report(tables: &[PhaseTable], stats: &JobStats, compute_s: f64, write_s: f64,
             short(t.effective_diameter_um)
         );
     }
-    println!(
+    outln!(
         "{} spheres, {:.2} s compute ({:.1} GFLOP/s), {:.2} s writing → {}",
         stats.spheres,
         compute_s,

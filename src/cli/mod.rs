@@ -3,6 +3,15 @@
 //! every model fitted to them — then slab tables of 10 µm droplets and their compression, into
 //! outputs/.
 
+/// `println!` for a command's report on stdout. A reader that closes the pipe early
+/// (`nephele transport … | head -1`) only ends the report: the command still writes its files
+/// and exits 0, as `cat` or `rg` would.
+macro_rules! outln {
+    ($($arg:tt)*) => {
+        $crate::cli::write_out(format_args!($($arg)*))
+    };
+}
+
 mod compare;
 mod compress;
 mod export_gpu;
@@ -16,13 +25,30 @@ mod slab;
 mod sphere;
 mod transport;
 
+/// Writes one line of [`outln!`]; a closed pipe is ignored, any other failure warned once.
+pub(crate) fn write_out(line: std::fmt::Arguments) {
+    use std::io::Write;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    static WARNED: AtomicBool = AtomicBool::new(false);
+    let mut out = std::io::stdout().lock();
+    let result = out.write_fmt(line).and_then(|()| out.write_all(b"\n"));
+    if let Err(e) = result {
+        let quiet = e.kind() == std::io::ErrorKind::BrokenPipe;
+        if !quiet && !WARNED.swap(true, Ordering::Relaxed) {
+            eprintln!(
+                "warning: the report on stdout could not be written ({e}); files are still written"
+            );
+        }
+    }
+}
+
 use anyhow::Result;
 use clap::{ArgMatches, Parser, Subcommand};
 use std::process::ExitCode;
 
 /// nephele — light scattering by water droplets, from Mie theory to renderer-ready tables.
 ///
-/// Without a subcommand, `nephele` runs the main job on built-in configs (~2 min on 2 cores, 113 s measured on 5 Dec 2026):
+/// Without a subcommand, `nephele` runs the main job on built-in configs (~2 min on 2 cores):
 /// Mie tables and phase-model fits (→ outputs/mie, outputs/fit), quick slab tables of 10 µm
 /// droplets (→ outputs/slab-quick), their compression (→ outputs/transport/quick), the
 /// path-traced default cloud (→ outputs/render/cloud) and the same cloud by the collector

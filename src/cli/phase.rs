@@ -212,7 +212,7 @@ pub fn run(args: PhaseArgs) -> Result<()> {
             "worst_mu": tab.worst_mu,
         });
     }
-    std::fs::create_dir_all(&args.out)?;
+    nephele::io::output_dir(&args.out)?;
     let mut set = AtomicFiles::new();
     if let Some(tab) = &export {
         set.write_bytes(&args.out.join("phase_mitsuba.xml"), tab.xml().as_bytes())?;
@@ -239,13 +239,13 @@ pub fn run(args: PhaseArgs) -> Result<()> {
     let mean = model
         .mean_cosine()
         .map_or("not in closed form".to_string(), |g| g.to_string());
-    println!(
+    outln!(
         "{}: mean cosine {mean} → {}",
         args.model.name(),
         args.out.display()
     );
     if let Some(tab) = &export {
-        println!(
+        outln!(
             "mitsuba tabphase ({} cosines): mean cosine as Mitsuba reads it {:.6}, normalisation \
              {:.6}, at most {:.2e} off the model between nodes (at mu = {:.5})",
             tab.values.len(),

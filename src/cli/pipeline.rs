@@ -82,7 +82,7 @@ pub fn run(full: bool) -> Result<()> {
     bar.finish_and_clear();
     write_outputs(render_out, &scene, &r)?;
     let headline = collector_beside(&scene, render_out)?;
-    println!(
+    outln!(
         "\nmain job done in {:.0} s: Mie + fits {fit_s:.0} s → outputs/fit, outputs/mie; slab {slab_s:.0} s \
          → {slab_out}; compression {comp_s:.0} s → {comp_out} (sum of groups ≥ 2 within {:.1} % \
          T-weighted RMS of the tables{}); render {:.0} s ({} spp) → {}/beauty.png",
@@ -95,7 +95,7 @@ pub fn run(full: bool) -> Result<()> {
         r.spp,
         render_out.display(),
     );
-    println!("{headline}");
+    outln!("{headline}");
     Ok(())
 }
 

@@ -446,13 +446,15 @@ pub fn run(args: RenderArgs, m: &ArgMatches) -> Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("outputs/render"));
+    nephele::io::output_dir(&out)?;
+    let _claim = nephele::io::FolderLock::take(&out)?;
     if let Some(n) = args.orbit {
         return render_orbit(&scene, &args, n as usize, &out);
     }
     let r = render_with(&scene, method, &args.fast)?;
     write_outputs_with(&out, &scene, &r, args.exposure)?;
     if method == Method::PathTracer {
-        println!(
+        outln!(
             "{}×{} pixels, {} spp: {} camera paths in {} ({:.0} paths/s); wrote {}/beauty.png, \
              beauty.exr, beauty.npy, groups.npy, halves.npy, unscattered.npy, transmittance.npy, \
              opacity.npy, render.json",
@@ -466,7 +468,7 @@ pub fn run(args: RenderArgs, m: &ArgMatches) -> Result<()> {
         );
     } else {
         let stages = &r.details["seconds_per_stage"];
-        println!(
+        outln!(
             "{}×{} pixels, {}: {:.3} s a frame (maps {:.3} s, sky {:.3} s, pixels {:.3} s); wrote \
              {}/beauty.png, beauty.exr, beauty.npy, groups.npy, regions.npy, unscattered.npy, \
              transmittance.npy, opacity.npy, render.json",
@@ -560,7 +562,7 @@ fn render_orbit(scene: &Scene, args: &RenderArgs, n: usize, out: &Path) -> Resul
             1.0 / mean_reused.max(1e-9)
         )
     };
-    println!(
+    outln!(
         "{n} views of {w}×{h} pixels, {}: light maps {} once, the first frame {}{others}; wrote \
          {}/view_000 … view_{:03}, views.json",
         method_name(args.method.into()),
@@ -589,14 +591,14 @@ fn print_search_stats(groups: &serde_json::Value) {
     let Some(groups) = groups.as_array() else {
         return;
     };
-    println!(
+    outln!(
         "  collector search per order group (shares of the pixels searched; docs/collector.md):"
     );
     let f = |g: &serde_json::Value, k: &str| g[k].as_f64().unwrap_or(0.0);
     for g in groups.iter().filter(|g| f(g, "searches") > 0.0) {
         let n = f(g, "searches");
         let pct = |k: &str| 100.0 * f(g, k) / n;
-        println!(
+        outln!(
             "  orders {:>2}+: {:.2} table reads a pixel, {:.1} % converged; held at the tables' \
              edge: thickness {:.1} %, sun angle {:.1} %, depth {:.1} %; depth set by the medium \
              behind the view point {:.1} %; cut above it to its depth to the sun {:.1} %; no \

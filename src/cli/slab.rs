@@ -85,6 +85,7 @@ pub fn run(args: SlabArgs) -> Result<()> {
         bail!("--save-every must be ≥ 0 seconds");
     }
     let out = args.out.unwrap_or_else(|| PathBuf::from("outputs/slab"));
+    nephele::io::output_dir(&out)?;
     run_config(&cfg, &out, shard, args.save_every, !args.no_plot)
 }
 
@@ -125,7 +126,7 @@ pub fn run_config(
     let mc_s = t1.elapsed().as_secs_f64();
     if let Some((k, n)) = shard {
         summary(&run, mc_s);
-        println!(
+        outln!(
             "shard {}/{n}: sums in {}; merge all shards with `nephele merge --config … SHARD_DIR…`",
             k + 1,
             out.join("checkpoint").display()
@@ -139,7 +140,7 @@ pub fn run_config(
     spin.finish_and_clear();
     checkpoint.remove()?;
     summary(&run, mc_s);
-    println!("wrote {}/tables.npz, tables.json", out.display());
+    outln!("wrote {}/tables.npz, tables.json", out.display());
     Ok(())
 }
 
@@ -170,7 +171,7 @@ pub fn merge_shards(args: MergeArgs) -> Result<()> {
     write_tables(&cfg, &run, phase.as_ref(), &out, !args.no_plot, timings)?;
     spin.finish_and_clear();
     summary(&run, seconds);
-    println!(
+    outln!(
         "merged {} shards into {}/tables.npz, tables.json",
         args.shards.len(),
         out.display()
@@ -179,12 +180,19 @@ pub fn merge_shards(args: MergeArgs) -> Result<()> {
 }
 
 fn summary(run: &SlabRun, seconds: f64) {
-    println!(
+    outln!(
         "{:>8} {:>6} {:>12} {:>10} {:>10} {:>10} {:>10} {:>10}",
-        "t", "mu_L", "photons", "R", "T", "worst se", "horizon", "converged"
+        "t",
+        "mu_L",
+        "photons",
+        "R",
+        "T",
+        "worst se",
+        "horizon",
+        "converged"
     );
     for (r, _) in run.done() {
-        println!(
+        outln!(
             "{:>8} {:>6} {:>12} {:>10.5} {:>10.5} {:>9.2}% {:>9.2}% {:>10}",
             r.t,
             r.mu_l,
@@ -197,5 +205,5 @@ fn summary(run: &SlabRun, seconds: f64) {
         );
     }
     let events: u64 = run.done().map(|(r, _)| r.events).sum();
-    println!("{events} scattering events in {seconds:.1} s");
+    outln!("{events} scattering events in {seconds:.1} s");
 }

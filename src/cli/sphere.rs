@@ -57,6 +57,6 @@ pub fn run(args: SphereArgs) -> Result<()> {
         v["a"] = json!(coef.a.iter().map(|c| [c.re, c.im]).collect::<Vec<_>>());
         v["b"] = json!(coef.b.iter().map(|c| [c.re, c.im]).collect::<Vec<_>>());
     }
-    println!("{}", serde_json::to_string(&v)?);
+    outln!("{}", serde_json::to_string(&v)?);
     Ok(())
 }

@@ -70,6 +70,7 @@ pub fn run(a: TransportArgs) -> Result<()> {
             .out
             .as_deref()
             .context("--points needs --out FILE.npy for the answers")?;
+        nephele::io::output_file(out)?;
         return super::with_tables(a.tables.as_deref(), |tab| {
             batch(points, out, a.collector, tab)
         });
@@ -168,7 +169,7 @@ fn batch(points: &Path, out: &Path, collector: bool, tab: &TransportTables) -> R
     for line in outside_lines(&tally, &dom) {
         eprintln!("warning: {line}");
     }
-    println!(
+    outln!(
         "{n} points in {seconds:.3} s ({:.2e} points/s, {} threads) → {} ({width} columns)",
         n as f64 / seconds.max(1e-12),
         rayon::current_num_threads(),
@@ -213,7 +214,7 @@ fn answer(at: &SlabPoint<f32>, psi_deg: f32, tab: &TransportTables) -> Result<()
         "order1": tab.order1(&at),
         "groups": groups,
     });
-    println!("{}", serde_json::to_string_pretty(&out)?);
+    outln!("{}", serde_json::to_string_pretty(&out)?);
     Ok(())
 }
 

@@ -27,8 +27,13 @@ impl AtomicFiles {
     ) -> Result<()> {
         let tmp = self.temp_name(path)?;
         self.pending.push((tmp.clone(), path.to_path_buf()));
-        let file =
-            File::create(&tmp).with_context(|| format!("cannot create '{}'", tmp.display()))?;
+        let file = File::create(&tmp).with_context(|| {
+            format!(
+                "cannot write '{}' (its temporary '{}')",
+                path.display(),
+                tmp.display()
+            )
+        })?;
         let mut w = BufWriter::new(file);
         f(&mut w).with_context(|| format!("while writing '{}'", path.display()))?;
         let file = w.into_inner().map_err(|e| e.into_error())?;
@@ -80,6 +85,96 @@ impl Drop for AtomicFiles {
             let _ = std::fs::remove_file(tmp);
         }
     }
+}
+
+/// Makes `dir` ready for a command's outputs before any work is spent: creates it with its
+/// parents and writes a probe file into it, so that a read-only folder or a path under a file
+/// fails at once with the user's own path, not after a whole render.
+pub fn output_dir(dir: &Path) -> Result<()> {
+    if dir.is_file() {
+        anyhow::bail!(
+            "--out '{}' is a file; give a folder (it is created if missing)",
+            dir.display()
+        );
+    }
+    std::fs::create_dir_all(dir).map_err(|e| {
+        anyhow::anyhow!(
+            "cannot create the output folder '{}': {e}; choose another --out",
+            dir.display()
+        )
+    })?;
+    let probe = dir.join(format!(".tmp-{}-probe", std::process::id()));
+    File::create(&probe).map_err(|e| {
+        anyhow::anyhow!(
+            "cannot write into the output folder '{}': {e}; choose another --out",
+            dir.display()
+        )
+    })?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(())
+}
+
+/// [`output_dir`] for the folder of an output file, refusing a file path that is a folder.
+pub fn output_file(path: &Path) -> Result<()> {
+    if path.is_dir() {
+        anyhow::bail!("--out '{}' is a folder; give a file path", path.display());
+    }
+    match path.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => output_dir(dir),
+        _ => output_dir(Path::new(".")),
+    }
+}
+
+/// An output folder claimed by one command: a second render into the same folder while the
+/// first runs would leave a mix of both renders' files. The claim is a `.nephele.lock` file
+/// holding the process id; one left by a process that no longer runs is taken over.
+pub struct FolderLock {
+    path: PathBuf,
+}
+
+impl FolderLock {
+    /// Claims `dir` (which exists), or says which process holds it.
+    pub fn take(dir: &Path) -> Result<Self> {
+        let path = dir.join(".nephele.lock");
+        for _ in 0..2 {
+            match std::fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(&path)
+            {
+                Ok(mut f) => {
+                    write!(f, "{}", std::process::id())?;
+                    return Ok(Self { path });
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                    let holder = std::fs::read_to_string(&path).ok();
+                    match holder.and_then(|s| s.trim().parse::<u32>().ok()) {
+                        Some(pid) if process_runs(pid) => anyhow::bail!(
+                            "'{}' is being written by another nephele (process {pid}); wait for it \
+                             or choose another --out",
+                            dir.display()
+                        ),
+                        _ => {
+                            let _ = std::fs::remove_file(&path);
+                        }
+                    }
+                }
+                Err(e) => anyhow::bail!("cannot claim '{}': {e}", path.display()),
+            }
+        }
+        anyhow::bail!("cannot claim '{}': it keeps reappearing", path.display())
+    }
+}
+
+impl Drop for FolderLock {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.path);
+    }
+}
+
+/// Whether a process with this id runs (Linux: /proc; elsewhere a lock is never trusted).
+fn process_runs(pid: u32) -> bool {
+    pid != std::process::id() && Path::new(&format!("/proc/{pid}")).exists()
 }
 
 /// Writes one file atomically.

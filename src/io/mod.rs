@@ -9,5 +9,5 @@ pub mod npz;
 pub mod plot;
 pub mod text;
 
-pub use atomic::{write_atomic, AtomicFiles};
+pub use atomic::{output_dir, output_file, write_atomic, AtomicFiles, FolderLock};
 pub use npz::Npz;

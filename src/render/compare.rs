@@ -47,6 +47,12 @@ pub struct RenderDir {
     pub regions: Option<Vec<u8>>,
 }
 
+/// Whether render.json lists `name` among the files its render wrote: a file of an earlier
+/// render left in the same folder is not this render's.
+fn listed(meta: &serde_json::Value, name: &str) -> bool {
+    meta["files"].get(name).is_some()
+}
+
 /// A render directory's render.json.
 fn read_meta(dir: &Path) -> Result<serde_json::Value> {
     let json = dir.join("render.json");
@@ -81,12 +87,12 @@ impl RenderDir {
             groups: read_npy(&dir.join("groups.npy"), &[ng, h, w, 3])?,
             beauty: read_npy(&dir.join("beauty.npy"), &[h, w, 3])?,
             opacity: read_npy(&dir.join("opacity.npy"), &[h, w])?,
-            halves: if halves.exists() {
+            halves: if listed(&meta, "halves.npy") && halves.exists() {
                 Some(read_npy(&halves, &[2, ng, h, w, 3])?)
             } else {
                 None
             },
-            regions: if regions.exists() {
+            regions: if listed(&meta, "regions.npy") && regions.exists() {
                 Some(read_npy(&regions, &[h, w])?)
             } else {
                 None
@@ -386,10 +392,11 @@ const RENDER_SETTINGS: [&str; 5] = [
 fn check_inputs(reference: &Path, candidates: &[PathBuf]) -> Result<()> {
     let r = read_meta(reference)?;
     ensure!(
-        reference.join("halves.npy").exists(),
-        "'{}' has no halves.npy: the reference must be a path-traced render (it has \
-         halves.npy); did you swap --reference and --candidate?",
-        reference.display()
+        listed(&r, "halves.npy") && reference.join("halves.npy").exists(),
+        "'{}' holds a {} render without halves.npy: the reference must be a path-traced render \
+         (its render.json lists halves.npy); did you swap --reference and --candidate?",
+        reference.display(),
+        method_name(&r)
     );
     let (r_scene, r_camera) = scene_and_camera(&r, reference)?;
     for c in candidates {

@@ -6,7 +6,7 @@ use super::image::{Rendered, GROUP_FIRST};
 use super::scene::Scene;
 use crate::io::npy::npy_bytes;
 use crate::io::AtomicFiles;
-use anyhow::{Context, Result};
+use anyhow::Result;
 use std::io::Write;
 use std::path::Path;
 
@@ -114,7 +114,7 @@ pub fn write_outputs_with(out: &Path, scene: &Scene, r: &Rendered, k: Option<f32
     if let Some(k) = k {
         anyhow::ensure!(is_exposure(k), "exposure {k}: {EXPOSURE_RULE}");
     }
-    std::fs::create_dir_all(out).with_context(|| format!("cannot create '{}'", out.display()))?;
+    crate::io::output_dir(out)?;
     let (w, h) = (r.width as u64, r.height as u64);
     let ng = GROUP_FIRST.len() as u64;
     let mut files = AtomicFiles::new();
@@ -196,5 +196,25 @@ pub fn write_outputs_with(out: &Path, scene: &Scene, r: &Rendered, k: Option<f32
     let mut json = serde_json::to_vec_pretty(&sidecar)?;
     json.write_all(b"\n")?;
     files.write_bytes(&out.join("render.json"), &json)?;
+    // The folder holds one render: an optional file this render does not write is an
+    // earlier render's, and would be read as this one's (a collector's "halves.npy").
+    for name in OPTIONAL_FILES {
+        if files_doc.get(name).is_none() {
+            remove_stale(&out.join(name))?;
+        }
+    }
     files.commit()
+}
+
+/// The files only some renders write.
+const OPTIONAL_FILES: [&str; 2] = ["halves.npy", "regions.npy"];
+
+fn remove_stale(path: &Path) -> Result<()> {
+    match std::fs::remove_file(path) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(anyhow::anyhow!(
+            "cannot remove the earlier render's '{}': {e}",
+            path.display()
+        )),
+        _ => Ok(()),
+    }
 }

@@ -1,0 +1,143 @@
+//! The files around a run: an output folder that cannot be written fails before any work, a
+//! render's folder holds that render's files alone, two renders do not write one folder at
+//! once, and a reader that closes stdout early does not crash a command.
+
+mod common;
+
+use common::cli::{files_in, refuses, succeeds};
+use std::path::Path;
+use std::process::{Command, Stdio};
+
+fn scene(name: &str) -> String {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("fit-configs/scenes");
+    p.join(name).to_string_lossy().into_owned()
+}
+
+fn s(p: &Path) -> String {
+    p.to_string_lossy().into_owned()
+}
+
+/// A small render of the default cloud into `out` by `method`.
+fn render(out: &Path, method: &str) {
+    let (scene, out) = (scene("cloud.json"), s(out));
+    let mut args = vec![
+        "render", "--scene", &scene, "--out", &out, "--size", "16", "12",
+    ];
+    args.extend(["--method", method]);
+    if method == "path-tracer" {
+        args.extend(["--spp", "2"]);
+    }
+    succeeds(&args);
+}
+
+#[test]
+fn an_out_that_is_a_file_or_under_one_fails_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("afile");
+    std::fs::write(&file, b"mine").unwrap();
+    let mie = ["mie", "--diameter", "10", "--out", &s(&file)];
+    let err = refuses(&mie, "is a file; give a folder", None);
+    assert!(err.contains(&s(&file)), "{err}");
+    let under = file.join("sub");
+    let (scene, under_s) = (scene("cloud.json"), s(&under));
+    let args = [
+        "render", "--scene", &scene, "--out", &under_s, "--size", "16", "12",
+    ];
+    let err = refuses(&args, "choose another --out", None);
+    assert!(err.contains(&under_s), "{err}");
+    assert_eq!(std::fs::read(&file).unwrap(), b"mine");
+    assert_eq!(files_in(dir.path()), ["afile"]);
+}
+
+#[test]
+fn transport_points_create_the_folder_of_their_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let points = dir.path().join("p.npy");
+    let row = [8.0f32, 0.5, 2.0, -0.6, 20.0];
+    let bytes = nephele::io::npy::npy_bytes(&[1, 5], &row).unwrap();
+    std::fs::write(&points, bytes).unwrap();
+    let out = dir.path().join("new/deeper/x.npy");
+    succeeds(&["transport", "--points", &s(&points), "--out", &s(&out)]);
+    assert!(out.exists());
+}
+
+#[test]
+fn a_render_folder_holds_one_render_and_compare_sees_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let mixed = dir.path().join("mixed");
+    render(&mixed, "path-tracer");
+    assert!(mixed.join("halves.npy").exists());
+    render(&mixed, "collector");
+    assert!(!mixed.join("halves.npy").exists(), "{:?}", files_in(&mixed));
+    assert!(mixed.join("regions.npy").exists());
+    let cmp = dir.path().join("cmp");
+    let (m, c) = (s(&mixed), s(&cmp));
+    let args = ["compare", "--reference", &m, "--candidate", &m, "--out", &c];
+    refuses(&args, "the reference must be a path-traced render", None);
+    // Back to the path tracer: the collector's regions.npy goes.
+    render(&mixed, "path-tracer");
+    assert!(!mixed.join("regions.npy").exists());
+}
+
+#[test]
+fn a_folder_another_running_nephele_writes_is_refused_and_a_dead_claim_taken_over() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("busy");
+    std::fs::create_dir(&out).unwrap();
+    let lock = out.join(".nephele.lock");
+    // This test's own process runs, and is not the render's.
+    std::fs::write(&lock, std::process::id().to_string()).unwrap();
+    let (scene, out_s) = (scene("cloud.json"), s(&out));
+    let args = [
+        "render", "--scene", &scene, "--out", &out_s, "--size", "16", "12",
+    ];
+    let err = refuses(&args, "is being written by another nephele", None);
+    assert!(
+        err.contains(&format!("process {}", std::process::id())),
+        "{err}"
+    );
+    assert_eq!(files_in(&out), [".nephele.lock"]);
+    // A claim whose process is gone (pid above Linux's maximum) is taken over, then released.
+    std::fs::write(&lock, "4294967295").unwrap();
+    render(&out, "collector");
+    assert!(!lock.exists());
+    assert!(out.join("render.json").exists());
+}
+
+#[test]
+fn a_closed_stdout_ends_the_report_not_the_command() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("r");
+    let (scene, out_s) = (scene("cloud.json"), s(&out));
+    for args in [
+        vec![
+            "transport",
+            "--t",
+            "8",
+            "--mu-l",
+            "0.5",
+            "--depth",
+            "2",
+            "--mu-v",
+            "-0.6",
+            "--psi-deg",
+            "20",
+        ],
+        vec![
+            "render", "--scene", &scene, "--out", &out_s, "--size", "16", "12", "--spp", "2",
+        ],
+    ] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_nephele"))
+            .args(&args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take()); // `| head -0`: the reader is gone before the first line
+        let o = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{args:?}: {:?} {err}", o.status);
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+    assert!(out.join("render.json").exists());
+}
