@@ -138,6 +138,25 @@ fn sigma_t_per_km_written_per_metre_warns_and_renders() {
 }
 
 #[test]
+fn a_float64_voxel_grid_of_densities_far_above_one_warns_and_renders() {
+    let dir = tempfile::tempdir().unwrap();
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("fit-configs/scenes/voxel_cloud.npy");
+    let shape = [48, 64, 64];
+    let grid: Vec<f32> = nephele::io::npy::read_npy(&shipped, &shape).unwrap();
+    let wide: Vec<f64> = grid.iter().map(|&v| v as f64 * 1000.0).collect();
+    let npy = nephele::io::npy::npy_bytes(&shape, &wide).unwrap();
+    std::fs::write(dir.path().join("dense.npy"), npy).unwrap();
+    let scene = scene_file(dir.path(), "voxels", |v| {
+        v["medium"]["npy"] = "dense.npy".into()
+    });
+    warns(&scene, &["thickest column", "densities far above 1"]);
+    let json = std::fs::read(scene.with_extension("out").join("render.json")).unwrap();
+    let meta: serde_json::Value = serde_json::from_slice(&json).unwrap();
+    let said = meta["scene_warnings"][0].as_str().unwrap_or("");
+    assert!(said.contains("thickest column"), "{meta:?}");
+}
+
+#[test]
 fn a_sun_below_the_horizon_warns_and_renders() {
     let dir = tempfile::tempdir().unwrap();
     let scene = scene_file(dir.path(), "cloud", |v| {

@@ -327,7 +327,7 @@ pub fn run(args: MieArgs) -> Result<()> {
 /// Refuses first a job that would not fit in the memory available.
 pub(super) fn compute_with_bar(job: &MieJob) -> Result<(Vec<PhaseTable>, JobStats, f64)> {
     job.validate()?;
-    if let Some(bytes) = available_memory() {
+    if let Some(bytes) = nephele::io::available_memory() {
         job.check_memory(bytes)?;
     }
     let bar = super::progress::work_bar("Mie", 0);
@@ -341,14 +341,6 @@ pub(super) fn compute_with_bar(job: &MieJob) -> Result<(Vec<PhaseTable>, JobStat
     })?;
     bar.finish_and_clear();
     Ok((tables, stats, t0.elapsed().as_secs_f64()))
-}
-
-/// Bytes of memory available to a new allocation (Linux's MemAvailable), if known.
-fn available_memory() -> Option<f64> {
-    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024.0)
 }
 
 fn compute_and_write(job: &MieJob, args: &MieArgs, out: &Path) -> Result<()> {

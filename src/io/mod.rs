@@ -9,5 +9,13 @@ pub mod npz;
 pub mod plot;
 pub mod text;
 
+/// Bytes of memory available to a new allocation (Linux's MemAvailable), if known.
+pub fn available_memory() -> Option<f64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024.0)
+}
+
 pub use atomic::{output_dir, output_file, write_atomic, AtomicFiles, FolderLock};
 pub use npz::Npz;

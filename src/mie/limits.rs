@@ -6,7 +6,7 @@
 use super::distribution::{SizeDistribution, PRODUCT_RULE_Z};
 use super::sphere::n_terms;
 use super::{MieJob, SizeRule};
-use crate::io::text::short;
+use crate::io::text::{bytes, short};
 use anyhow::{bail, Result};
 use std::f64::consts::PI;
 
@@ -200,15 +200,6 @@ fn slip(lambda_nm: f64, d_um: f64, large: bool) -> String {
             "the Mie series is verified down to x = {X_MIN:e} (docs/mie.md); use larger \
              droplets, a narrower distribution or shorter wavelengths"
         )
-    }
-}
-
-/// `b` bytes as "512 MB", "24 GB", "1.2 TB".
-fn bytes(b: f64) -> String {
-    match b {
-        b if b >= 1e12 => format!("{} TB", short(b / 1e12)),
-        b if b >= 1e9 => format!("{} GB", short(b / 1e9)),
-        b => format!("{} MB", short(b / 1e6)),
     }
 }
 

@@ -88,6 +88,11 @@ impl Affine {
         Self::new(m, origin).expect("a box of positive size")
     }
 
+    /// The length of the image of the unit vector along local axis `k` (a column of M).
+    pub fn axis_length(&self, k: usize) -> f64 {
+        (0..3).map(|r| self.m[r][k].powi(2)).sum::<f64>().sqrt()
+    }
+
     /// M p + b.
     pub fn apply(&self, p: Vec3) -> Vec3 {
         std::array::from_fn(|r| dot(self.m[r], p) + self.t[r])

@@ -456,7 +456,8 @@ pub struct Voxels {
 /// The densities at the voxel centres, [nz, ny, nx] with x fastest, and their trilinear lookup
 /// in the unit cube's coordinates.
 struct VoxelValues {
-    data: Vec<f32>,
+    /// Shared with the scene that read them: a large grid is held in memory once.
+    data: std::sync::Arc<Vec<f32>>,
     /// Voxels along x, y, z.
     n: [usize; 3],
 }
@@ -466,13 +467,27 @@ const VOXELS_PER_CELL: usize = 4;
 
 impl Voxels {
     /// The grid over the box [origin, origin + size] (m); `sigma_t` (1/m) scales the densities.
-    pub fn new(data: Vec<f32>, n: [usize; 3], origin: Vec3, size: Vec3, sigma_t: f64) -> Self {
+    pub fn new(
+        data: impl Into<std::sync::Arc<Vec<f32>>>,
+        n: [usize; 3],
+        origin: Vec3,
+        size: Vec3,
+        sigma_t: f64,
+    ) -> Self {
         Self::with_transform(data, n, Affine::from_box(origin, size), sigma_t)
     }
 
     /// The grid over the image of the unit cube by `to_world`.
-    pub fn with_transform(data: Vec<f32>, n: [usize; 3], to_world: Affine, sigma_t: f64) -> Self {
-        let values = VoxelValues { data, n };
+    pub fn with_transform(
+        data: impl Into<std::sync::Arc<Vec<f32>>>,
+        n: [usize; 3],
+        to_world: Affine,
+        sigma_t: f64,
+    ) -> Self {
+        let values = VoxelValues {
+            data: data.into(),
+            n,
+        };
         let cells = n.map(|m| m.div_ceil(VOXELS_PER_CELL));
         let grid = MajorantGrid::build([0.0; 3], [1.0; 3], cells, |lo, hi| {
             let (min, max) = values.range_over(lo, hi);

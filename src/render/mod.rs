@@ -18,6 +18,7 @@ pub mod compare;
 pub mod fast;
 mod fbm;
 pub mod geometry;
+mod grid_file;
 pub mod image;
 pub mod light;
 pub mod majorant;

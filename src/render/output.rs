@@ -178,6 +178,7 @@ pub fn write_outputs_with(out: &Path, scene: &Scene, r: &Rendered, k: Option<f32
         "method": r.method,
         "details": r.details,
         "scene": scene,
+        "scene_warnings": scene.warnings(),
         "width": w,
         "height": h,
         "spp": r.spp,

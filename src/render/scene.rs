@@ -5,6 +5,7 @@
 //! z is up.
 
 use super::geometry::{cross, dot, Affine, Vec3};
+use super::grid_file::{grid_warnings, read_grid, Grid};
 use super::light::Light;
 use super::medium::{Cloud, Ellipsoid, Fog, Medium, Slab, Voxels};
 use super::mesh::TriangleMesh;
@@ -69,6 +70,9 @@ pub struct Scene {
     /// Seed of every random stream.
     #[serde(default)]
     pub seed: u64,
+    /// A voxel grid's densities, read once (by the warnings or the first medium built).
+    #[serde(skip)]
+    grid: std::sync::OnceLock<Grid>,
 }
 
 fn one() -> f64 {
@@ -358,11 +362,16 @@ impl Scene {
 
     /// Legal but implausible values, one sentence each naming the units (the caller prints
     /// them as warnings; the scene still renders): an optical size far beyond any cloud's (a
-    /// σ_t per km written per metre), a sun below the horizon.
+    /// σ_t per km written per metre, a voxel grid's densities far above 1), voxels stretched
+    /// as by swapped axes, a sun below the horizon.
     pub fn warnings(&self) -> Vec<String> {
         let mut w = Vec::new();
         let (extent, tau) = (self.extent_m(), self.optical_size());
-        if tau > MAX_OPTICAL_SIZE {
+        let voxels = matches!(self.medium, MediumSpec::Voxels { .. });
+        if voxels {
+            // The grid's own densities say how thick it is, not the box at density 1.
+            w.extend(self.voxel_warnings());
+        } else if tau > MAX_OPTICAL_SIZE {
             w.push(format!(
                 "σ_t is per metre: sigma_t = {} /m over the medium's {extent:.0} m is {tau:.0} mean \
                  free paths (real clouds: up to a few hundred; the shipped scenes at most {:.0}) \
@@ -418,6 +427,29 @@ impl Scene {
         }
     }
 
+    /// A voxel grid's densities, read on first use (refused when larger than the memory
+    /// available).
+    fn voxel_grid(&self) -> Result<Grid> {
+        let MediumSpec::Voxels { npy, .. } = &self.medium else {
+            bail!("not a voxel grid");
+        };
+        if let Some(g) = self.grid.get() {
+            return Ok(g.clone());
+        }
+        let g = read_grid(npy, crate::io::available_memory())?;
+        Ok(self.grid.get_or_init(|| g).clone())
+    }
+
+    /// A voxel grid's own warnings: its thickest column, its voxels' shape (none when the grid
+    /// cannot be read: building the medium says why).
+    fn voxel_warnings(&self) -> Vec<String> {
+        let (Ok(grid), Ok(m)) = (self.voxel_grid(), self.voxel_transform()) else {
+            return Vec::new();
+        };
+        let voxel_m = std::array::from_fn(|k| m.axis_length(k) / grid.n[k] as f64);
+        grid_warnings(&grid, voxel_m, self.sigma_t, MAX_OPTICAL_SIZE)
+    }
+
     /// A voxel grid's map of the unit cube to the world, from origin and size or to_world.
     fn voxel_transform(&self) -> Result<Affine> {
         let MediumSpec::Voxels {
@@ -459,10 +491,15 @@ impl Scene {
                 h: *thickness,
                 sigma_t: self.sigma_t,
             }),
-            MediumSpec::Voxels { npy, .. } => {
-                let (data, n) = read_grid(npy)?;
+            MediumSpec::Voxels { .. } => {
+                let grid = self.voxel_grid()?;
                 let to_world = self.voxel_transform()?;
-                Box::new(Voxels::with_transform(data, n, to_world, self.sigma_t))
+                Box::new(Voxels::with_transform(
+                    grid.data.clone(),
+                    grid.n,
+                    to_world,
+                    self.sigma_t,
+                ))
             }
             MediumSpec::Cloud { blobs, edge, noise } => Box::new(Cloud::new(
                 blobs.clone(),
@@ -495,34 +532,4 @@ impl Scene {
             },
         })
     }
-}
-
-/// A float32 .npy of rank 3 [nz, ny, nx] with finite, non-negative values; (values, [nx, ny, nz]).
-fn read_grid(path: &Path) -> Result<(Vec<f32>, [usize; 3])> {
-    let what = || format!("voxel grid '{}'", path.display());
-    let file = std::fs::File::open(path).with_context(what)?;
-    let npy = npyz::NpyFile::new(std::io::BufReader::new(file)).with_context(what)?;
-    let shape = npy.shape().to_vec();
-    ensure!(
-        shape.len() == 3 && shape.iter().all(|&d| d > 0),
-        "{}: shape {shape:?}, expected [nz, ny, nx]",
-        what()
-    );
-    ensure!(
-        !npy.order().eq(&npyz::Order::Fortran),
-        "{}: Fortran order; save a C-order array",
-        what()
-    );
-    let data: Vec<f32> = npy
-        .into_vec::<f32>()
-        .with_context(|| format!("{}: float32 values expected", what()))?;
-    ensure!(
-        data.iter().all(|v| v.is_finite() && *v >= 0.0),
-        "{}: densities must be finite and non-negative",
-        what()
-    );
-    Ok((
-        data,
-        [shape[2] as usize, shape[1] as usize, shape[0] as usize],
-    ))
 }
