@@ -141,3 +141,23 @@ fn a_closed_stdout_ends_the_report_not_the_command() {
     }
     assert!(out.join("render.json").exists());
 }
+
+#[test]
+fn a_frame_larger_than_memory_is_refused_before_it_allocates() {
+    let need = nephele::render::image::frame_bytes(16384, 16384, true);
+    let available = nephele::io::available_memory().unwrap_or(0.0);
+    assert!(available > 0.0, "no MemAvailable in /proc/meminfo");
+    if available >= need {
+        eprintln!("skipped: {available} bytes available, the frame needs {need}");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("big");
+    let (scene, out_s) = (scene("cloud.json"), s(&out));
+    let args = [
+        "render", "--scene", &scene, "--out", &out_s, "--size", "16384", "16384",
+    ];
+    let err = refuses(&args, "render a smaller --size", None);
+    assert!(err.contains("16384 × 16384 frame needs about"), "{err}");
+    assert!(!out.exists());
+}

@@ -442,6 +442,7 @@ pub fn run(args: RenderArgs, m: &ArgMatches) -> Result<()> {
         scene.camera.height = s[1];
     }
     scene.validate()?;
+    check_frame_memory(&scene, method)?;
     let out = args
         .out
         .clone()
@@ -486,6 +487,24 @@ pub fn run(args: RenderArgs, m: &ArgMatches) -> Result<()> {
         }
         print_warnings(&r.details);
     }
+    Ok(())
+}
+
+/// Refuses a frame larger than the memory available, before anything is allocated.
+fn check_frame_memory(scene: &Scene, method: Method) -> Result<()> {
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    let need =
+        nephele::render::image::frame_bytes(w as usize, h as usize, method == Method::PathTracer);
+    let Some(available) = nephele::io::available_memory() else {
+        return Ok(());
+    };
+    anyhow::ensure!(
+        need <= available,
+        "a {w} × {h} frame needs about {} of memory, more than the {} available; render a \
+         smaller --size",
+        nephele::io::text::bytes(need),
+        nephele::io::text::bytes(available)
+    );
     Ok(())
 }
 

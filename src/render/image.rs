@@ -39,6 +39,14 @@ pub struct Rendered {
     pub details: serde_json::Value,
 }
 
+/// Bytes a w × h frame takes while it renders and is written, an upper estimate: the path
+/// tracer's per-pixel f64 sums of both halves (2 × 74 × 8 B), its halves, groups and AOVs in
+/// f32, and their encoded copies; the fast renderers' groups, AOVs, regions and copies.
+pub fn frame_bytes(w: usize, h: usize, path_tracer: bool) -> f64 {
+    let per_pixel = if path_tracer { 1800.0 } else { 400.0 };
+    (w * h) as f64 * per_pixel
+}
+
 impl Rendered {
     /// A black, empty image of w × h pixels.
     pub fn empty(w: usize, h: usize) -> Self {
