@@ -161,3 +161,39 @@ fn a_frame_larger_than_memory_is_refused_before_it_allocates() {
     assert!(err.contains("16384 × 16384 frame needs about"), "{err}");
     assert!(!out.exists());
 }
+
+#[test]
+fn a_view_without_the_cloud_warns_and_compare_refuses_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("fit-configs/scenes/cloud.json");
+    let mut v: serde_json::Value = serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap();
+    // Look from the cloud's position away from it, into a black sky.
+    let eye = v["camera"]["position"].clone();
+    let ahead: Vec<f64> = (0..3)
+        .map(|k| 2.0 * eye[k].as_f64().unwrap() - v["camera"]["look_at"][k].as_f64().unwrap())
+        .collect();
+    v["camera"]["look_at"] = serde_json::json!(ahead);
+    v["sky"] = serde_json::json!([0.0, 0.0, 0.0]);
+    let scene = dir.path().join("away.json");
+    std::fs::write(&scene, v.to_string()).unwrap();
+    let out = dir.path().join("away");
+    let (sc, o) = (s(&scene), s(&out));
+    let args = [
+        "render", "--scene", &sc, "--out", &o, "--size", "16", "12", "--spp", "2",
+    ];
+    let run = succeeds(&args);
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        err.contains("warning: no pixel of the frame is opaque"),
+        "{err}"
+    );
+    let meta: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("render.json")).unwrap()).unwrap();
+    assert_eq!(meta["exposure"], 1.0, "{}", meta["exposure"]);
+    assert_eq!(meta["exposure_from"], "black frame");
+    assert!(meta["warnings"][0].as_str().unwrap().contains("no pixel"));
+    let cmp = dir.path().join("cmp");
+    let c = s(&cmp);
+    let args = ["compare", "--reference", &o, "--candidate", &o, "--out", &c];
+    refuses(&args, "its camera sees no cloud", None);
+}

@@ -152,7 +152,7 @@ fn a_float64_voxel_grid_of_densities_far_above_one_warns_and_renders() {
     warns(&scene, &["thickest column", "densities far above 1"]);
     let json = std::fs::read(scene.with_extension("out").join("render.json")).unwrap();
     let meta: serde_json::Value = serde_json::from_slice(&json).unwrap();
-    let said = meta["scene_warnings"][0].as_str().unwrap_or("");
+    let said = meta["warnings"][0].as_str().unwrap_or("");
     assert!(said.contains("thickest column"), "{meta:?}");
 }
 

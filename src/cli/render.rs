@@ -487,6 +487,10 @@ pub fn run(args: RenderArgs, m: &ArgMatches) -> Result<()> {
         }
         print_warnings(&r.details);
     }
+    let opacity: Vec<f32> = r.transmittance.iter().map(|t| 1.0 - t).collect();
+    for w in nephele::render::output::frame_warnings(&opacity) {
+        eprintln!("warning: {w}");
+    }
     Ok(())
 }
 

@@ -331,6 +331,13 @@ pub fn compare_with(
         .map(|c| RenderDir::read(c))
         .collect::<Result<_>>()?;
     let masks = masks(&r, &cands);
+    let opaque = masks[0].1.iter().filter(|&&o| o).count();
+    ensure!(
+        opaque > 0,
+        "no pixel of the reference '{}' is opaque (opacity > {CLOUD_OPACITY}): its camera sees \
+         no cloud, so there is nothing to compare; render a view of the medium",
+        reference.display()
+    );
     let k = exposure
         .or_else(|| r.meta["exposure"].as_f64().map(|k| k as f32))
         .unwrap_or_else(|| auto_exposure(&r.beauty, &r.opacity).k);

@@ -48,15 +48,36 @@ pub fn exposure(rgb: &[f32], opacity: &[f32]) -> Exposure {
         (rgb.chunks_exact(3).map(lum).collect(), "frame")
     };
     values.sort_by(f32::total_cmp);
-    let p90 = values
-        .get(values.len() * 9 / 10)
-        .copied()
-        .unwrap_or(1.0)
-        .max(1e-12);
+    let p90 = values.get(values.len() * 9 / 10).copied().unwrap_or(0.0);
+    if !(p90 > BLACK) {
+        // A black frame: any k shows it black, and 1 keeps render.json's value readable.
+        return Exposure {
+            k: 1.0,
+            from: "black frame",
+        };
+    }
     Exposure {
         k: (4.0f32).ln() / p90,
         from,
     }
+}
+
+/// A luminance below which a frame is black (radiance in the scene's units, where the sun's
+/// irradiance and the sky are of order 1).
+const BLACK: f32 = 1e-12;
+
+/// What a frame itself says is likely wrong: no pixel of the medium in view (a camera looking
+/// away from it, or densities all 0).
+pub fn frame_warnings(opacity: &[f32]) -> Vec<String> {
+    let largest = opacity.iter().copied().fold(0.0f32, f32::max);
+    if largest > CLOUD_OPACITY {
+        return Vec::new();
+    }
+    vec![format!(
+        "no pixel of the frame is opaque (the largest opacity is {largest:.3}, the cloud's pixels \
+         have > {CLOUD_OPACITY}): the camera looks away from the medium, or its densities are \
+         all 0; check camera.look_at and the medium"
+    )]
 }
 
 const EXPOSURE_RULE: &str = "K multiplies the linear radiance before 1 - exp(-K x) and must \
@@ -174,11 +195,12 @@ pub fn write_outputs_with(out: &Path, scene: &Scene, r: &Rendered, k: Option<f32
     if !r.regions.is_empty() {
         files_doc["regions.npy"] = "[H, W] uint8: 0 opacity <= 0.5, 1 lit face (sun optical depth < 2 at the visible surface point), 2 shadowed face, 3 silhouette (0.5 < opacity < 0.99)".into();
     }
+    let warnings = [scene.warnings(), frame_warnings(&opacity)].concat();
     let sidecar = serde_json::json!({
         "method": r.method,
         "details": r.details,
         "scene": scene,
-        "scene_warnings": scene.warnings(),
+        "warnings": warnings,
         "width": w,
         "height": h,
         "spp": r.spp,
