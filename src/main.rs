@@ -20,6 +20,10 @@ fn main() -> ExitCode {
         .and_then(|args| cli::run(args, &matches));
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.is::<cli::interrupt::Interrupted>() => {
+            eprintln!("{e}");
+            ExitCode::from(130)
+        }
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::from(2)

@@ -197,3 +197,33 @@ fn a_view_without_the_cloud_warns_and_compare_refuses_it() {
     let args = ["compare", "--reference", &o, "--candidate", &o, "--out", &c];
     refuses(&args, "its camera sees no cloud", None);
 }
+
+#[test]
+fn ctrl_c_on_a_budgeted_render_writes_the_samples_finished_and_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("stopped");
+    let (scene, out_s) = (scene("cloud.json"), s(&out));
+    let args = [
+        "render", "--scene", &scene, "--out", &out_s, "--size", "24", "18",
+    ];
+    let child = Command::new(env!("CARGO_BIN_EXE_nephele"))
+        .args(args)
+        .args(["--time-budget", "600"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Once the first pass has a result to write (its progress names a pass), Ctrl-C.
+    std::thread::sleep(std::time::Duration::from_secs(3));
+    unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGINT) };
+    let o = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    assert!(err.contains("interrupted (Ctrl-C) after"), "{err}");
+    assert!(err.contains(&format!("written to '{out_s}'")), "{err}");
+    let meta: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("render.json")).unwrap()).unwrap();
+    assert_eq!(meta["details"]["interrupted"], true);
+    assert!(meta["spp"].as_u64().unwrap() >= 2, "{}", meta["details"]);
+    assert!(!out.join(".nephele.lock").exists());
+}

@@ -16,6 +16,7 @@ mod compare;
 mod compress;
 mod export_gpu;
 mod fit;
+pub mod interrupt;
 mod mie;
 mod phase;
 mod pipeline;

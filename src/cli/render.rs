@@ -7,7 +7,7 @@ use nephele::render::fast::{
 };
 use nephele::render::image::Rendered;
 use nephele::render::output::{exposure as output_exposure, write_outputs_with};
-use nephele::render::path::{render_reporting, Progress};
+use nephele::render::path::{render_until, Progress};
 use nephele::render::scene::{Camera, Scene};
 use nephele_runtime::transport::SearchOptions;
 use std::path::{Path, PathBuf};
@@ -28,11 +28,13 @@ pub struct RenderArgs {
     /// multi-octave approximation of real-time engines.
     #[arg(long, value_enum, default_value = "path-tracer")]
     pub method: MethodArg,
-    /// Path tracer: samples per pixel, overriding the scene's (per pass with a time budget).
+    /// Path tracer: samples per pixel, overriding the scene's (with a time budget: the most a
+    /// pass takes).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     pub spp: Option<u32>,
-    /// Path tracer: wall-clock budget in seconds, overriding the scene's: passes of spp
-    /// samples per pixel while the next one fits.
+    /// Path tracer: wall-clock cap in seconds, overriding the scene's: a first pass of 2
+    /// samples per pixel, then passes of a tenth of the budget until it is spent (the last one
+    /// cut by rows). Ctrl-C writes the samples finished.
     #[arg(long, value_name = "SECONDS", value_parser = super::positive_f64)]
     pub time_budget: Option<f64>,
     /// Path tracer: most steps of the sun-lobe walks and directions of their MIS window
@@ -277,12 +279,14 @@ pub fn render_with(scene: &Scene, method: Method, fast: &FastArgs) -> Result<Ren
     let r = if method == Method::PathTracer {
         // A time budget runs passes: show them, the spp and the noise reached so far.
         let budget = scene.time_budget_s.is_some();
-        render_reporting(scene, &|p: &Progress| {
+        super::interrupt::catch();
+        let report = |p: &Progress| {
             progress(p.fraction);
             if budget && p.passes > 0 {
                 bar.set_message(p.summary());
             }
-        })?
+        };
+        render_until(scene, &report, &super::interrupt::STOP)?
     } else {
         let opts = fast.options(method)?;
         super::with_tables(fast.tables.as_deref(), |tables| {
@@ -455,18 +459,34 @@ pub fn run(args: RenderArgs, m: &ArgMatches) -> Result<()> {
     let r = render_with(&scene, method, &args.fast)?;
     write_outputs_with(&out, &scene, &r, args.exposure)?;
     if method == Method::PathTracer {
+        let n = &r.details["samples_per_pixel"];
+        let (spp, per_pixel) = match (n["min"].as_u64(), n["max"].as_u64()) {
+            (Some(lo), Some(hi)) if lo != hi => (
+                format!("{lo}–{hi} spp (the last pass cut)"),
+                format!("{lo}–{hi} per pixel"),
+            ),
+            _ => (format!("{} spp", r.spp), format!("{} per pixel", r.spp)),
+        };
         outln!(
-            "{}×{} pixels, {} spp: {} camera paths in {} ({:.0} paths/s); wrote {}/beauty.png, \
+            "{}×{} pixels, {spp}: {} camera paths in {} ({:.0} paths/s); wrote {}/beauty.png, \
              beauty.exr, beauty.npy, groups.npy, halves.npy, unscattered.npy, transmittance.npy, \
              opacity.npy, render.json",
             r.width,
             r.height,
-            r.spp,
             r.paths,
             super::seconds(r.seconds),
             r.paths as f64 / r.seconds.max(1e-9),
             out.display()
         );
+        if r.details["interrupted"] == true {
+            return Err(super::interrupt::Interrupted(format!(
+                "interrupted (Ctrl-C) after {} passes: the samples finished ({per_pixel}) are \
+                 written to '{}'",
+                r.details["passes"],
+                out.display()
+            ))
+            .into());
+        }
     } else {
         let stages = &r.details["seconds_per_stage"];
         outln!(

@@ -19,7 +19,7 @@ use nephele_runtime::PhaseFunction;
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::Instant;
 use sun_lobe::SunLobe;
@@ -75,11 +75,27 @@ pub fn render(scene: &Scene, progress: &(dyn Fn(f64) + Sync)) -> Result<Rendered
     render_reporting(scene, &|p| progress(p.fraction))
 }
 
-/// Renders `scene`; `progress` as rows finish, with the passes, spp and noise so far. With a
-/// time budget, passes of `spp` samples per pixel follow one another while the next one is
-/// predicted to fit (at least one): each pixel's stream continues across passes, so k passes
-/// give the same bits as one render at k · spp.
+/// Renders `scene`; `progress` as rows finish, with the passes, spp and noise so far. See
+/// [`render_until`].
 pub fn render_reporting(scene: &Scene, progress: &(dyn Fn(&Progress) + Sync)) -> Result<Rendered> {
+    render_until(scene, progress, &AtomicBool::new(false))
+}
+
+/// Renders `scene` until it is done, its time budget is spent or `stop` is set (Ctrl-C).
+///
+/// Without a budget: one pass of the scene's spp. With one, a first pass of 2 samples per pixel
+/// (every pixel gets light and a noise estimate), then passes of a tenth of the budget (at most
+/// the scene's spp) while it lasts; rows not started when it runs out are left out of the last
+/// pass, so the budget caps the render to within one row's work. Each pixel's stream continues across passes and its even
+/// and odd samples are its halves, so a render's bits depend only on how many samples each row
+/// got: k whole passes give the bits of one render at k · spp. `stop` ends the render the same
+/// way, after a budgeted render's first pass; without a budget, before its one pass has
+/// finished, it is an error, as nothing could be written.
+pub fn render_until(
+    scene: &Scene,
+    progress: &(dyn Fn(&Progress) + Sync),
+    stop: &AtomicBool,
+) -> Result<Rendered> {
     // The path tracer's own limit: the scene knows no renderer.
     ensure!(
         scene.sun_lobe_steps <= sun_lobe::MAX_STEPS,
@@ -97,8 +113,16 @@ pub fn render_reporting(scene: &Scene, progress: &(dyn Fn(&Progress) + Sync)) ->
     let mut rngs: Vec<Xoshiro256PlusPlus> = (0..w * h)
         .map(|px| Xoshiro256PlusPlus::seed_from_u64(pixel_seed(scene.seed, px as u64)))
         .collect();
+    // Samples each row's pixels have.
+    let mut row_spp = vec![0u32; h];
     let rows_done = AtomicUsize::new(0);
     let t0 = Instant::now();
+    let over = || {
+        let spent = scene
+            .time_budget_s
+            .is_some_and(|b| t0.elapsed().as_secs_f64() >= b);
+        spent || stop.load(Ordering::Relaxed)
+    };
     let state = Mutex::new(Progress::default());
     let report = || {
         let rows = rows_done.fetch_add(1, Ordering::Relaxed) + 1;
@@ -110,18 +134,28 @@ pub fn render_reporting(scene: &Scene, progress: &(dyn Fn(&Progress) + Sync)) ->
         progress(&p);
     };
     let mut passes = 0u32;
+    let mut spp = match scene.time_budget_s {
+        Some(_) => scene.spp.min(2),
+        None => scene.spp,
+    };
     Phase::with_all(&models, |phases| {
         let volume = volume(scene, medium.as_ref(), &surfaces, phases);
         loop {
-            let pass_start = t0.elapsed().as_secs_f64();
-            let first = passes as u64 * scene.spp as u64;
+            let first_pass = passes == 0;
+            let budgeted = scene.time_budget_s.is_some();
             sums.par_chunks_mut(w * 2 * stride)
                 .zip(rngs.par_chunks_mut(w))
+                .zip(row_spp.par_iter_mut())
                 .enumerate()
-                .for_each(|(j, (row, row_rngs))| {
+                .for_each(|(j, ((row, row_rngs), done))| {
+                    // A budgeted render's first pass (2 samples) is whole, so that a budget
+                    // or a Ctrl-C always leaves an image; any other pass stops at either.
+                    if !(first_pass && budgeted) && over() {
+                        return;
+                    }
                     for (i, (both, rng)) in row.chunks_mut(2 * stride).zip(row_rngs).enumerate() {
-                        for k in 0..scene.spp as u64 {
-                            let half = ((first + k) & 1) as usize;
+                        for k in 0..spp as u64 {
+                            let half = ((*done as u64 + k) & 1) as usize;
                             let px = &mut both[half * stride..(half + 1) * stride];
                             let dir = cam.direction(i, j, rng.random(), rng.random());
                             let p = trace(&volume, cam.position, dir, rng);
@@ -136,6 +170,7 @@ pub fn render_reporting(scene: &Scene, progress: &(dyn Fn(&Progress) + Sync)) ->
                             px[stride - 1] += p.transmittance;
                         }
                     }
+                    *done += spp;
                     report();
                 });
             passes += 1;
@@ -143,38 +178,63 @@ pub fn render_reporting(scene: &Scene, progress: &(dyn Fn(&Progress) + Sync)) ->
                 break;
             };
             // Cheap beside a pass (a few adds per pixel against spp paths): shown between passes.
-            let spp = scene.spp * passes;
-            let noise = noise_so_far(scene, &sums, spp);
+            let noise = noise_so_far(scene, &sums, &row_spp, w);
             let now = t0.elapsed().as_secs_f64();
             let mut p = state.lock().unwrap_or_else(|e| e.into_inner());
             *p = Progress {
                 fraction: (now / budget).min(1.0),
                 passes,
-                spp,
+                spp: row_spp.iter().copied().min().unwrap_or(0),
                 noise,
             };
             progress(&p);
             drop(p);
-            if now + (now - pass_start) > budget || passes >= max_passes(scene.spp) {
+            if over() || passes >= max_passes(spp) {
                 break;
+            }
+            if first_pass {
+                spp = budgeted_pass(scene.spp, budget, now / spp as f64);
             }
         }
     });
-    let spp = scene.spp * passes;
-    Ok(gather(scene, &cam, &sums, spp, t0.elapsed().as_secs_f64()))
+    let interrupted = stop.load(Ordering::Relaxed);
+    ensure!(
+        row_spp.iter().all(|&n| n > 0),
+        "interrupted before every pixel had a sample: nothing to write"
+    );
+    let mut r = gather(scene, &cam, &sums, &row_spp, t0.elapsed().as_secs_f64());
+    r.details = serde_json::json!({
+        "passes": passes,
+        "samples_per_pixel": samples_summary(&row_spp),
+        "interrupted": interrupted,
+    });
+    Ok(r)
 }
 
-/// [`Progress::noise`] from the per-pixel sums of `spp` samples (two halves each); none below
-/// two samples or without light.
-fn noise_so_far(scene: &Scene, sums: &[f64], spp: u32) -> Option<f64> {
-    if spp < 2 {
+/// The least, the most and the mean samples per pixel over the rows.
+fn samples_summary(row_spp: &[u32]) -> serde_json::Value {
+    let min = row_spp.iter().copied().min().unwrap_or(0);
+    let max = row_spp.iter().copied().max().unwrap_or(0);
+    let mean = row_spp.iter().map(|&n| n as f64).sum::<f64>() / row_spp.len().max(1) as f64;
+    serde_json::json!({"min": min, "max": max, "mean": mean})
+}
+
+/// Samples in the even and in the odd half of `n` samples.
+fn half_counts(n: u32) -> [f64; 2] {
+    [n.div_ceil(2) as f64, (n / 2) as f64]
+}
+
+/// [`Progress::noise`] from the per-pixel sums (two halves each) of `row_spp` samples per row
+/// of `w` pixels; none until both halves of every pixel have samples, or without light.
+fn noise_so_far(scene: &Scene, sums: &[f64], row_spp: &[u32], w: usize) -> Option<f64> {
+    if row_spp.iter().any(|&n| n < 2) {
         return None;
     }
     let (ng, stride) = (GROUP_FIRST.len(), stride());
-    let counts = [spp.div_ceil(2) as f64, (spp / 2) as f64];
     let (sun, sky) = (scene.sun.irradiance, scene.sky);
     let (mut var, mut mean) = (0.0, 0.0);
-    for both in sums.chunks(2 * stride) {
+    for (px, both) in sums.chunks(2 * stride).enumerate() {
+        let counts = half_counts(row_spp[px / w]);
         for c in 0..3 {
             let half = |k: usize| {
                 let part = &both[k * stride..(k + 1) * stride];
@@ -214,25 +274,33 @@ pub fn volume<'a>(
     }
 }
 
+/// The samples per pixel of a budgeted render's passes after the first: a tenth of the
+/// `budget` (s) at `per_sample` seconds a sample per pixel, so that the pass the budget cuts
+/// leaves rows at most a tenth of the budget's samples apart; between 2 and the scene's spp.
+fn budgeted_pass(scene_spp: u32, budget: f64, per_sample: f64) -> u32 {
+    let fit = (0.1 * budget / per_sample.max(1e-9)).floor();
+    (fit.min(scene_spp as f64) as u32).max(2.min(scene_spp))
+}
+
 /// Most passes of a time-budgeted render: 4096, and spp · passes below 2³².
 fn max_passes(spp: u32) -> u32 {
     (u32::MAX / spp.max(1)).min(4096)
 }
 
-/// The images from the per-pixel sums of `spp` samples (two halves each), scaled by the sun's
-/// irradiance and the sky's radiance.
-fn gather(scene: &Scene, cam: &Pinhole, sums: &[f64], spp: u32, seconds: f64) -> Rendered {
+/// The images from the per-pixel sums (two halves each) of `row_spp` samples per row, scaled
+/// by the sun's irradiance and the sky's radiance.
+fn gather(scene: &Scene, cam: &Pinhole, sums: &[f64], row_spp: &[u32], seconds: f64) -> Rendered {
     let (w, h, ng, stride) = (cam.width, cam.height, GROUP_FIRST.len(), stride());
-    let n = spp as f64;
-    let counts = [spp.div_ceil(2) as f64, (spp / 2) as f64];
     let (sun, sky) = (scene.sun.irradiance, scene.sky);
     let mut out = Rendered::empty(w, h);
     out.seconds = seconds;
-    out.paths = (w * h) as u64 * spp as u64;
-    out.spp = spp;
+    out.paths = row_spp.iter().map(|&n| w as u64 * n as u64).sum();
+    out.spp = row_spp.iter().copied().min().unwrap_or(0);
     out.method = "path_tracer".into();
     out.halves = vec![0.0; 2 * ng * h * w * 3];
     for (px, both) in sums.chunks(2 * stride).enumerate() {
+        let n = row_spp[px / w] as f64;
+        let counts = half_counts(row_spp[px / w]);
         let (a, b) = both.split_at(stride);
         for (half, part) in [a, b].into_iter().enumerate() {
             for g in 0..ng {
