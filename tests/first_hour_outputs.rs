@@ -227,3 +227,35 @@ fn ctrl_c_on_a_budgeted_render_writes_the_samples_finished_and_says_so() {
     assert!(meta["spp"].as_u64().unwrap() >= 2, "{}", meta["details"]);
     assert!(!out.join(".nephele.lock").exists());
 }
+
+#[test]
+fn another_droplet_size_is_refused_naming_both_phase_functions_and_the_tolerance() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("fit-configs/scenes/cloud.json");
+    let mut v: serde_json::Value = serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap();
+    v["phase"] = serde_json::json!({"kind": "hg_draine", "diameter_um": 30});
+    let scene = dir.path().join("d30.json");
+    std::fs::write(&scene, v.to_string()).unwrap();
+    let out = dir.path().join("d30");
+    let (sc, o) = (s(&scene), s(&out));
+    let args = [
+        "render",
+        "--scene",
+        &sc,
+        "--out",
+        &o,
+        "--method",
+        "collector",
+    ];
+    let err = refuses(
+        &args,
+        "beyond the 5 % at every angle the tables accept",
+        None,
+    );
+    assert!(err.contains("hg_draine, d = 30 µm"), "{err}");
+    assert!(
+        err.contains("the shipped tables are for 10 µm droplets"),
+        "{err}"
+    );
+    assert!(!out.exists(), "a folder left by a refused render");
+}

@@ -26,7 +26,7 @@ pub struct CompareArgs {
 
 /// Runs `nephele compare`.
 pub fn run(args: CompareArgs) -> Result<()> {
-    nephele::io::output_dir(&args.out)?;
+    nephele::io::check_output_dir(&args.out)?;
     let report = compare_with(&args.reference, &args.candidate, &args.out, args.exposure)?;
     print_table(&report);
     outln!(

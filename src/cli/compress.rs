@@ -97,7 +97,7 @@ pub fn run(args: CompressArgs, m: &clap::ArgMatches) -> Result<()> {
         collector_q: args.collector_smooth_t,
     };
     opt.check()?;
-    nephele::io::output_dir(&args.out)?;
+    nephele::io::check_output_dir(&args.out)?;
     let o = compress_with_spinner(&args.tables, &args.out, &opt)?;
     print_outcome(&o, &args.out);
     Ok(())

@@ -27,7 +27,7 @@ pub struct ExportGpuArgs {
 
 /// Runs `nephele export-gpu`.
 pub fn run(a: ExportGpuArgs) -> Result<()> {
-    nephele::io::output_dir(&a.out)?;
+    nephele::io::check_output_dir(&a.out)?;
     let (bytes, name) = match &a.tables {
         Some(p) => (
             std::fs::read(p).with_context(|| format!("cannot read tables '{}'", p.display()))?,

@@ -71,7 +71,7 @@ impl FitFile {
 pub fn run(args: FitArgs) -> Result<()> {
     let file = FitFile::load(&args.config)?;
     let out = args.out.unwrap_or_else(|| PathBuf::from("outputs/fit"));
-    nephele::io::output_dir(&out)?;
+    nephele::io::check_output_dir(&out)?;
     let mie_out = out.join("mie");
     run_file(&file, &out, &mie_out, !args.no_plot)
 }

@@ -319,7 +319,7 @@ pub fn run(args: MieArgs) -> Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("outputs/mie"));
-    nephele::io::output_dir(&out)?;
+    nephele::io::check_output_dir(&out)?;
     compute_and_write(&job, &args, &out)
 }
 

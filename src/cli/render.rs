@@ -451,7 +451,6 @@ pub fn run(args: RenderArgs, m: &ArgMatches) -> Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("outputs/render"));
-    nephele::io::output_dir(&out)?;
     let _claim = nephele::io::FolderLock::take(&out)?;
     if let Some(n) = args.orbit {
         return render_orbit(&scene, &args, n as usize, &out);

@@ -85,7 +85,7 @@ pub fn run(args: SlabArgs) -> Result<()> {
         bail!("--save-every must be ≥ 0 seconds");
     }
     let out = args.out.unwrap_or_else(|| PathBuf::from("outputs/slab"));
-    nephele::io::output_dir(&out)?;
+    nephele::io::check_output_dir(&out)?;
     run_config(&cfg, &out, shard, args.save_every, !args.no_plot)
 }
 

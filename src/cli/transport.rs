@@ -70,7 +70,7 @@ pub fn run(a: TransportArgs) -> Result<()> {
             .out
             .as_deref()
             .context("--points needs --out FILE.npy for the answers")?;
-        nephele::io::output_file(out)?;
+        nephele::io::check_output_file(out)?;
         return super::with_tables(a.tables.as_deref(), |tab| {
             batch(points, out, a.collector, tab)
         });
@@ -155,6 +155,9 @@ fn batch(points: &Path, out: &Path, collector: bool, tab: &TransportTables) -> R
         "points_per_second": n as f64 / seconds.max(1e-12),
         "threads": rayon::current_num_threads(),
     });
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        nephele::io::output_dir(dir)?;
+    }
     let mut files = AtomicFiles::new();
     files.write_bytes(out, &npy_bytes(&[n as u64, width as u64], &answers)?)?;
     files.write_bytes(

@@ -87,22 +87,58 @@ impl Drop for AtomicFiles {
     }
 }
 
-/// Makes `dir` ready for a command's outputs before any work is spent: creates it with its
-/// parents and writes a probe file into it, so that a read-only folder or a path under a file
-/// fails at once with the user's own path, not after a whole render.
+/// Makes `dir` ready for a writer's outputs: creates it with its parents, and writes a probe
+/// file into it, so that a read-only folder or a path under a file fails with the user's own
+/// path.
 pub fn output_dir(dir: &Path) -> Result<()> {
+    create_missing(dir)?;
+    probe(dir)
+}
+
+/// Checks, before any work is spent, that `dir` can hold a command's outputs (as
+/// [`output_dir`]), leaving no folder behind: the command creates it when it writes.
+pub fn check_output_dir(dir: &Path) -> Result<()> {
+    let created = create_missing(dir)?;
+    let probed = probe(dir);
+    if let Some(top) = created {
+        remove_created(dir, &top);
+    }
+    probed
+}
+
+/// Creates `dir` and its missing parents; the outermost folder it created, if any.
+fn create_missing(dir: &Path) -> Result<Option<PathBuf>> {
     if dir.is_file() {
         anyhow::bail!(
             "--out '{}' is a file; give a folder (it is created if missing)",
             dir.display()
         );
     }
+    let top = dir
+        .ancestors()
+        .filter(|a| !a.as_os_str().is_empty())
+        .take_while(|a| !a.exists())
+        .last()
+        .map(Path::to_path_buf);
     std::fs::create_dir_all(dir).map_err(|e| {
         anyhow::anyhow!(
             "cannot create the output folder '{}': {e}; choose another --out",
             dir.display()
         )
     })?;
+    Ok(top)
+}
+
+/// Removes the empty folders from `dir` up to `top`, which [`create_missing`] made.
+fn remove_created(dir: &Path, top: &Path) {
+    for a in dir.ancestors() {
+        if std::fs::remove_dir(a).is_err() || a == top {
+            break;
+        }
+    }
+}
+
+fn probe(dir: &Path) -> Result<()> {
     let probe = dir.join(format!(".tmp-{}-probe", std::process::id()));
     File::create(&probe).map_err(|e| {
         anyhow::anyhow!(
@@ -114,27 +150,45 @@ pub fn output_dir(dir: &Path) -> Result<()> {
     Ok(())
 }
 
-/// [`output_dir`] for the folder of an output file, refusing a file path that is a folder.
-pub fn output_file(path: &Path) -> Result<()> {
+/// [`check_output_dir`] for the folder of an output file, refusing a file path that is a
+/// folder.
+pub fn check_output_file(path: &Path) -> Result<()> {
     if path.is_dir() {
         anyhow::bail!("--out '{}' is a folder; give a file path", path.display());
     }
     match path.parent() {
-        Some(dir) if !dir.as_os_str().is_empty() => output_dir(dir),
-        _ => output_dir(Path::new(".")),
+        Some(dir) if !dir.as_os_str().is_empty() => check_output_dir(dir),
+        _ => check_output_dir(Path::new(".")),
     }
 }
 
 /// An output folder claimed by one command: a second render into the same folder while the
 /// first runs would leave a mix of both renders' files. The claim is a `.nephele.lock` file
-/// holding the process id; one left by a process that no longer runs is taken over.
+/// holding the process id; one left by a process that no longer runs is taken over. The folder
+/// is created if missing, and removed again if the command leaves it empty.
 pub struct FolderLock {
     path: PathBuf,
+    dir: PathBuf,
+    created: Option<PathBuf>,
 }
 
 impl FolderLock {
-    /// Claims `dir` (which exists), or says which process holds it.
+    /// Claims `dir`, or says which process holds it (or why it cannot be written).
     pub fn take(dir: &Path) -> Result<Self> {
+        let created = create_missing(dir)?;
+        let lock = Self::claim(dir);
+        if let (Err(_), Some(top)) = (&lock, &created) {
+            remove_created(dir, top);
+        }
+        let path = lock?;
+        Ok(Self {
+            path,
+            dir: dir.to_path_buf(),
+            created,
+        })
+    }
+
+    fn claim(dir: &Path) -> Result<PathBuf> {
         let path = dir.join(".nephele.lock");
         for _ in 0..2 {
             match std::fs::OpenOptions::new()
@@ -144,7 +198,7 @@ impl FolderLock {
             {
                 Ok(mut f) => {
                     write!(f, "{}", std::process::id())?;
-                    return Ok(Self { path });
+                    return Ok(path);
                 }
                 Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
                     let holder = std::fs::read_to_string(&path).ok();
@@ -159,7 +213,10 @@ impl FolderLock {
                         }
                     }
                 }
-                Err(e) => anyhow::bail!("cannot claim '{}': {e}", path.display()),
+                Err(e) => anyhow::bail!(
+                    "cannot write into the output folder '{}': {e}; choose another --out",
+                    dir.display()
+                ),
             }
         }
         anyhow::bail!("cannot claim '{}': it keeps reappearing", path.display())
@@ -169,6 +226,9 @@ impl FolderLock {
 impl Drop for FolderLock {
     fn drop(&mut self) {
         let _ = std::fs::remove_file(&self.path);
+        if let Some(top) = &self.created {
+            remove_created(&self.dir, top);
+        }
     }
 }
 

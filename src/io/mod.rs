@@ -17,5 +17,7 @@ pub fn available_memory() -> Option<f64> {
     Some(kb * 1024.0)
 }
 
-pub use atomic::{output_dir, output_file, write_atomic, AtomicFiles, FolderLock};
+pub use atomic::{
+    check_output_dir, check_output_file, output_dir, write_atomic, AtomicFiles, FolderLock,
+};
 pub use npz::Npz;

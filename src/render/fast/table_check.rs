@@ -10,8 +10,8 @@ use crate::render::scene::Scene;
 use anyhow::{bail, Result};
 use nephele_runtime::transport::TransportTables;
 
-/// The tables are for one phase function and ϖ = 1: the scene's must match (p within 5 % at
-/// every degree, the forward peak included; ϖ = 1 but for the collector, which weighs in the
+/// The tables are for one phase function and ϖ = 1: the scene's must match (p within
+/// [`PHASE_TOLERANCE`] at every degree, the forward peak included; ϖ = 1 but for the collector, which weighs in the
 /// absorption) unless the caller allows a mismatch.
 pub(super) fn check_tables(
     scene: &Scene,
@@ -41,23 +41,42 @@ pub(super) fn check_tables(
             worst = (rel, deg as f64);
         }
     }
-    if worst.0 > 0.05 {
+    let scene_phase = describe_phase(&scene.phase, mean_cosine(phases));
+    let tables_phase = format!("g = {:.4}", tables.mean_cosine());
+    if worst.0 > PHASE_TOLERANCE {
+        let remedy = match &scene.phase {
+            crate::phase::PhaseSpec::Mie { diameter_um, .. } => format!(
+                "make tables for it with `nephele tables --diameter {diameter_um} --out DIR` and \
+                 pass --tables DIR"
+            ),
+            _ => "make tables for it with `nephele slab` and `nephele compress`, and pass \
+                  --tables DIR"
+                .to_string(),
+        };
         problems.push(format!(
-            "the scene's phase function differs from the tables' by {:.0} % at {}° (the \
-             tables are for one phase function and droplet size; make tables for this one with \
-             `nephele slab` and `nephele compress`, and pass them with --tables)",
+            "the scene's phase function ({scene_phase}) differs from the tables' ({tables_phase}; \
+             the shipped tables are for 10 µm droplets) by {:.0} % at {}°, beyond the {:.0} % \
+             at every angle the tables accept: {remedy}",
             100.0 * worst.0,
-            worst.1
+            worst.1,
+            100.0 * PHASE_TOLERANCE
         ));
+    } else if worst.0 > PHASE_NOTICE {
+        let w = format!(
+            "the scene's phase function ({scene_phase}) differs from the tables' ({tables_phase}) \
+             by {:.1} % at {}°, within the {:.0} % the tables accept",
+            100.0 * worst.0,
+            worst.1,
+            100.0 * PHASE_TOLERANCE
+        );
+        warnings.push(w);
     }
     if problems.is_empty() {
         return Ok(());
     }
     if opts.allow_mismatch {
-        for p in problems {
-            eprintln!("warning: {p}");
-            warnings.push(p);
-        }
+        // Said once, with the render's other warnings (render.json and stderr).
+        warnings.extend(problems);
         return Ok(());
     }
     bail!(
@@ -65,6 +84,23 @@ pub(super) fn check_tables(
          anyway)",
         problems.join("; ")
     )
+}
+
+/// The largest relative difference of the scene's phase function from the tables' (at any
+/// whole degree) the tables accept.
+const PHASE_TOLERANCE: f64 = 0.05;
+
+/// A difference below the tolerance still worth a warning.
+const PHASE_NOTICE: f64 = 0.005;
+
+/// "mie, d = 30 µm, g = 0.8712".
+fn describe_phase(spec: &crate::phase::PhaseSpec, g: f64) -> String {
+    use crate::phase::PhaseSpec::*;
+    match spec {
+        Mie { diameter_um, .. } => format!("mie, d = {diameter_um} µm, g = {g:.4}"),
+        HgDraine { diameter_um, .. } => format!("hg_draine, d = {diameter_um} µm, g = {g:.4}"),
+        _ => format!("g = {g:.4}"),
+    }
 }
 
 /// The mean of the channels' phase functions at cosine `mu`.
