@@ -259,3 +259,22 @@ fn another_droplet_size_is_refused_naming_both_phase_functions_and_the_tolerance
     );
     assert!(!out.exists(), "a folder left by a refused render");
 }
+
+#[test]
+fn tables_refuses_a_diameter_out_of_range_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("t");
+    let o = s(&out);
+    refuses(
+        &["tables", "--diameter", "-20", "--out", &o],
+        "-20 is not > 0",
+        None,
+    );
+    let err = refuses(
+        &["tables", "--diameter", "20000", "--out", &o],
+        "--diameter 20000",
+        None,
+    );
+    assert!(err.contains("must be in (0, 10000]"), "{err}");
+    assert!(!out.exists());
+}

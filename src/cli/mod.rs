@@ -24,6 +24,7 @@ mod progress;
 mod render;
 mod slab;
 mod sphere;
+mod tables;
 mod transport;
 
 /// Writes one line of [`outln!`]; a closed pipe is ignored, any other failure warned once.
@@ -84,6 +85,10 @@ enum Command {
     /// Fit the compressed form (docs/compress.md) to a slab run's tables and report its error per group.
     #[command(allow_negative_numbers = true)]
     Compress(compress::CompressArgs),
+    /// Transport tables for another droplet size in one command: slab Monte Carlo and
+    /// compression, ready for `render --method collector --tables DIR`.
+    #[command(allow_negative_numbers = true)]
+    Tables(tables::TablesArgs),
     /// Evaluate compressed transport tables (transport.ntt) at one point: T per order group, as JSON.
     #[command(allow_negative_numbers = true)]
     Transport(transport::TransportArgs),
@@ -156,13 +161,16 @@ pub fn parse_error(e: clap::Error) -> ExitCode {
     ExitCode::from(2)
 }
 
-/// `f` on transport tables: the file's, or the embedded Mie 10 µm ones; a file that is not
-/// tables is named in the error.
+/// `f` on transport tables: the file's (or a folder's transport.ntt, as `nephele tables` and
+/// `nephele compress` write it), or the embedded Mie 10 µm ones; a file that is not tables is
+/// named in the error.
 fn with_tables<R>(
     path: Option<&std::path::Path>,
     f: impl FnOnce(&nephele_runtime::transport::TransportTables) -> Result<R>,
 ) -> Result<R> {
     use anyhow::Context;
+    let in_dir = path.filter(|p| p.is_dir()).map(|p| p.join("transport.ntt"));
+    let path = in_dir.as_deref().or(path);
     let bytes: std::borrow::Cow<'static, [u8]> = match path {
         Some(p) => std::fs::read(p)
             .with_context(|| format!("cannot read tables '{}'", p.display()))?
@@ -240,6 +248,7 @@ pub fn run(cli: Cli, matches: &ArgMatches) -> Result<()> {
         Some(Command::Slab(args)) => slab::run(args),
         Some(Command::Merge(args)) => slab::merge_shards(args),
         Some(Command::Compress(args)) => compress::run(args, sub),
+        Some(Command::Tables(args)) => tables::run(args),
         Some(Command::Transport(args)) => transport::run(args),
         Some(Command::ExportGpu(args)) => export_gpu::run(args),
         Some(Command::Render(args)) => render::run(args, sub),

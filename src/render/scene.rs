@@ -56,11 +56,13 @@ pub struct Scene {
     pub surfaces: Vec<Surface>,
     /// The camera.
     pub camera: Camera,
-    /// Samples (camera paths) per pixel; with a time budget, per pass.
+    /// Samples (camera paths) per pixel (default 64); with a time budget, the most a pass
+    /// takes.
+    #[serde(default = "default_spp")]
     pub spp: u32,
-    /// Wall-clock budget (s): passes of `spp` samples per pixel follow one another while the
-    /// next is predicted to fit (at least one). The image is the same as one render at
-    /// spp × passes (render.json gives the spp reached).
+    /// Wall-clock cap (s): a first pass of 2 samples per pixel, then passes of a tenth of the
+    /// budget (at most `spp`) until it is spent, the last one cut by rows (render.json gives
+    /// the samples per pixel reached).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub time_budget_s: Option<f64>,
     /// Steps of the sun-lobe walk launched at every collision (docs/render.md): an unbiased
@@ -73,6 +75,10 @@ pub struct Scene {
     /// A voxel grid's densities, read once (by the warnings or the first medium built).
     #[serde(skip)]
     grid: std::sync::OnceLock<Grid>,
+}
+
+fn default_spp() -> u32 {
+    64
 }
 
 fn one() -> f64 {
