@@ -128,6 +128,9 @@ fn print_near_beam(nb: &NearBeamCheck, whose: &str) {
 
 /// Prints what a compression measured and wrote.
 pub fn print_outcome(o: &Outcome, out: &Path) {
+    for w in &o.warnings {
+        eprintln!("warning: {w}");
+    }
     print_errors("fitted slices", &o.errors);
     print_errors(
         &format!("reference (Bouthors-like, {} parameters)", o.reference.1),

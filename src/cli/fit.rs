@@ -83,10 +83,8 @@ pub fn run_main_job() -> Result<()> {
     let file: FitFile = serde_json::from_str(text).context("embedded fit-configs/paper.json")?;
     file.fit.validate()?;
     eprintln!(
-        "nephele {}: the paper's setup (water n = 1.333, σ = 0.25, 400–700 nm), d = 5…50 µm: \
-         Mie tables, then HG, two-term HG, Cornette–Shanks, Draine and HG+Draine fits \
-         → outputs/fit, outputs/mie",
-        nephele::VERSION
+        "step 1: the paper's setup (water n = 1.333, σ = 0.25, 400–700 nm), d = 5…50 µm: Mie \
+         tables, then HG, two-term HG, Cornette–Shanks, Draine and HG+Draine fits"
     );
     run_file(
         &file,

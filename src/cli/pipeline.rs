@@ -37,13 +37,14 @@ fn preset(full: bool) -> (&'static str, &'static str, &'static str, &'static str
 
 /// Runs the main job.
 pub fn run(full: bool) -> Result<()> {
+    announce(full);
     let t0 = Instant::now();
     fit::run_main_job()?;
     let fit_s = t0.elapsed().as_secs_f64();
     let (text, name, slab_out, comp_out) = preset(full);
     let cfg = slab::parse_config(text, name)?;
     eprintln!(
-        "slab Monte Carlo ({name}{}) → {slab_out}",
+        "step 2: slab Monte Carlo ({name}{}) → {slab_out}",
         if full {
             ", ~17 min on 2 cores"
         } else {
@@ -53,7 +54,7 @@ pub fn run(full: bool) -> Result<()> {
     let t1 = Instant::now();
     slab::run_config(&cfg, Path::new(slab_out), None, 30.0, true)?;
     let slab_s = t1.elapsed().as_secs_f64();
-    eprintln!("compression → {comp_out}");
+    eprintln!("step 2: compression → {comp_out}");
     let t2 = Instant::now();
     // The quick grid is too coarse to leave two thicknesses and two sun cosines out of it.
     let opt = Options {
@@ -73,7 +74,7 @@ pub fn run(full: bool) -> Result<()> {
     let sum = o.errors.last().map_or(f64::NAN, |e| e.rel_rms);
     let render_out = Path::new("outputs/render/cloud");
     eprintln!(
-        "render of fit-configs/scenes/cloud.json → {}",
+        "step 3: render of fit-configs/scenes/cloud.json → {}",
         render_out.display()
     );
     let scene = Scene::parse(include_str!("../../fit-configs/scenes/cloud.json"))?;
@@ -97,6 +98,23 @@ pub fn run(full: bool) -> Result<()> {
     );
     outln!("{headline}");
     Ok(())
+}
+
+/// What the main job is about to do, and where, before any of it is spent.
+fn announce(full: bool) {
+    let (_, name, slab_out, comp_out) = preset(full);
+    let here = std::env::current_dir().map_or("the current folder".into(), |d| {
+        format!("'{}'", d.join("outputs").display())
+    });
+    eprintln!(
+        "nephele {}: the main job ({}; `nephele --help` lists the commands), writing into {here}:\n\
+         \x20 1. Mie tables and phase-model fits of the paper's setup → outputs/mie, outputs/fit\n\
+         \x20 2. slab tables of 10 µm droplets ({name}) → {slab_out}, compressed → {comp_out}\n\
+         \x20 3. the default cloud path-traced → outputs/render/cloud, by the collector → \
+         outputs/render/cloud-collector, compared → outputs/compare/cloud",
+        nephele::VERSION,
+        if full { "about 20 min on 2 cores" } else { "about 2 min on 2 cores" }
+    );
 }
 
 /// The default cloud by the collector renderer (the shipped tables) beside its path-traced

@@ -7,13 +7,26 @@ use indicatif::{ProgressBar, ProgressFinish, ProgressStyle};
 /// the lines they expect.
 pub(super) fn work_bar(prefix: &str, len: u64) -> ProgressBar {
     let style = ProgressStyle::with_template(
-        "{prefix} [{bar:30}] {percent:>3}% {msg} ({elapsed}, eta {eta})",
+        "{prefix} [{bar:30}] {percent:>3}% {msg} ({elapsed}, {guarded_eta})",
     )
-    .expect("static template");
-    ProgressBar::new(len)
+    .expect("static template")
+    .with_key("guarded_eta", guarded_eta);
+    // A bar of unknown length starts at 0 %, not indicatif's 100 % of nothing.
+    ProgressBar::new(len.max(1))
         .with_style(style)
         .with_prefix(prefix.to_string())
         .with_finish(ProgressFinish::AndClear)
+}
+
+/// "eta 2m", once 5 % of the work is done: before, the rate is the start-up's, and the
+/// estimate is noise ("eta …").
+fn guarded_eta(state: &indicatif::ProgressState, w: &mut dyn std::fmt::Write) {
+    let text = if state.fraction() < 0.05 {
+        "eta …".to_string()
+    } else {
+        format!("eta {:#}", indicatif::HumanDuration(state.eta()))
+    };
+    let _ = w.write_str(&text);
 }
 
 /// A spinner on stderr for a step of unknown length: "⠋ PREFIX: MSG (elapsed)".

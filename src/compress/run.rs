@@ -115,6 +115,41 @@ pub struct Outcome {
     /// Coverage: the worst slice's share of light the groups drop together, and per group
     /// then for the sum.
     pub coverage: (SliceShare, Vec<Coverage>),
+    /// What the fit cannot know from these tables: a domain of one thickness or one sun, more
+    /// ln t terms than thicknesses.
+    pub warnings: Vec<String>,
+}
+
+/// The warnings of a fit of `opt` to tables on this grid of thicknesses and sun cosines.
+pub fn grid_warnings(thickness: &[f64], mu_l: &[f64], opt: &Options) -> Vec<String> {
+    let mut w = Vec::new();
+    let (nt, nl) = (thickness.len(), mu_l.len());
+    if nt == 1 || nl == 1 {
+        w.push(format!(
+            "the tables hold {} and {}: the fit errors are measured there alone, and the \
+             compressed tables answer every other thickness and sun from that grid",
+            plural(nt, "thickness", "thicknesses"),
+            plural(nl, "sun cosine", "sun cosines"),
+        ));
+    }
+    for (terms, flag) in [
+        (opt.smooth_t, "--smooth-t"),
+        (opt.collector_q, "--collector-smooth-t"),
+    ] {
+        if terms > nt {
+            w.push(format!(
+                "{flag} {terms}: {terms} terms in ln t fitted to {} — more terms than \
+                 thicknesses, so the fit is not determined by the tables between them; use \
+                 {flag} {nt} or fewer, or a slab run with more thicknesses",
+                plural(nt, "thickness", "thicknesses")
+            ));
+        }
+    }
+    w
+}
+
+fn plural(n: usize, one: &str, many: &str) -> String {
+    format!("{n} {}", if n == 1 { one } else { many })
 }
 
 /// Fits, measures and writes everything into `out`.
@@ -168,6 +203,7 @@ pub fn compress_reporting(
         collector_params: m.collector_params,
         fit_seconds: m.fit_seconds,
         ntt,
+        warnings: grid_warnings(&tab.thickness, &tab.mu_l, opt),
     })
 }
 
@@ -888,4 +924,24 @@ fn manifest(
             outside: "t or mu_L outside their ranges: past the thickest slab the tables continue by diffusion theory (docs/compress.md, 'Past the thickest slab'); below the thinnest slab the form's parameters are held at the grid's end while the geometry (boundary factor, single-scattering factor, scattering angle) follows the point; below the lowest sun mu_0 the point is read under mu_0 and T scaled by mu_L/mu_0 (T/mu_L held); Domain::outside tells a caller which coordinate and by how much",
         },
     })
+}
+
+#[cfg(test)]
+mod grid_tests {
+    use super::*;
+
+    #[test]
+    fn a_point_domain_and_more_ln_t_terms_than_thicknesses_are_warned() {
+        let opt = Options::default();
+        let w = grid_warnings(&[8.0], &[0.5], &opt);
+        assert!(w[0].contains("1 thickness and 1 sun cosine"), "{w:?}");
+        let w = grid_warnings(&[1.0, 4.0, 16.0], &[0.5, 1.0], &opt);
+        assert_eq!(w.len(), 1 + usize::from(opt.collector_q > 3), "{w:?}");
+        assert!(
+            w[0].contains("--smooth-t 5: 5 terms in ln t fitted to 3 thicknesses"),
+            "{w:?}"
+        );
+        let five = [1.0, 2.0, 4.0, 8.0, 16.0];
+        assert!(grid_warnings(&five, &[0.5, 1.0], &opt).is_empty());
+    }
 }

@@ -20,6 +20,15 @@ pub fn short(v: f64) -> String {
     }
 }
 
+/// `b` bytes as "512 MB", "24 GB", "1.2 TB".
+pub fn bytes(b: f64) -> String {
+    match b {
+        b if b >= 1e12 => format!("{} TB", short(b / 1e12)),
+        b if b >= 1e9 => format!("{} GB", short(b / 1e9)),
+        b => format!("{} MB", short(b / 1e6)),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -31,14 +40,5 @@ mod tests {
         assert_eq!(short(117809.7), "1.2e5");
         assert_eq!(short(1.5e-5), "1.5e-5");
         assert_eq!(short(2251.0), "2251");
-    }
-}
-
-/// `b` bytes as "512 MB", "24 GB", "1.2 TB".
-pub fn bytes(b: f64) -> String {
-    match b {
-        b if b >= 1e12 => format!("{} TB", short(b / 1e12)),
-        b if b >= 1e9 => format!("{} GB", short(b / 1e9)),
-        b => format!("{} MB", short(b / 1e6)),
     }
 }
