@@ -161,29 +161,6 @@ pub fn parse_error(e: clap::Error) -> ExitCode {
     ExitCode::from(2)
 }
 
-/// `f` on transport tables: the file's (or a folder's transport.ntt, as `nephele tables` and
-/// `nephele compress` write it), or the embedded Mie 10 µm ones; a file that is not tables is
-/// named in the error.
-fn with_tables<R>(
-    path: Option<&std::path::Path>,
-    f: impl FnOnce(&nephele_runtime::transport::TransportTables) -> Result<R>,
-) -> Result<R> {
-    use anyhow::Context;
-    let in_dir = path.filter(|p| p.is_dir()).map(|p| p.join("transport.ntt"));
-    let path = in_dir.as_deref().or(path);
-    let bytes: std::borrow::Cow<'static, [u8]> = match path {
-        Some(p) => std::fs::read(p)
-            .with_context(|| format!("cannot read tables '{}'", p.display()))?
-            .into(),
-        None => nephele_runtime::embedded::MIE_10UM.into(),
-    };
-    let tables = nephele_runtime::transport::TransportTables::from_bytes(&bytes).map_err(|e| {
-        let name = path.map_or("(embedded)".into(), |p| format!("'{}'", p.display()));
-        anyhow::anyhow!("transport tables {name}: {e}")
-    })?;
-    f(&tables)
-}
-
 /// Seconds with three significant digits (0.570 s, 12.3 s, 135 s): a fast render's 0.57 s
 /// must not read "1 s".
 pub(crate) fn seconds(s: f64) -> String {

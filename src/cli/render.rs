@@ -2,13 +2,14 @@
 
 use anyhow::Result;
 use clap::{ArgMatches, Args, ValueEnum};
+use nephele::render::fast::orbit::render_orbit as render_orbit_views;
 use nephele::render::fast::{
     prepare, render_fast, FastOptions, Finite, Method, Octaves, RayPattern,
 };
 use nephele::render::image::Rendered;
 use nephele::render::output::{exposure as output_exposure, write_outputs_with};
 use nephele::render::path::{render_until, Progress};
-use nephele::render::scene::{Camera, Scene};
+use nephele::render::scene::Scene;
 use nephele_runtime::transport::SearchOptions;
 use std::path::{Path, PathBuf};
 
@@ -256,7 +257,7 @@ impl FastArgs {
             },
             thickness_scale: self.thickness_scale,
         };
-        o.validate()?;
+        // Validated once, where every caller passes: `prepare`.
         Ok(o)
     }
 }
@@ -289,7 +290,7 @@ pub fn render_with(scene: &Scene, method: Method, fast: &FastArgs) -> Result<Ren
         render_until(scene, &report, &super::interrupt::STOP)?
     } else {
         let opts = fast.options(method)?;
-        super::with_tables(fast.tables.as_deref(), |tables| {
+        nephele::io::tables::with_tables(fast.tables.as_deref(), |tables| {
             render_fast(scene, tables, &opts, &progress)
         })?
     };
@@ -547,22 +548,19 @@ fn render_orbit(scene: &Scene, args: &RenderArgs, n: usize, out: &Path) -> Resul
     }
     let opts = args.fast.options(args.method.into())?;
     let bar = super::progress::work_bar("render", (n * 1000) as u64);
-    bar.set_message("preparing the phase function, the medium and the light maps");
+    bar.set_message("view 1: preparing the phase function, the medium and the light maps");
     bar.enable_steady_tick(std::time::Duration::from_millis(200));
     let mut first_details = serde_json::Value::Null;
-    let summary = super::with_tables(args.fast.tables.as_deref(), |tables| {
+    let summary = nephele::io::tables::with_tables(args.fast.tables.as_deref(), |tables| {
         let prepared = prepare(scene, tables, &opts)?;
         let mut exposure = args.exposure;
         let mut views = Vec::with_capacity(n);
-        for k in 0..n {
-            bar.set_message(format!("view {} of {n}", k + 1));
-            let mut view = scene.clone();
-            view.camera = orbit_camera(&scene.camera, k, n);
-            let progress = |done: f64| bar.set_position(((k as f64 + done) * 1000.0) as u64);
-            let r = prepared.render(&view.camera, &progress);
+        let progress = |done: f64| bar.set_position((done * n as f64 * 1000.0) as u64);
+        render_orbit_views(&prepared, scene, n, &progress, &mut |k, view, r| {
+            bar.set_message(format!("view {} of {n}", (k + 2).min(n)));
             let opacity: Vec<f32> = r.transmittance.iter().map(|t| 1.0 - t).collect();
             let k_used = *exposure.get_or_insert(output_exposure(&r.beauty, &opacity).k);
-            write_outputs_with(&out.join(format!("view_{k:03}")), &view, &r, Some(k_used))?;
+            write_outputs_with(&out.join(format!("view_{k:03}")), view, r, Some(k_used))?;
             views.push((
                 view.camera,
                 r.seconds,
@@ -571,7 +569,8 @@ fn render_orbit(scene: &Scene, args: &RenderArgs, n: usize, out: &Path) -> Resul
             if k == 0 {
                 first_details = r.details.clone();
             }
-        }
+            Ok(())
+        })?;
         Ok((prepared.seconds(), views, exposure))
     })?;
     bar.finish_and_clear();
@@ -614,18 +613,6 @@ fn render_orbit(scene: &Scene, args: &RenderArgs, n: usize, out: &Path) -> Resul
         n - 1
     );
     Ok(())
-}
-
-/// View `k` of `n` on the orbit of `cam`: its position turned by 360° k/n about the vertical
-/// through its look-at point.
-fn orbit_camera(cam: &Camera, k: usize, n: usize) -> Camera {
-    let phi = std::f64::consts::TAU * k as f64 / n as f64;
-    let (s, c) = phi.sin_cos();
-    let d = [0, 1].map(|i| cam.position[i] - cam.look_at[i]);
-    let mut out = *cam;
-    out.position[0] = cam.look_at[0] + c * d[0] - s * d[1];
-    out.position[1] = cam.look_at[1] + s * d[0] + c * d[1];
-    out
 }
 
 /// The collector search's statistics per order group, in words (render.json has the counts).

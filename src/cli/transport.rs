@@ -71,12 +71,12 @@ pub fn run(a: TransportArgs) -> Result<()> {
             .as_deref()
             .context("--points needs --out FILE.npy for the answers")?;
         nephele::io::check_output_file(out)?;
-        return super::with_tables(a.tables.as_deref(), |tab| {
+        return nephele::io::tables::with_tables(a.tables.as_deref(), |tab| {
             batch(points, out, a.collector, tab)
         });
     }
     let at = one_point(&a)?;
-    super::with_tables(a.tables.as_deref(), |tab| {
+    nephele::io::tables::with_tables(a.tables.as_deref(), |tab| {
         answer(&at, a.psi_deg.unwrap_or(0.0), tab)
     })
 }

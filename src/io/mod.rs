@@ -7,6 +7,7 @@ pub mod container;
 pub mod npy;
 pub mod npz;
 pub mod plot;
+pub mod tables;
 pub mod text;
 
 /// Bytes of memory available to a new allocation (Linux's MemAvailable), if known.

@@ -33,6 +33,7 @@
 pub mod collector;
 pub mod light_map;
 pub mod octaves;
+pub mod orbit;
 pub mod rays;
 pub mod sky;
 pub mod substeps;
