@@ -1,9 +1,9 @@
-//! Mie benchmarks (criterion): one sphere's coefficients, the product-rule job of issue 2
+//! Mie benchmarks (criterion): one sphere's coefficients, the product-rule job
 //! (d = 5 µm, σ = 0.25, 41 sizes × 31 wavelengths, 2251 angles), and the matrix product at
 //! its shapes through the GEMM nephele uses (the `gemm` crate, faer's kernels) against
-//! matrixmultiply (its GEMM until 6 Dec 2026), both dispatching to the CPU's SIMD level at run
-//! time: which one a build should take, measured in one run on the machine at hand (issue 30;
-//! docs/mie.md). The comparison
+//! matrixmultiply (the earlier GEMM), both dispatching to the CPU's SIMD level at run
+//! time: which one a build should take, measured in one run on the machine at hand
+//! (docs/mie.md). The comparison
 //! against miepython and numpy's DGEMM lives in scripts/bench_mie.py (same machine, same run).
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};

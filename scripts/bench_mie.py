@@ -13,7 +13,7 @@ p_lambda(theta) = sum_i w_i (|S1|^2 + |S2|^2)/2 / sum_i w_i pi x_i^2 Q_sca,i at 
   nephele's GFLOP/s.
 * wall times of the converged default at d = 20 um and of the 46-diameter paper range.
 
-Speed targets (issue 30): >= 30x miepython on one thread (>= 35x on two, the earlier issue's),
+Speed targets: >= 30x miepython on one thread (>= 35x on two),
 nephele's one-thread GFLOP/s >= 70% of DGEMM. They are reported as PASS/MISS and never fail
 the script. On a VM whose clock drifts, scripts/bench_mie_gemm.py gives the steadier DGEMM
 fraction (the two interleaved, best of N each).

@@ -8,7 +8,7 @@ d = 20 and 5 um product-rule jobs (41 sizes x 31 wavelengths, as bench_mie.py), 
 of each are taken over the same minutes.
 
 nephele's rates are the two that phase.json reports: the GEMM part's own (the flops its GEMM
-calls do over the seconds spent inside them, issue 30's "GEMM part"), and the whole job's
+calls do over the seconds spent inside them, the "GEMM part"), and the whole job's
 useful GFLOP/s over its whole compute time (the count bench_mie.py checks independently).
 Set NEPHELE_GEMM=matrixmultiply to time the old GEMM, OPENBLAS_CORETYPE=Haswell to hold numpy
 to AVX2 kernels (with a nephele built for them).
@@ -62,7 +62,7 @@ def main() -> int:
     for d in ("20", "5"):
         g = best["gemm" + d]
         print(f"  nephele d = {d:>2} um, 1 thread: GEMM part {g:.1f} GFLOP/s = "
-              f"{100 * g / best['dgemm']:.0f} % of DGEMM (issue 30: >= 70 %); whole job "
+              f"{100 * g / best['dgemm']:.0f} % of DGEMM (target >= 70 %); whole job "
               f"{best[d]:.1f} GFLOP/s = {100 * best[d] / best['dgemm']:.0f} %")
     return 0
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Phase-model speed: nephele-runtime (examples/bench_phase.rs) next to the renderer-style f32
 # closed forms of benches/baselines/phase_ref.c, built with cc -O3 -march=native, in one run.
-# First one full run of each; then, for issue 30's comparisons, refbench/ (nephele-refbench):
+# First one full run of each; then, for the in-process comparisons, refbench/ (nephele-refbench):
 # the C baseline compiled unchanged into the same process as nephele, the two loops run one
 # right after the other ROUNDS times (default 30) on CALLS calls each (default 10⁷), the order
 # swapped every round. On a VM whose clock drifts within a minute the ratio of two runs a few

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Per-pixel noise of `nephele render` against wall time, per order group (issue 18's benchmark).
+"""Per-pixel noise of `nephele render` against wall time, per order group.
 
 Renders a scene (default: the default cloud, fit-configs/scenes/cloud.json) with N independent
 seeds, for two lightings — the scene's own sun ("front": behind the camera) and the sun mirrored

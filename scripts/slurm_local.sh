@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# A real Slurm run of the sharded slab tables on one machine (issue 28, item 5).
+# A real Slurm run of the sharded slab tables on one machine.
 #
 # Sets up a single-node cluster on localhost (munge, slurmctld and slurmd from Debian's
 # slurm-wlm, a slurm.conf written here), submits scripts/slab_slurm.sh as a job array of

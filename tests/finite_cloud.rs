@@ -107,7 +107,7 @@ fn an_absorbing_slab_keeps_what_the_path_tracer_keeps() {
 /// A conservative cloud under a uniform sky and no sun is a white furnace: every pixel's
 /// beauty is the sky's radiance, whatever the cloud's shape (the exact reference, no path
 /// tracer needed). The sky term in the view ray's slab keeps it to the tables' own sum error
-/// and the sky grid's (measured at 40 × 30, 4 Dec 2026: mean +2.0 %, RMSE 2.9 % over the
+/// and the sky grid's (measured at 40 × 30: mean +2.0 %, RMSE 2.9 % over the
 /// cloud's pixels with the slab across the whole chord; +5.9 %, 5.9 % when the chord was cut at
 /// the march's stop, 9.2 mfp); read in the sun's slab, as before, it was +15 % with a 44 % RMSE
 /// at 160 × 120. The sides' share moves light between orders only, so it cannot move this.

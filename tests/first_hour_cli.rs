@@ -1,4 +1,4 @@
-//! A new user's slips on the command line (issue 26): negative numbers reach their range check,
+//! A new user's slips on the command line: negative numbers reach their range check,
 //! flags a command does not take are refused, and each refusal is one line that names the fix,
 //! with no file written.
 

@@ -1,4 +1,4 @@
-//! A new user's first hour with `nephele compare` and the pictures (issue 26, items 3 and 7):
+//! A new user's first hour with `nephele compare` and the pictures:
 //! compare refuses renders of different scenes, cameras or sizes and a reference without the
 //! path tracer's noise estimate; the PNG's exposure is set by the cloud, not the sky around
 //! it, and `--exposure` overrides it.

@@ -1,4 +1,4 @@
-//! A new user's slips of units (issue 26, item 2) and progress on long runs (item 8): each
+//! A new user's slips of units and progress on long runs: each
 //! slip that is out of range is refused at once with one line naming the fix and no file
 //! written; each legal but implausible value renders with one `warning: ` line naming the
 //! units; the progress callbacks report what the bars show.

@@ -3,7 +3,7 @@
 //! shipped tables), seen from below looking into the sun. Within 6° of the beam the collector's
 //! orders 2, 3–4 and 5–6 must be within 20 % (+ 3 SE) of the path tracer's with the shipped
 //! tables (measured at 160 × 120: −4.9 %, −6.3 %, +3.8 %), and the same tables without their
-//! halo (the form alone, as shipped until 4 Dec 2026: −90 %, −81 %, −51 %) must be below −45 %:
+//! halo (the form alone, without the halo: −90 %, −81 %, −51 %) must be below −45 %:
 //! the bound can fail.
 
 use nephele::render::fast::{render_fast, FastOptions};

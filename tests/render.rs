@@ -690,7 +690,7 @@ impl ZScores {
 }
 
 /// The implicit cloud with delta and ratio tracking on its fine majorant grid rather than its
-/// blocks (what the path tracer walked before 5 Dec 2026).
+/// blocks (the path tracer's earlier walk).
 struct FineTracking(nephele::render::medium::Cloud);
 
 impl Medium for FineTracking {

@@ -28,7 +28,7 @@ fn the_embedded_tables_are_the_committed_file_its_manifest_describes() {
         m["file"]["crc32"].as_str().unwrap(),
         format!("{:08x}", crc32(&MIE_10UM[..MIE_10UM.len() - 4]))
     );
-    // Issue 25: the shipped file within 512 KB.
+    // The shipped file within 512 KB.
     assert!(MIE_10UM.len() <= 512 * 1024, "{} bytes", MIE_10UM.len());
     assert_eq!(m["slab_run"]["config"]["phase"]["diameter_um"], 10.0);
     // Coverage, measured by the compressor over every cell of the slab tables with light: the
@@ -333,7 +333,7 @@ fn halo_reach() -> f64 {
     edges.get(edges.len() - 1).unwrap() as f64
 }
 
-/// Near the far face of thick slabs, looking at it (issue 27: the continuation of the depth
+/// Near the far face of thick slabs, looking at it (the continuation of the depth
 /// profile beyond the fitted planes was 2–4× above an independent Monte Carlo there): order 1 +
 /// every group against DISORT (tests/data/near-face-disort.json, scripts/near_face_disort.py).
 #[test]
@@ -345,7 +345,7 @@ fn near_the_far_face_the_tables_follow_disort() {
     let doc: serde_json::Value = serde_json::from_str(&text).unwrap();
     let tab = mie_10um();
     let mut out = [Transport::default(); 8];
-    let (mut rel, mut issue_cells) = (Vec::new(), Vec::new());
+    let (mut rel, mut named_cells) = (Vec::new(), Vec::new());
     for p in doc["points"].as_array().unwrap() {
         let v: Vec<f64> = p
             .as_array()
@@ -366,12 +366,12 @@ fn near_the_far_face_the_tables_follow_disort() {
         rel.push((ratio - 1.0).abs());
         if (32.0..=64.0).contains(&t) && (0.97..=0.98).contains(&f) && (0.08..=0.25).contains(&mu_v)
         {
-            issue_cells.push(ratio);
+            named_cells.push(ratio);
         }
     }
     rel.sort_by(f64::total_cmp);
     let median = rel[rel.len() / 2];
-    let worst = issue_cells
+    let worst = named_cells
         .iter()
         .fold(1.0f64, |w, &r| w.max(r).max(1.0 / r));
     println!(
@@ -380,7 +380,7 @@ fn near_the_far_face_the_tables_follow_disort() {
         100.0 * median,
         100.0 * rel.last().unwrap()
     );
-    assert!(issue_cells.len() == 24, "{}", issue_cells.len());
+    assert!(named_cells.len() == 24, "{}", named_cells.len());
     assert!(worst <= 2.0, "{worst}");
     assert!(median <= 0.15, "{median}");
 }

@@ -1,4 +1,4 @@
-//! nephele against the C baselines of benches/baselines/ in one process, alternately: issue 30's
+//! nephele against the C baselines of benches/baselines/ in one process, alternately: the
 //! ratios on a machine whose clock drifts.
 //!
 //!     cargo run --release -p nephele-refbench -- phase [CALLS [ROUNDS]]
@@ -168,7 +168,7 @@ fn phase(calls: usize, rounds: usize) {
         }
     }
     println!(
-        "   nephele / C, ns per call (issue 30: ≤ 1.0 for evaluation and the blend's and Draine's \
+        "   nephele / C, ns per call (target ≤ 1.0 for evaluation and the blend's and Draine's \
          sampling), {rounds} rounds of {calls} calls:"
     );
     for (k, (name, _, _)) in cases.iter().enumerate() {
@@ -208,7 +208,7 @@ fn slab(photons: u64, rounds: usize) {
         }
     }
     println!(
-        "   nephele / C walk, scattering events per second (issue 30: ≥ 1.0), {rounds} rounds of {photons} photons:"
+        "   nephele / C walk, scattering events per second (target ≥ 1.0), {rounds} rounds of {photons} photons:"
     );
     let mut ratios: Vec<f64> = ours.iter().zip(&theirs).map(|(a, b)| a / b).collect();
     report(

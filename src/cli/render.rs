@@ -107,7 +107,7 @@ pub struct FastArgs {
     /// Collector, with --search-block N > 1: a block shares one search only where each of its
     /// pixels is at least this opaque (the cloud's interior); the pixels of any other block
     /// (silhouettes, thin matter, where orders ≥ 2 change from pixel to pixel) search alone.
-    /// 0: every block shares, as before 5 Dec 2026.
+    /// 0: every block shares.
     #[arg(long, default_value_t = nephele::render::regions::OPAQUE, value_name = "ALPHA")]
     pub search_block_opacity: f64,
     /// Collector: search on every ray of a pixel, not once per pixel (an ablation: n² times the

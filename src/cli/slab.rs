@@ -98,6 +98,9 @@ pub fn run_config(
     save_every: f64,
     plot: bool,
 ) -> Result<()> {
+    if let Some(bytes) = nephele::io::available_memory() {
+        cfg.check_memory(bytes)?;
+    }
     let t0 = Instant::now();
     let spin = super::progress::spinner("slab", "the phase function");
     let phase = Phase::build(&cfg.phase)?;

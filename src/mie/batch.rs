@@ -446,7 +446,7 @@ impl<'a> Strided<'a> {
 
 /// Which GEMM runs the products: the `gemm` crate (faer's kernels, AVX-512 included through its
 /// `x86-v4` feature), or matrixmultiply when `NEPHELE_GEMM=matrixmultiply` (the GEMM of
-/// nephele until 6 Dec 2026, kept so that both can be timed in one run on any CPU: on an Intel
+/// nephele before the `gemm` crate, kept so that both can be timed in one run on any CPU: on an Intel
 /// Xeon with two 512-bit FMA units the `gemm` crate's kernels are 1.3–1.5× faster, docs/mie.md).
 /// Both pick their kernels at run time (AVX-512, AVX2/FMA, SSE2) from one baseline build.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -543,7 +543,7 @@ fn gemm_with(
 }
 
 /// The flops and the seconds spent inside the GEMM calls of this process, summed over threads:
-/// the GEMM part's own rate (issue 30's "GEMM part", against numpy's DGEMM), beside the whole
+/// the GEMM part's own rate (the "GEMM part", against numpy's DGEMM), beside the whole
 /// job's. Two clock reads per call, against the 10⁵–10⁸ flops of a call.
 pub struct GemmClock {
     flops: std::sync::atomic::AtomicU64,

@@ -158,7 +158,7 @@ const CLOUD_GRID: usize = 80;
 /// `TRACKING_BLOCK`³ cells (16 per axis): the fine grid is 8 MB, and a ray through it waits on
 /// memory at every one of its many cell faces, where a looser bound costs only a few more
 /// density lookups. Measured on the default cloud (scripts/bench_render_noise.py, 32 spp,
-/// 4 seeds, 5 Dec 2026): blocks of 1, 4, 5 and 8 gave efficiencies 5.3, 6.8, 6.8 and 6.7 with
+/// 4 seeds): blocks of 1, 4, 5 and 8 gave efficiencies 5.3, 6.8, 6.8 and 6.7 with
 /// the sun in front, 5.0, 6.3, 6.4 and 6.3 from behind, the noise per sample unchanged. The
 /// fast renderers' march keeps the fine grid: its sub-steps follow its faces and skip its
 /// empty cells.

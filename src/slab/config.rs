@@ -157,6 +157,35 @@ impl SlabConfig {
             .collect()
     }
 
+    /// Bytes a run holds at its peak, an upper estimate: for the slice under way its
+    /// accumulator (Σ v and Σ v vᵀ: 14 f64 a cell) and a round of batch tallies (4 f64 a cell
+    /// each), and every slice's tables (T, its error, c and σ: at most 8 f64 a cell) until they
+    /// are written.
+    pub fn footprint_bytes(&self) -> Result<f64> {
+        let t_max = self.thicknesses.iter().copied().fold(0.0, f64::max);
+        let cells = self.grid(t_max)?.n_cells() as f64;
+        let slices = (self.thicknesses.len() * self.mu_l.len()) as f64;
+        let round = self.stop.round_batches as f64;
+        Ok(8.0 * cells * (14.0 + 4.0 * round + 8.0 * slices))
+    }
+
+    /// Refuses a run larger than `available` bytes, with its estimate.
+    pub fn check_memory(&self, available: f64) -> Result<()> {
+        let need = self.footprint_bytes()?;
+        if need > available {
+            bail!(
+                "this slab run needs about {} of memory, more than the {} available ({} cells a \
+                 slice: planes × mu_v_bins × psi_v_bins × order groups, {} slices); use fewer \
+                 planes, mu_v_bins, psi_v_bins, order groups or slices",
+                crate::io::text::bytes(need),
+                crate::io::text::bytes(available),
+                self.grid(self.thicknesses[0])?.n_cells(),
+                self.thicknesses.len() * self.mu_l.len()
+            );
+        }
+        Ok(())
+    }
+
     /// The grid of the slab of thickness `t`.
     pub fn grid(&self, t: f64) -> Result<SlabGrid> {
         let (nm, np) = (self.mu_v_bins, self.psi_v_bins);
@@ -179,5 +208,24 @@ impl SlabConfig {
         grid.grazing_mu = self.grazing_mu;
         grid.aureole = super::aureole::Aureole::new(self.aureole_deg.clone())?;
         Ok(grid)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_run_larger_than_memory_is_refused_with_its_estimate() {
+        let text = include_str!("../../fit-configs/slab-default.json");
+        let mut cfg: SlabConfig = serde_json::from_str(text).unwrap();
+        let need = cfg.footprint_bytes().unwrap();
+        // The default run: 72 slices of 16 planes × 16 × 12 bins × 10 groups.
+        assert!(need > 1e7 && need < 1e9, "{need}");
+        assert!(cfg.check_memory(need).is_ok());
+        cfg.planes = 1024;
+        let err = cfg.check_memory(8e9).unwrap_err().to_string();
+        assert!(err.contains("more than the 8 GB available"), "{err}");
+        assert!(err.contains("use fewer"), "{err}");
     }
 }

@@ -608,7 +608,7 @@ pub(crate) fn depth_polynomial_in<F: Real>(
 /// ln of T/B at distance `h` from a face relative to its value at the fitted edge (distance
 /// `h_edge`), given `rise` = ln(T/B) one step further inside (distance `h_inside`) less the
 /// edge's, > 0. Two shapes agree at both points:
-/// - *exponential* in depth (ln T linear in d; until 2026-12-03 the only shape, and linear in
+/// - *exponential* in depth (ln T linear in d; the first shape, and linear in
 ///   the stretched depth u instead): right where a group's light fades away from its fitted
 ///   cells (low orders deep in a thick slab);
 /// - *linear* in depth: the diffusion regime near a face, where the source function falls
