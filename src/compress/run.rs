@@ -8,20 +8,19 @@ use super::figure;
 use super::fit::{fit_all, held_out_l, predict, predict_held_out, GroupFit};
 use super::form::Lerp;
 use super::joint::{fit_all_joint, fit_joint_groups, spanned, JointFit};
-use super::near_beam::{halo_table, near_beam_check, NearBeamCheck};
+use super::manifest::manifest;
+use super::near_beam::near_beam_check;
+pub use super::ntt::NttCheck;
+use super::ntt::{phase_of_run, write_ntt};
 use super::report::{collector_error_on, group_error, group_error_on, CollectorError, GroupError};
-use super::ship::{ntt_bytes, phase_angles, with_halo};
 use super::{LogAdditive, SlabTables};
 use crate::io::{write_atomic, AtomicFiles, Npz};
-use crate::phase::{Phase, PhaseSpec};
 use anyhow::{anyhow, ensure, Context, Result};
 use nephele_runtime::fitting::{CollectorForm, Statistic};
-use nephele_runtime::phase::Cosine;
-use nephele_runtime::transport::single_scattering;
-use nephele_runtime::transport::{Transport, TransportTables};
+use nephele_runtime::transport::TransportTables;
 use rayon::prelude::*;
 use serde::Serialize;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 /// What to fit.
@@ -211,33 +210,33 @@ pub fn compress_reporting(
 const DOMAIN_CHECK_SAMPLES: usize = 1500;
 
 /// Everything a compression computes before it writes anything.
-struct Measured {
-    fits: Vec<GroupFit>,
-    joint: Vec<JointFit>,
-    coll: Vec<CollectorFit>,
+pub(super) struct Measured {
+    pub(super) fits: Vec<GroupFit>,
+    pub(super) joint: Vec<JointFit>,
+    pub(super) coll: Vec<CollectorFit>,
     /// The form's T and collector (σ, c_x, c_z) over the tables' layout.
-    pred: Vec<f64>,
-    pred_c: [Vec<f64>; 3],
-    errors: Vec<GroupError>,
-    reference: (Vec<GroupError>, usize),
-    collector: Vec<CollectorError>,
-    held_out: Option<HeldOut>,
-    params: usize,
-    collector_params: usize,
-    fit_seconds: f64,
-    coverage: CoverageReport,
+    pub(super) pred: Vec<f64>,
+    pub(super) pred_c: [Vec<f64>; 3],
+    pub(super) errors: Vec<GroupError>,
+    pub(super) reference: (Vec<GroupError>, usize),
+    pub(super) collector: Vec<CollectorError>,
+    pub(super) held_out: Option<HeldOut>,
+    pub(super) params: usize,
+    pub(super) collector_params: usize,
+    pub(super) fit_seconds: f64,
+    pub(super) coverage: CoverageReport,
 }
 
 /// The coverage of every group and of the sum ([`super::coverage`]).
 #[derive(Serialize)]
-struct CoverageReport {
-    definition: &'static str,
+pub(super) struct CoverageReport {
+    pub(super) definition: &'static str,
     /// The largest share of one (t, μ_L) slice's light of orders ≥ 2 dropped by the groups
     /// together.
-    worst_slice_all_groups: SliceShare,
+    pub(super) worst_slice_all_groups: SliceShare,
     /// Every slice's share dropped by the groups together (t outer, μ_L inner).
-    slices_all_groups: Vec<SliceShare>,
-    groups: Vec<Coverage>,
+    pub(super) slices_all_groups: Vec<SliceShare>,
+    pub(super) groups: Vec<Coverage>,
 }
 
 impl CoverageReport {
@@ -397,7 +396,7 @@ struct CollectorReport<'a> {
 
 /// The collector form's sizes and its Q, as reports and manifests write them.
 #[derive(Serialize)]
-struct CollectorOptions {
+pub(super) struct CollectorOptions {
     legendre: usize,
     harmonics: usize,
     theta_nodes: usize,
@@ -405,7 +404,7 @@ struct CollectorOptions {
 }
 
 impl CollectorOptions {
-    fn of(opt: &Options) -> Self {
+    pub(super) fn of(opt: &Options) -> Self {
         Self {
             legendre: opt.collector.legendre,
             harmonics: opt.collector.harmonics,
@@ -540,389 +539,6 @@ fn held_out_study(tab: &SlabTables, opt: &Options) -> Result<HeldOut> {
         errors,
         collector,
         pred,
-    })
-}
-
-/// The phase function the slab run sampled: the table stored in its tables.npz, or, for an
-/// analytic phase function (or tables written before the table was stored), the one its
-/// tables.json's config.phase names.
-fn phase_of_run(tab: &SlabTables, tables: &Path) -> Result<Phase> {
-    if let Some(source) = &tab.phase {
-        return Phase::from_source(source.clone())
-            .with_context(|| format!("'{}': the stored phase table", tables.display()));
-    }
-    let json = tables.with_extension("json");
-    let text = std::fs::read_to_string(&json).with_context(|| {
-        format!(
-            "the phase function for order 1 comes from '{}'",
-            json.display()
-        )
-    })?;
-    let doc: serde_json::Value =
-        serde_json::from_str(&text).with_context(|| format!("'{}' is not JSON", json.display()))?;
-    let spec: PhaseSpec = serde_json::from_value(doc["config"]["phase"].clone())
-        .with_context(|| format!("'{}': no config.phase", json.display()))?;
-    Phase::build(&spec)
-}
-
-/// transport.ntt as written, and how closely the runtime follows the fit.
-#[derive(Clone, Debug, Serialize)]
-pub struct NttCheck {
-    /// Where.
-    pub path: PathBuf,
-    /// Its size.
-    pub bytes: usize,
-    /// Largest |T_runtime/T_fit − 1| over the cells where both are positive and the fit's T
-    /// holds ≥ 10⁻⁶ of its (t, μ_L) slice's largest (all groups), as for order 1.
-    pub worst_t: f64,
-    /// The same over the fainter cells in f32's normal range: where T is continued toward a
-    /// face and nearly vanishes, it is the difference of nearly equal numbers, and f32 keeps
-    /// fewer of its digits.
-    pub worst_t_faint: f64,
-    /// Largest |σ_runtime/σ_fit − 1| and |c_runtime − c_fit|/σ_fit.
-    pub worst_sigma: f64,
-    /// See `worst_sigma`.
-    pub worst_c_in_sigma: f64,
-    /// Largest |T₁/T₁_exact − 1| of order 1 from the stored phase table against the phase
-    /// function itself, over the cells' centres where T₁_exact > 10⁻⁶ of its slice maximum.
-    pub worst_order1: f64,
-    /// Cells where exactly one of the fit and the runtime is 0 (a lost group, or f32
-    /// underflow of a T f32 could hold), not counting `below_f32`.
-    pub zero_mismatches: usize,
-    /// Cells where the fit's T > 0 lies below f32's smallest normal number (1.2·10⁻³⁸):
-    /// the runtime's f32 cannot hold it (0 or a subnormal with few digits) and they are not
-    /// compared — light no renderer sees (low orders deep in thick slabs under a grazing sun).
-    pub below_f32: usize,
-    /// The runtime's T near the beam against the tables' tallies there.
-    pub near_beam: Option<NearBeamCheck>,
-    /// The same for the form alone, where the file holds a halo (what the halo corrects).
-    pub near_beam_form: Option<NearBeamCheck>,
-}
-
-/// Writes transport.ntt (joint fits and the phase function) after loading it back with the
-/// runtime and comparing its f32 evaluation with the fit on every cell the form represents.
-fn write_ntt(
-    out: &Path,
-    tab: &SlabTables,
-    opt: &Options,
-    model: &Phase,
-    m: &Measured,
-) -> Result<NttCheck> {
-    let (joint, coll) = (m.joint.as_slice(), m.coll.as_slice());
-    let (pred, pred_c) = (&m.pred, &m.pred_c);
-    // The nodes the walk's table has (or, analytic, a fine grid) and p there as it sampled it.
-    let theta = model
-        .source()
-        .map_or_else(phase_angles, |s| s.theta_deg.clone());
-    let phase: Vec<f64> = theta
-        .iter()
-        .map(|deg| {
-            let half = (0.5 * deg.to_radians()).sin();
-            model.with(|p| p.pdf_cosine(Cosine::from_one_minus_mu(2.0 * half * half)))
-        })
-        .collect();
-    let collector = (!coll.is_empty()).then_some((&opt.collector, coll));
-    let bytes = ntt_bytes(
-        tab,
-        &opt.form,
-        opt.smooth_t,
-        joint,
-        collector,
-        (&theta, &phase),
-    )?;
-    let rt = TransportTables::from_bytes(&bytes).map_err(|e| anyhow!("{e}"))?;
-    // The halo (if the run tallied an aureole) against the form without it; the checks below
-    // compare the form itself with the fit.
-    let halo = tab.aureole.as_ref().map(|a| halo_table(tab, a, &rt));
-    let written = match &halo {
-        Some(h) => with_halo(&bytes, h)?,
-        None => bytes.clone(),
-    };
-    let [_, nt, nl, nd, nm, nk] = tab.shape;
-    let mut check = NttCheck {
-        path: out.join("transport.ntt"),
-        bytes: bytes.len(),
-        worst_t: 0.0,
-        worst_sigma: 0.0,
-        worst_c_in_sigma: 0.0,
-        worst_order1: 0.0,
-        zero_mismatches: 0,
-        below_f32: 0,
-        worst_t_faint: 0.0,
-        near_beam: None,
-        near_beam_form: halo.as_ref().map(|_| near_beam_check(tab, &rt)),
-    };
-    let mut all = vec![Transport::default(); joint.len()];
-    for it in 0..nt {
-        for il in 0..nl {
-            let mut order1 = Vec::new();
-            let mut slice_top = 0.0f64;
-            for (f, j, m, k) in joint.iter().flat_map(|f| {
-                (0..nd).flat_map(move |j| {
-                    (0..nm).flat_map(move |m| (0..nk).map(move |k| (f, j, m, k)))
-                })
-            }) {
-                slice_top = slice_top.max(pred[tab.index(f.group, it, il, j, m, k)]);
-            }
-            for j in 0..nd {
-                for m in 0..nm {
-                    for k in 0..nk {
-                        let at = tab.point(it, il, j, m, k);
-                        let at32 = at.to_f32();
-                        rt.evaluate_all(&at32, &mut all);
-                        for (f, got) in joint.iter().zip(&all) {
-                            let i = tab.index(f.group, it, il, j, m, k);
-                            compare(
-                                &mut check,
-                                (pred[i], pred_c[0][i], pred_c[1][i], pred_c[2][i]),
-                                got,
-                                1e-6 * slice_top,
-                            );
-                        }
-                        let exact = model.with(|p| single_scattering(p, 1.0, &at));
-                        let stored = rt.order1(&at32) as f64;
-                        order1.push((exact, stored));
-                    }
-                }
-            }
-            let top = order1.iter().map(|o| o.0).fold(0.0, f64::max);
-            for (exact, stored) in order1 {
-                if exact > 1e-6 * top {
-                    check.worst_order1 = check.worst_order1.max((stored / exact - 1.0).abs());
-                }
-            }
-        }
-    }
-    check.bytes = written.len();
-    write_atomic(&check.path, |w| {
-        std::io::Write::write_all(w, &written)?;
-        Ok(())
-    })?;
-    Ok(check)
-}
-
-/// Folds one cell's runtime values `got` against the fit's (T, σ, c_x, c_z) into `check`.
-fn compare(
-    check: &mut NttCheck,
-    (t, sigma, cx, cz): (f64, f64, f64, f64),
-    got: &Transport,
-    faint: f64,
-) {
-    if t > 0.0 && t < f32::MIN_POSITIVE as f64 {
-        check.below_f32 += 1;
-        return;
-    }
-    if (t > 0.0) != (got.t > 0.0) {
-        check.zero_mismatches += 1;
-    }
-    if !(t > 0.0 && got.t > 0.0) {
-        return;
-    }
-    let rel = (got.t as f64 / t - 1.0).abs();
-    if t < faint {
-        check.worst_t_faint = check.worst_t_faint.max(rel);
-    } else {
-        check.worst_t = check.worst_t.max(rel);
-    }
-    if sigma.is_finite() && sigma > 0.0 {
-        check.worst_sigma = check
-            .worst_sigma
-            .max((got.sigma as f64 / sigma - 1.0).abs());
-        let dc = (got.c_x as f64 - cx).hypot(got.c_z as f64 - cz) / sigma;
-        check.worst_c_in_sigma = check.worst_c_in_sigma.max(dc);
-    }
-}
-
-/// manifest.json, what shipped tables are: the slab run they come from (its config, seed,
-/// photons, tool version), the compressor's version and options, the file's size and CRC-32,
-/// and the error summary (per group, fitted and held out, T and the collector).
-#[derive(Serialize)]
-struct Manifest {
-    what: &'static str,
-    file: Option<FileId>,
-    slab_run: serde_json::Map<String, serde_json::Value>,
-    compressor: Compressor,
-    errors: ErrorSummary,
-    coverage: CoverageSummary,
-    domain: Domain,
-}
-
-/// What a renderer may ask and what the tables answer outside their grid.
-#[derive(Serialize)]
-struct Domain {
-    thickness: [f64; 2],
-    mu_l: [f64; 2],
-    mu_v: [f64; 2],
-    psi_v: [f64; 2],
-    depth: &'static str,
-    outside: &'static str,
-}
-
-#[derive(Serialize)]
-struct CoverageSummary {
-    definition: &'static str,
-    worst_slice_all_groups: SliceShare,
-    /// Every (t, μ_L) slice's share dropped by the groups together (t outer).
-    slices_all_groups: Vec<SliceShare>,
-    /// Per group then the sum: dropped share, zero share, relative RMS over every cell.
-    dropped: Vec<f64>,
-    zero: Vec<f64>,
-    rel_rms_all: Vec<f64>,
-    noise_all: Vec<f64>,
-}
-
-#[derive(Serialize)]
-struct FileId {
-    name: &'static str,
-    bytes: usize,
-    crc32: String,
-}
-
-#[derive(Serialize)]
-struct Compressor {
-    version: &'static str,
-    git_commit: Option<&'static str>,
-    form: serde_json::Value,
-    smooth_t: usize,
-    collector: CollectorOptions,
-}
-
-#[derive(Serialize)]
-struct ErrorSummary {
-    definition: &'static str,
-    fitted: Summary,
-    held_out: Option<HeldOutSummary>,
-}
-
-#[derive(Serialize)]
-struct Summary {
-    #[serde(rename = "T")]
-    t: Vec<TSummary>,
-    collector: Vec<CollectorSummary>,
-}
-
-#[derive(Serialize)]
-struct HeldOutSummary {
-    thicknesses: Vec<f64>,
-    mu_l: Vec<f64>,
-    #[serde(flatten)]
-    summary: Summary,
-}
-
-#[derive(Serialize)]
-struct TSummary {
-    first_order: Option<f64>,
-    rel_rms: f64,
-    noise: f64,
-}
-
-#[derive(Serialize)]
-struct CollectorSummary {
-    first_order: f64,
-    sigma_rel: f64,
-    c_in_sigma: f64,
-    sigma_noise: f64,
-    c_noise: f64,
-}
-
-impl Summary {
-    fn of(errors: &[GroupError], collector: &[CollectorError]) -> Self {
-        Summary {
-            t: errors
-                .iter()
-                .map(|e| TSummary {
-                    first_order: e.first_order,
-                    rel_rms: e.rel_rms,
-                    noise: e.noise,
-                })
-                .collect(),
-            collector: collector
-                .iter()
-                .map(|c| CollectorSummary {
-                    first_order: c.first_order,
-                    sigma_rel: c.sigma_rel,
-                    c_in_sigma: c.c_in_sigma,
-                    sigma_noise: c.sigma_noise,
-                    c_noise: c.c_noise,
-                })
-                .collect(),
-        }
-    }
-}
-
-fn manifest(
-    tables: &Path,
-    tab: &SlabTables,
-    opt: &Options,
-    m: &Measured,
-    ntt: Option<&NttCheck>,
-) -> Result<Manifest> {
-    let slab: serde_json::Value = std::fs::read_to_string(tables.with_extension("json"))
-        .ok()
-        .and_then(|t| serde_json::from_str(&t).ok())
-        .unwrap_or_default();
-    let keys = [
-        "config",
-        "seed",
-        "photons",
-        "events",
-        "converged_slices",
-        "version",
-        "git_commit",
-    ];
-    let file = match ntt {
-        Some(n) => {
-            let bytes = std::fs::read(&n.path)?;
-            Some(FileId {
-                name: "transport.ntt",
-                bytes: bytes.len(),
-                // The CRC of the body (the file's own trailer): the CRC of the whole file,
-                // trailer included, is the same constant for every file (CRC-32's residue).
-                crc32: format!(
-                    "{:08x}",
-                    nephele_runtime::fitting::crc32(&bytes[..bytes.len().saturating_sub(4)])
-                ),
-            })
-        }
-        None => None,
-    };
-    Ok(Manifest {
-        what: "compressed slab transport tables: T, c, sigma per order group of orders >= 2 (docs/compress.md); order 1 in closed form from the stored phase function",
-        file,
-        slab_run: keys.iter().map(|k| (k.to_string(), slab[*k].clone())).collect(),
-        compressor: Compressor {
-            version: crate::VERSION,
-            git_commit: option_env!("NEPHELE_GIT_COMMIT"),
-            form: super::form::to_json(&opt.form),
-            smooth_t: opt.smooth_t,
-            collector: CollectorOptions::of(opt),
-        },
-        errors: ErrorSummary {
-            definition: "T-weighted relative RMS of T per group and for the sum of groups (last); sigma relative, c in units of sigma; noise = the tables' own on the same cells",
-            fitted: Summary::of(&m.errors, &m.collector),
-            held_out: m.held_out.as_ref().map(|h| HeldOutSummary {
-                thicknesses: h.thicknesses.clone(),
-                mu_l: h.mu_l.clone(),
-                summary: Summary::of(&h.errors, &h.collector),
-            }),
-        },
-        coverage: CoverageSummary {
-            definition: m.coverage.definition,
-            worst_slice_all_groups: m.coverage.worst_slice_all_groups,
-            slices_all_groups: m.coverage.slices_all_groups.clone(),
-            dropped: m.coverage.groups.iter().map(|c| c.dropped).collect(),
-            zero: m.coverage.groups.iter().map(|c| c.zero).collect(),
-            rel_rms_all: m.coverage.groups.iter().map(|c| c.rel_rms_all).collect(),
-            noise_all: m.coverage.groups.iter().map(|c| c.noise_all).collect(),
-        },
-        domain: Domain {
-            thickness: [tab.thickness[0], tab.thickness[tab.thickness.len() - 1]],
-            mu_l: [tab.mu_l[0], tab.mu_l[tab.mu_l.len() - 1]],
-            mu_v: [-1.0, 1.0],
-            psi_v: [0.0, std::f64::consts::PI],
-            depth: "[0, t]",
-            outside: "t or mu_L outside their ranges: past the thickest slab the tables continue by diffusion theory (docs/compress.md, 'Past the thickest slab'); below the thinnest slab the form's parameters are held at the grid's end while the geometry (boundary factor, single-scattering factor, scattering angle) follows the point; below the lowest sun mu_0 the point is read under mu_0 and T scaled by mu_L/mu_0 (T/mu_L held); Domain::outside tells a caller which coordinate and by how much",
-        },
     })
 }
 
