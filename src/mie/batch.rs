@@ -445,9 +445,10 @@ impl<'a> Strided<'a> {
 }
 
 /// Which GEMM runs the products: the `gemm` crate (faer's kernels, AVX-512 included through its
-/// `x86-v4` feature), or matrixmultiply when `NEPHELE_GEMM=matrixmultiply` (the GEMM of
-/// nephele before the `gemm` crate, kept so that both can be timed in one run on any CPU: on an Intel
-/// Xeon with two 512-bit FMA units the `gemm` crate's kernels are 1.3–1.5× faster, docs/mie.md).
+/// `x86-v4` feature), or matrixmultiply when `NEPHELE_GEMM=matrixmultiply` (nephele's GEMM
+/// before the `gemm` crate, kept so that both can be timed in one run on any CPU: on an Intel
+/// Xeon with two 512-bit FMA units the `gemm` crate's kernels are 1.3–1.5× faster,
+/// docs/mie.md).
 /// Both pick their kernels at run time (AVX-512, AVX2/FMA, SSE2) from one baseline build.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub enum Gemm {

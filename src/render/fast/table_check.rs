@@ -11,8 +11,8 @@ use anyhow::{bail, Result};
 use nephele_runtime::transport::TransportTables;
 
 /// The tables are for one phase function and ϖ = 1: the scene's must match (p within
-/// [`PHASE_TOLERANCE`] at every degree, the forward peak included; ϖ = 1 but for the collector, which weighs in the
-/// absorption) unless the caller allows a mismatch.
+/// [`PHASE_TOLERANCE`] at every degree, the forward peak included; ϖ = 1 but for the
+/// collector, which weighs in the absorption) unless the caller allows a mismatch.
 pub(super) fn check_tables(
     scene: &Scene,
     tables: &TransportTables,
