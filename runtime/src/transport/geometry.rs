@@ -23,6 +23,19 @@ pub struct SlabPoint<F> {
 }
 
 impl<F: Copy> SlabPoint<F> {
+    /// The point in the argument order of the C ABI, Python, WGSL and the command line:
+    /// thickness t (mfp), sun cosine μ_L, depth d (mfp), view cosine μ_V, azimuth ψ_V
+    /// (radians).
+    pub const fn new(thickness: F, mu_l: F, depth: F, mu_v: F, psi_v: F) -> Self {
+        Self {
+            depth,
+            thickness,
+            mu_v,
+            psi_v,
+            mu_l,
+        }
+    }
+
     /// The same place and sun, another view direction.
     pub fn with_view(self, mu_v: F, psi_v: F) -> Self {
         Self {
@@ -252,5 +265,18 @@ mod tests {
         assert!((at(0.0, 0.5).view_weight(0.3) - 0.3).abs() < 1e-6);
         // At the far face seen going up the path is 0: the weight is held finite.
         assert!((at(10.0, 0.5).view_weight(0.3) - 300.0).abs() < 1e-3);
+    }
+
+    #[test]
+    fn new_takes_the_interfaces_order() {
+        let p = SlabPoint::new(8.0f32, 0.5, 2.0, -0.6, 0.35);
+        let named = SlabPoint {
+            thickness: 8.0,
+            mu_l: 0.5,
+            depth: 2.0,
+            mu_v: -0.6,
+            psi_v: 0.35,
+        };
+        assert_eq!(p, named);
     }
 }

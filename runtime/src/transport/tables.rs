@@ -49,6 +49,16 @@ pub struct Transport {
     pub sigma: f32,
 }
 
+impl Transport {
+    /// Every field NaN: the answer at a point that is not in the slab.
+    pub const NAN: Self = Self {
+        t: f32::NAN,
+        c_x: f32::NAN,
+        c_z: f32::NAN,
+        sigma: f32::NAN,
+    };
+}
+
 /// Where the tables hold information: the thicknesses and sun cosines of their grid. Every
 /// other coordinate is covered whole (d ∈ [0, t], μ_V ∈ [−1, 1] with the horizon, any ψ_V).
 /// Past the thickest slab the tables continue by diffusion theory ([`super::thick`]); below
@@ -405,15 +415,7 @@ impl<'a> TransportTables<'a> {
     /// T, c and σ of the groups `first .. first + count` at `at` into `out[..count]`.
     fn evaluate_run(&self, at: &SlabPoint<f32>, run: (usize, usize), out: &mut [Transport]) {
         if at.check().is_err() {
-            let nan = f32::NAN;
-            out.iter_mut().for_each(|v| {
-                *v = Transport {
-                    t: nan,
-                    c_x: nan,
-                    c_z: nan,
-                    sigma: nan,
-                }
-            });
+            out.fill(Transport::NAN);
             return;
         }
         let (at, sun) = self.lowest_sun(at);
