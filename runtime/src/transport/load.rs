@@ -5,7 +5,7 @@ use super::format::{
     collector_part, halo_part, increasing, names, need, parse_form, whole_numbers, Strides,
     MAX_GROUPS, MAX_NODES, U_STEPS,
 };
-use super::tables::{integrate_mean_cosine, TransportTables};
+use super::tables::{integrate_mean_cosine, Domain, TransportTables};
 use crate::container::{Container, FormatError};
 
 impl<'a> TransportTables<'a> {
@@ -14,6 +14,7 @@ impl<'a> TransportTables<'a> {
     pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
         let mut t = Self::parse(&Container::from_bytes(bytes)?)?;
         t.check()?;
+        t.domain = t.read_domain();
         t.mean_cosine = integrate_mean_cosine(&t);
         Ok(t)
     }
@@ -70,6 +71,10 @@ impl<'a> TransportTables<'a> {
             phase: need(c, names::PHASE, theta_len)?,
             halo: halo_part(c, g, n, l)?,
             mean_cosine: 0.0,
+            domain: Domain {
+                thickness: (0.0, 0.0),
+                mu_l: (0.0, 0.0),
+            },
         })
     }
 

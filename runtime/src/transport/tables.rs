@@ -244,6 +244,9 @@ pub struct TransportTables<'a> {
     /// g of the stored phase function ([`Self::mean_cosine`]), by which the tables continue
     /// past their thickest slab ([`super::thick`]).
     pub(super) mean_cosine: f32,
+    /// The grid's ends ([`Self::domain`]), read once at load: every evaluation asks for the
+    /// lowest sun.
+    pub(super) domain: Domain,
 }
 
 impl<'a> TransportTables<'a> {
@@ -539,6 +542,11 @@ impl<'a> TransportTables<'a> {
 
     /// The thicknesses and sun cosines the tables cover ([`Domain`]).
     pub fn domain(&self) -> Domain {
+        self.domain
+    }
+
+    /// The grid's ends, from the arrays.
+    pub(super) fn read_domain(&self) -> Domain {
         let ends = |a: &ArrayView| {
             (
                 a.get(0).unwrap_or(0.0),
