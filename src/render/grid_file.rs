@@ -18,6 +18,9 @@ pub struct Grid {
     pub data: Arc<Vec<f32>>,
     /// Voxels along x, y, z.
     pub n: [usize; 3],
+    /// [`column_sums`](Self::column_sums), taken once when the grid is made: the scene's
+    /// warnings ask for them at every render and every view.
+    pub thickest: [f64; 3],
 }
 
 /// Reads a rank-3 [nz, ny, nx] .npy of finite, non-negative densities, after checking that it
@@ -74,10 +77,7 @@ pub fn read_grid(path: &Path, available: Option<f64>) -> Result<Grid> {
         what()
     );
     let n = [shape[2] as usize, shape[1] as usize, shape[0] as usize];
-    Ok(Grid {
-        data: Arc::new(data),
-        n,
-    })
+    Ok(Grid::new(data, n))
 }
 
 impl std::fmt::Debug for Grid {
@@ -87,6 +87,17 @@ impl std::fmt::Debug for Grid {
 }
 
 impl Grid {
+    /// The grid of `data` ([nz, ny, nx], x fastest) with `n` voxels along x, y, z.
+    pub fn new(data: Vec<f32>, n: [usize; 3]) -> Self {
+        let mut grid = Self {
+            data: Arc::new(data),
+            n,
+            thickest: [0.0; 3],
+        };
+        grid.thickest = grid.column_sums();
+        grid
+    }
+
     /// The largest density summed along a line of voxels, for each axis x, y, z: multiplied by
     /// a voxel's length (m) and σ_t (1/m), the optical depth of the grid's thickest column.
     pub fn column_sums(&self) -> [f64; 3] {
@@ -117,7 +128,7 @@ impl Grid {
 /// order ([x, y, z] instead of [z, y, x]).
 pub fn grid_warnings(grid: &Grid, voxel_m: [f64; 3], sigma_t: f64, max_tau: f64) -> Vec<String> {
     let mut w = Vec::new();
-    let sums = grid.column_sums();
+    let sums = grid.thickest;
     let tau = (0..3)
         .map(|i| sums[i] * voxel_m[i] * sigma_t)
         .fold(0.0, f64::max);
@@ -161,11 +172,7 @@ mod tests {
         let data = (0..24)
             .map(|i| (100 * (i / 12) + 10 * (i / 4 % 3) + i % 4) as f32)
             .collect();
-        let s = Grid {
-            data: Arc::new(data),
-            n,
-        }
-        .column_sums();
+        let s = Grid::new(data, n).thickest;
         // Along x: the row z = 1, y = 2 is 4 × 120 + 0 + 1 + 2 + 3.
         assert_eq!(s[0], 486.0);
         // Along y: z = 1, x = 3 is 3 × 103 + 0 + 10 + 20.
@@ -212,10 +219,7 @@ mod tests {
 
     #[test]
     fn thick_columns_and_stretched_voxels_are_warned() {
-        let grid = Grid {
-            data: Arc::new(vec![1.0; 4 * 4 * 4]),
-            n: [4, 4, 4],
-        };
+        let grid = Grid::new(vec![1.0; 4 * 4 * 4], [4, 4, 4]);
         // 4 voxels of 10 m at σ_t 0.05 /m: 2 mfp; of 10 km: 2000.
         assert!(grid_warnings(&grid, [10.0; 3], 0.05, 2000.0).is_empty());
         let w = grid_warnings(&grid, [1e4, 10.0, 10.0], 0.05, 1999.0);

@@ -296,9 +296,9 @@ pub fn prepare<'a>(
     let t_start = Instant::now();
     let medium = scene.build_medium()?;
     let phases = Phase::build_channels(&scene.phase)?;
-    let mut warnings = Vec::new();
-    check_tables(scene, tables, &phases, opts, &mut warnings)?;
     let g = mean_cosine(&phases);
+    let mut warnings = Vec::new();
+    check_tables(scene, tables, (&phases, g), opts, &mut warnings)?;
     let setup = t_start.elapsed().as_secs_f64();
     let step = opts.step.unwrap_or(0.5 / scene.sigma_t);
     let threshold = opts.surface_density * scene.sigma_t;

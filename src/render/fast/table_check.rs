@@ -12,11 +12,12 @@ use nephele_runtime::transport::TransportTables;
 
 /// The tables are for one phase function and ϖ = 1: the scene's must match (p within
 /// [`PHASE_TOLERANCE`] at every degree, the forward peak included; ϖ = 1 but for the
-/// collector, which weighs in the absorption) unless the caller allows a mismatch.
+/// collector, which weighs in the absorption) unless the caller allows a mismatch. `phases`
+/// come with their mean cosine g.
 pub(super) fn check_tables(
     scene: &Scene,
     tables: &TransportTables,
-    phases: &[Phase],
+    (phases, g): (&[Phase], f64),
     opts: &FastOptions,
     warnings: &mut Vec<String>,
 ) -> Result<()> {
@@ -41,7 +42,7 @@ pub(super) fn check_tables(
             worst = (rel, deg as f64);
         }
     }
-    let scene_phase = describe_phase(&scene.phase, mean_cosine(phases));
+    let scene_phase = describe_phase(&scene.phase, g);
     let tables_phase = format!("g = {:.4}", tables.mean_cosine());
     if worst.0 > PHASE_TOLERANCE {
         let remedy = match &scene.phase {
