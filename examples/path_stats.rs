@@ -11,7 +11,7 @@ use nephele::phase::Phase;
 use nephele::render::geometry::normalize;
 use nephele::render::image::GROUP_FIRST;
 use nephele::render::path::integrator::{trace, Volume};
-use nephele::render::path::volume;
+use nephele::render::path::{volume, Settings};
 use nephele::render::scene::Scene;
 use rand::SeedableRng;
 
@@ -35,10 +35,14 @@ fn spread(values: &[f64], fractions: &[f64]) -> (f64, f64, Vec<f64>) {
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
     anyhow::ensure!(args.len() == 4, "usage: path_stats SCENE K PATHS");
-    let mut scene = Scene::load(std::path::Path::new(&args[1]))?;
-    scene.sun_lobe_steps = args[2].parse()?;
-    scene.validate()?;
-    let steps = scene.sun_lobe_steps;
+    let file = std::path::Path::new(&args[1]);
+    let scene = Scene::load(file)?;
+    let settings = Settings {
+        sun_lobe_steps: args[2].parse()?,
+        ..Settings::load(file)?
+    };
+    settings.validate()?;
+    let steps = settings.sun_lobe_steps;
     let n: usize = args[3].parse()?;
     let medium = scene.build_medium()?;
     let surfaces = nephele::render::surface::Surfaces::build(&scene.surfaces)?;
@@ -47,7 +51,7 @@ fn main() -> anyhow::Result<()> {
         // Sunlight only: the sky's share would blur where the variance comes from.
         let volume = Volume {
             sky: 0.0,
-            ..volume(&scene, medium.as_ref(), &surfaces, phases)
+            ..volume(&scene, &settings, medium.as_ref(), &surfaces, phases)
         };
         let cam = &scene.camera;
         let dir = normalize(std::array::from_fn(|k| cam.look_at[k] - cam.position[k]));

@@ -8,7 +8,7 @@ use nephele::render::compare::compare;
 use nephele::render::fast::{render_fast, FastOptions, Method, RayPattern};
 use nephele::render::image::{Rendered, GROUP_FIRST};
 use nephele::render::output::write_outputs;
-use nephele::render::path::render;
+use nephele::render::path::{render, Settings};
 use nephele::render::scene::Scene;
 use std::process::Command;
 
@@ -27,16 +27,24 @@ fn compression_error() -> Vec<f64> {
         .collect()
 }
 
-fn slab_scene(camera_y: f64, camera_z: f64, look_z: f64, spp: u32) -> Scene {
+fn slab_scene(camera_y: f64, camera_z: f64, look_z: f64) -> Scene {
     Scene::parse(&format!(
         r#"{{"medium": {{"kind": "slab", "thickness": 200}}, "sigma_t": 0.05,
             "phase": {{"kind": "mie", "diameter_um": 10}},
             "sun": {{"direction": [0, -0.7071, 0.7071], "irradiance": [1, 1, 1]}},
             "camera": {{"position": [0, {camera_y}, {camera_z}], "look_at": [0, 0, {look_z}],
-                        "fov_deg": 30, "width": 12, "height": 8}},
-            "spp": {spp}, "seed": 3}}"#
+                        "fov_deg": 30, "width": 12, "height": 8}}}}"#
     ))
     .unwrap()
+}
+
+/// The path tracer at `spp` samples per pixel, from `seed`.
+fn traced(spp: u32, seed: u64) -> Settings {
+    Settings {
+        spp,
+        seed,
+        ..Settings::default()
+    }
 }
 
 /// The image mean of group g (luminance-free: channel 0, the sun is white) and, from the
@@ -68,10 +76,10 @@ fn on_a_slab_the_collector_renderer_matches_the_path_tracer_per_group() {
     let tables = nephele_runtime::embedded::mie_10um();
     let errors = compression_error();
     for (what, scene) in [
-        ("above", slab_scene(-900.0, 700.0, 200.0, 384)),
-        ("below", slab_scene(900.0, -700.0, 0.0, 384)),
+        ("above", slab_scene(-900.0, 700.0, 200.0)),
+        ("below", slab_scene(900.0, -700.0, 0.0)),
     ] {
-        let pt = render(&scene, &|_| {}).unwrap();
+        let pt = render(&scene, &traced(384, 3), &|_| {}).unwrap();
         let fast = render_fast(&scene, &tables, &FastOptions::default(), &|_| {}).unwrap();
         let (mut sum_pt, mut sum_fast, mut var) = (0.0, 0.0, 0.0);
         let scattered: f64 = (1..GROUP_FIRST.len()).map(|g| group_mean(&pt, g).0).sum();
@@ -165,7 +173,7 @@ fn a_sun_below_the_tables_is_said_in_the_render_json() {
     let tables = nephele_runtime::embedded::mie_10um();
     let opts = FastOptions::default();
     let warnings = |elevation_deg: f64| -> Vec<String> {
-        let mut scene = slab_scene(-1500.0, 1500.0, 200.0, 1);
+        let mut scene = slab_scene(-1500.0, 1500.0, 200.0);
         let e = elevation_deg.to_radians();
         scene.sun.direction = [0.0, -e.cos(), e.sin()];
         let r = render_fast(&scene, &tables, &opts, &|_| {}).unwrap();
@@ -236,7 +244,7 @@ fn scenes_that_do_not_match_the_tables_are_refused() {
 #[test]
 fn compare_measures_the_references_noise() {
     let dir = tempfile::tempdir().unwrap();
-    let mut scene = slab_scene(-900.0, 700.0, 200.0, 64);
+    let mut scene = slab_scene(-900.0, 700.0, 200.0);
     scene.camera.width = 24;
     scene.camera.height = 16;
     let a = dir.path().join("a");
@@ -244,10 +252,10 @@ fn compare_measures_the_references_noise() {
     let names = ["orders >= 2", "order 1", "beauty"];
     let mut ratios = [0.0; 3];
     for pair in 1..=4u64 {
-        scene.seed = pair;
-        write_outputs(&a, &scene, &render(&scene, &|_| {}).unwrap()).unwrap();
-        scene.seed = 100 + pair;
-        write_outputs(&b, &scene, &render(&scene, &|_| {}).unwrap()).unwrap();
+        for (dir, seed) in [(&a, pair), (&b, 100 + pair)] {
+            let r = render(&scene, &traced(64, seed), &|_| {}).unwrap();
+            write_outputs(dir, &scene, &r).unwrap();
+        }
         let report = compare(&a, &[b.clone(), a.clone()], &dir.path().join("cmp")).unwrap();
         let q = |k: usize, name: &str| {
             report.candidates[k]

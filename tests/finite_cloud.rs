@@ -9,20 +9,25 @@
 
 use nephele::render::fast::{render_fast, FastOptions, Finite};
 use nephele::render::image::{Rendered, GROUP_FIRST};
-use nephele::render::path::render;
+use nephele::render::path::{render, Settings};
 use nephele::render::scene::Scene;
 
-fn scene(name: &str, width: u32, height: u32, spp: u32) -> Scene {
+/// A shipped scene at `width` × `height`, and its path tracer's settings at `spp`.
+fn scene(name: &str, width: u32, height: u32, spp: u32) -> (Scene, Settings) {
     let path = format!(
         "{}/fit-configs/scenes/{name}.json",
         env!("CARGO_MANIFEST_DIR")
     );
-    let mut s = Scene::load(std::path::Path::new(&path)).unwrap();
+    let path = std::path::Path::new(&path);
+    let mut s = Scene::load(path).unwrap();
     s.camera.width = width;
     s.camera.height = height;
-    s.spp = spp;
-    s.time_budget_s = None;
-    s
+    let settings = Settings {
+        spp,
+        time_budget_s: None,
+        ..Settings::load(path).unwrap()
+    };
+    (s, settings)
 }
 
 /// Σ over the pixels the reference sees as opaque (transmittance < 0.5) of orders ≥ 2 (channel
@@ -69,8 +74,8 @@ fn bias(reference: &Rendered, s: &Scene, finite: Finite) -> (f64, f64) {
 #[test]
 fn the_finite_cloud_correction_brings_orders_above_one_near_the_path_tracer() {
     for (name, published_at_least) in [("sphere40", 0.4), ("cloud_front", 0.5)] {
-        let s = scene(name, 40, 30, 96);
-        let reference = render(&s, &|_| {}).unwrap();
+        let (s, pt) = scene(name, 40, 30, 96);
+        let reference = render(&s, &pt, &|_| {}).unwrap();
         let (corrected, se) = bias(&reference, &s, Finite::default());
         let (published, _) = bias(&reference, &s, Finite::PUBLISHED);
         eprintln!(
@@ -91,9 +96,9 @@ fn the_finite_cloud_correction_brings_orders_above_one_near_the_path_tracer() {
 #[test]
 fn an_absorbing_slab_keeps_what_the_path_tracer_keeps() {
     for albedo in [0.9, 0.99] {
-        let mut s = scene("slab", 12, 8, 256);
+        let (mut s, pt) = scene("slab", 12, 8, 256);
         s.albedo = albedo;
-        let reference = render(&s, &|_| {}).unwrap();
+        let reference = render(&s, &pt, &|_| {}).unwrap();
         let (b, se) = bias(&reference, &s, Finite::default());
         eprintln!(
             "ϖ = {albedo}: orders ≥ 2 {:+.2} % ± {:.2} %",
@@ -113,7 +118,7 @@ fn an_absorbing_slab_keeps_what_the_path_tracer_keeps() {
 /// at 160 × 120. The sides' share moves light between orders only, so it cannot move this.
 #[test]
 fn under_a_uniform_sky_alone_the_cloud_glows_at_the_skys_radiance() {
-    let s = scene("cloud_sky", 40, 30, 1);
+    let (s, _) = scene("cloud_sky", 40, 30, 1);
     assert_eq!(s.sun.irradiance, [0.0; 3]);
     let opts = FastOptions {
         map_resolution: 128,
@@ -146,8 +151,8 @@ fn under_a_uniform_sky_alone_the_cloud_glows_at_the_skys_radiance() {
 /// of the reference (of the mean: the groups' errors combined).
 #[test]
 fn under_a_white_sky_the_orders_split_near_the_path_tracer() {
-    let s = scene("sphere40_sky", 40, 30, 128);
-    let reference = render(&s, &|_| {}).unwrap();
+    let (s, pt) = scene("sphere40_sky", 40, 30, 128);
+    let reference = render(&s, &pt, &|_| {}).unwrap();
     let opts = FastOptions {
         map_resolution: 128,
         ..FastOptions::default()

@@ -8,7 +8,7 @@ mod common;
 use common::cli::{files_in, nephele, refuses};
 use nephele::mie::{MieJob, SizeRule};
 use nephele::render::image::GROUP_FIRST;
-use nephele::render::path::{render_reporting, Progress};
+use nephele::render::path::{render_reporting, Progress, Settings};
 use nephele::render::scene::{Scene, SHIPPED_MAX_OPTICAL_SIZE};
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -218,12 +218,12 @@ fn a_time_budget_reports_passes_spp_and_the_noise_of_the_halves() {
         v["spp"] = 2.into();
         v["time_budget_s"] = 0.3.into();
     });
-    let scene = Scene::load(&file).unwrap();
+    let (scene, settings) = (Scene::load(&file).unwrap(), Settings::load(&file).unwrap());
     let seen: Mutex<Vec<Progress>> = Mutex::new(Vec::new());
-    let r = render_reporting(&scene, &|p| seen.lock().unwrap().push(*p)).unwrap();
+    let r = render_reporting(&scene, &settings, &|p| seen.lock().unwrap().push(*p)).unwrap();
     let last = *seen.lock().unwrap().last().unwrap();
     assert!(r.spp >= 4, "too few passes to test: {}", r.spp);
-    // Passes of 2 samples (the scene's spp): the one the budget cuts leaves rows 2 apart.
+    // Passes of 2 samples (the settings' spp): the one the budget cuts leaves rows 2 apart.
     let n = &r.details["samples_per_pixel"];
     let (lo, hi) = (n["min"].as_u64().unwrap(), n["max"].as_u64().unwrap());
     assert_eq!((lo, last.spp as u64), (r.spp as u64, lo));

@@ -8,7 +8,7 @@
 
 use nephele::render::fast::{render_fast, FastOptions};
 use nephele::render::image::{Rendered, GROUP_FIRST};
-use nephele::render::path::render;
+use nephele::render::path::{render, Settings};
 use nephele::render::scene::Scene;
 use nephele_runtime::embedded::{mie_10um, MIE_10UM};
 use nephele_runtime::transport::TransportTables;
@@ -23,8 +23,7 @@ fn scene() -> Scene {
             "phase": {{"kind": "mie", "diameter_um": 10}},
             "sun": {{"direction": [0, {}, {c}], "irradiance": [1, 1, 1]}},
             "camera": {{"position": [0, {}, -1500], "look_at": [0, 0, 0], "fov_deg": {FOV_DEG},
-                        "width": 36, "height": 36}},
-            "spp": 1024, "seed": 3}}"#,
+                        "width": 36, "height": 36}}}}"#,
         -s,
         1500.0 * s / c
     ))
@@ -62,7 +61,12 @@ fn near_beam(r: &Rendered) -> Vec<(f64, f64)> {
 #[test]
 fn near_the_beam_the_halo_brings_the_low_orders_to_the_path_tracer() {
     let s = scene();
-    let reference = near_beam(&render(&s, &|_| {}).unwrap());
+    let settings = Settings {
+        spp: 1024,
+        seed: 3,
+        ..Settings::default()
+    };
+    let reference = near_beam(&render(&s, &settings, &|_| {}).unwrap());
     let opts = FastOptions {
         map_resolution: 64,
         ..FastOptions::default()

@@ -265,7 +265,6 @@ fn small_cloud() -> nephele::render::scene::Scene {
     let mut scene = nephele::render::scene::Scene::parse(&text).unwrap();
     scene.camera.width = 24;
     scene.camera.height = 16;
-    scene.spp = 2;
     scene.phase = nephele::phase::PhaseSpec::Hg { g: 0.85 };
     scene
 }
@@ -274,14 +273,18 @@ fn small_cloud() -> nephele::render::scene::Scene {
 /// sky add up to the beauty image.
 #[test]
 fn renders_are_bit_identical_for_any_thread_count_and_aovs_add_up() {
-    use nephele::render::path::render;
+    use nephele::render::path::{render, Settings};
     let scene = small_cloud();
+    let two = Settings {
+        spp: 2,
+        ..Settings::default()
+    };
     let with = |threads: usize| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .unwrap()
-            .install(|| render(&scene, &|_| {}).unwrap())
+            .install(|| render(&scene, &two, &|_| {}).unwrap())
     };
     let (a, b) = (with(1), with(2));
     assert!(a.beauty == b.beauty && a.groups == b.groups && a.transmittance == b.transmittance);
@@ -524,11 +527,14 @@ fn per_channel_phase_functions_match_monochrome_renders() {
 /// it allowed, the image is the one a single render at the same total spp gives.
 #[test]
 fn a_time_budget_gives_the_image_of_its_total_spp() {
-    use nephele::render::path::render;
-    let mut scene = small_cloud();
-    scene.spp = 1;
-    scene.time_budget_s = Some(0.3);
-    let budgeted = render(&scene, &|_| {}).unwrap();
+    use nephele::render::path::{render, Settings};
+    let scene = small_cloud();
+    let budget = Settings {
+        spp: 1,
+        time_budget_s: Some(0.3),
+        ..Settings::default()
+    };
+    let budgeted = render(&scene, &budget, &|_| {}).unwrap();
     let n = &budgeted.details["samples_per_pixel"];
     let (lo, hi) = (
         n["min"].as_u64().unwrap() as u32,
@@ -537,11 +543,13 @@ fn a_time_budget_gives_the_image_of_its_total_spp() {
     assert!(lo >= 2, "{lo} passes in 0.3 s");
     assert!(hi <= lo + 1, "the cut pass leaves rows one pass apart: {n}");
     // Each row is the bits of one render at its own samples per pixel: the least or the most.
-    scene.time_budget_s = None;
     let at = |spp: u32| {
-        let mut s = scene.clone();
-        s.spp = spp;
-        render(&s, &|_| {}).unwrap()
+        let fixed = Settings {
+            spp,
+            time_budget_s: None,
+            ..budget
+        };
+        render(&scene, &fixed, &|_| {}).unwrap()
     };
     let (fewer, more) = (at(lo), at(hi));
     let row = 3 * budgeted.width;

@@ -13,7 +13,7 @@
 use nephele::render::image::Rendered;
 use nephele::render::medium::{Fog, Medium};
 use nephele::render::path::integrator::{collide, transmittance};
-use nephele::render::path::render;
+use nephele::render::path::{render, Settings};
 use nephele::render::scene::Scene;
 use rand::SeedableRng;
 use std::f64::consts::PI;
@@ -76,11 +76,20 @@ fn ground_scene(fog_sigma: f64, albedo: f64, extra: &str, look_at: [f64; 3]) -> 
         "sun": {{"direction": [0.6, 0, 0.8], "irradiance": [2, 1, 0.5]}},
         "surfaces": [{{"kind": "ground", "height": 0, "reflectance": [0.8, 0.5, 0.2]}}],
         "camera": {{"position": [-30, 20, 150], "look_at": {look_at:?}, "fov_deg": 0.01,
-                    "width": 4, "height": 4}},
-        "spp": 64, "seed": 3 {extra}
+                    "width": 4, "height": 4}} {extra}
     }}"#
     ))
     .expect("a valid scene")
+}
+
+/// The path tracer at `spp` samples per pixel from `seed`, with `sun_lobe_steps`.
+fn traced(spp: u32, seed: u64, sun_lobe_steps: usize) -> Settings {
+    Settings {
+        spp,
+        seed,
+        sun_lobe_steps,
+        ..Settings::default()
+    }
 }
 
 /// The image mean of group `g`, channel `c`, and its standard error from each pixel's two
@@ -113,9 +122,8 @@ fn assert_matches(what: &str, (got, se): (f64, f64), want: f64) {
 fn a_diffuse_ground_reflects_the_sun_through_absorbing_fog() {
     // Albedo 0: nothing scatters; the fog only absorbs, on the way down and on the way up.
     let sigma = 0.004;
-    let mut s = ground_scene(sigma, 0.0, "", [0.0, 0.0, 0.0]);
-    s.spp = 4096;
-    let r = render(&s, &|_| {}).expect("render");
+    let s = ground_scene(sigma, 0.0, "", [0.0, 0.0, 0.0]);
+    let r = render(&s, &traced(4096, 3, 16), &|_| {}).expect("render");
     let cam = [-30.0f64, 20.0, 150.0];
     let r_cam = (cam[0] * cam[0] + cam[1] * cam[1] + cam[2] * cam[2]).sqrt();
     let (mu_sun, depth) = (0.8, 100.0);
@@ -138,8 +146,7 @@ fn a_point_light_lights_the_ground_with_the_inverse_square_law() {
     let sigma = 0.004;
     let mut s = ground_scene(sigma, 0.0, &extra, [0.0, 0.0, 0.0]);
     s.sun.irradiance = [0.0; 3];
-    s.spp = 4096;
-    let r = render(&s, &|_| {}).expect("render");
+    let r = render(&s, &traced(4096, 3, 16), &|_| {}).expect("render");
     let cam = [-30.0f64, 20.0, 150.0];
     let r_cam = (cam[0] * cam[0] + cam[1] * cam[1] + cam[2] * cam[2]).sqrt();
     let d2 = light[0] * light[0] + light[1] * light[1] + light[2] * light[2];
@@ -152,7 +159,7 @@ fn a_point_light_lights_the_ground_with_the_inverse_square_law() {
 
 /// The ground under an area light, lit by it alone: the fog is far out of the way.
 fn lit_by(light: &str) -> Rendered {
-    let mut s = Scene::parse(&format!(
+    let s = Scene::parse(&format!(
         r#"{{
         "medium": {{"kind": "fog", "min": [1000, 1000, 0], "max": [1001, 1001, 1]}},
         "sigma_t": 0.1, "phase": {{"kind": "hg", "g": 0}},
@@ -160,13 +167,11 @@ fn lit_by(light: &str) -> Rendered {
         "lights": [{light}],
         "surfaces": [{{"kind": "ground", "height": 0, "reflectance": [0.8, 0.5, 0.2]}}],
         "camera": {{"position": [-30, 20, 150], "look_at": [0, 0, 0], "fov_deg": 0.01,
-                    "width": 4, "height": 4}},
-        "spp": 16384, "seed": 9
+                    "width": 4, "height": 4}}
     }}"#
     ))
     .expect("a valid scene");
-    s.sun_lobe_steps = 0;
-    render(&s, &|_| {}).expect("render")
+    render(&s, &traced(16384, 9, 0), &|_| {}).expect("render")
 }
 
 #[test]
@@ -211,13 +216,10 @@ fn the_sun_lobe_walks_stay_unbiased_over_a_ground() {
     // order group, within the combined standard errors of the two renders' pixel spreads.
     let render_with = |steps: usize| {
         let mut s = ground_scene(0.02, 0.9, "", [0.0, 0.0, 0.0]);
-        s.sun_lobe_steps = steps;
         s.camera.fov_deg = 30.0;
         s.camera.width = 16;
         s.camera.height = 16;
-        s.spp = 256;
-        s.seed = 5 + steps as u64;
-        render(&s, &|_| {}).expect("render")
+        render(&s, &traced(256, 5 + steps as u64, steps), &|_| {}).expect("render")
     };
     let (a, b) = (render_with(0), render_with(16));
     let mut tested = 0;
@@ -413,7 +415,7 @@ fn a_mesh_surface_is_lit_and_casts_its_shadow() {
     // ground just beyond it, away from the sun, lies in its shadow.
     let obj = boxes_obj("block", &[([-1.0, -1.0, 0.0], [1.0, 1.0, 2.0])]);
     let view = |look_at: [f64; 3]| {
-        let mut s = Scene::parse(&format!(
+        let s = Scene::parse(&format!(
             r#"{{
             "medium": {{"kind": "fog", "min": [1000, 1000, 0], "max": [1001, 1001, 1]}},
             "sigma_t": 0.1, "phase": {{"kind": "hg", "g": 0}},
@@ -422,14 +424,12 @@ fn a_mesh_surface_is_lit_and_casts_its_shadow() {
             "surfaces": [{{"kind": "ground", "height": 0, "reflectance": [0.5, 0.5, 0.5]}},
                          {{"kind": "mesh", "obj": {:?}, "reflectance": [0.9, 0.6, 0.3]}}],
             "camera": {{"position": [0, -0.5, 40], "look_at": {look_at:?}, "fov_deg": 0.01,
-                        "width": 2, "height": 2}},
-            "spp": 256, "seed": 2
+                        "width": 2, "height": 2}}
         }}"#,
             obj.display().to_string()
         ))
         .expect("a valid scene");
-        s.sun_lobe_steps = 0;
-        render(&s, &|_| {}).expect("render")
+        render(&s, &traced(256, 2, 0), &|_| {}).expect("render")
     };
     let top = view([0.2, 0.1, 2.0]);
     let want = 0.9 / PI * std::f64::consts::FRAC_1_SQRT_2;
@@ -457,7 +457,7 @@ fn a_ground_under_the_sky_hides_it_and_a_mirror_reflects_it() {
     // furnace), a mirror ρ L; the sky behind the ground is not seen (it once was, added to
     // the unscattered image).
     for material in ["diffuse", "mirror"] {
-        let mut s = Scene::parse(&format!(
+        let s = Scene::parse(&format!(
             r#"{{
             "medium": {{"kind": "fog", "min": [1000, 1000, 0], "max": [1001, 1001, 1]}},
             "sigma_t": 0.1, "phase": {{"kind": "hg", "g": 0}},
@@ -466,13 +466,11 @@ fn a_ground_under_the_sky_hides_it_and_a_mirror_reflects_it() {
             "surfaces": [{{"kind": "ground", "height": 0, "reflectance": [0.8, 0.5, 0.25],
                            "material": "{material}"}}],
             "camera": {{"position": [0, -30, 20], "look_at": [0, 0, 0], "fov_deg": 20,
-                        "width": 8, "height": 6}},
-            "spp": 4, "seed": 1
+                        "width": 8, "height": 6}}
         }}"#
         ))
         .expect("a valid scene");
-        s.sun_lobe_steps = 0;
-        let r = render(&s, &|_| {}).expect("render");
+        let r = render(&s, &traced(4, 1, 0), &|_| {}).expect("render");
         for (px, v) in r.beauty.chunks(3).enumerate() {
             for (c, want) in [0.8 * 0.2, 0.5 * 0.3, 0.25 * 0.5].into_iter().enumerate() {
                 let got = v[c] as f64;

@@ -6,7 +6,7 @@
 //!
 //! t along the camera ray w, ω the unit vector toward the light at distance r.
 
-use nephele::render::path::render;
+use nephele::render::path::{render, Settings};
 use nephele::render::scene::Scene;
 use nephele::stats::adaptive_simpson;
 use std::f64::consts::PI;
@@ -29,8 +29,7 @@ fn parse(lights: &str) -> anyhow::Result<Scene> {
         "sun": {{"direction": [0, 0, 1], "irradiance": [0, 0, 0]}},
         "lights": [{lights}],
         "camera": {{"position": {CAMERA:?}, "look_at": [0, 0, 0], "fov_deg": 0.01,
-                    "width": 8, "height": 8}},
-        "spp": 4000, "seed": 7, "sun_lobe_steps": 0
+                    "width": 8, "height": 8}}
     }}"#
     ))
 }
@@ -61,7 +60,13 @@ fn single_scattering(intensity: &dyn Fn([f64; 3]) -> f64) -> f64 {
 /// Order 1 (channel 0) over the 64 pixels, and its standard error from their spread (the
 /// pixels are independent estimates of one ray's light).
 fn rendered_order1(s: &Scene) -> (f64, f64) {
-    let r = render(s, &|_| {}).expect("render");
+    let settings = Settings {
+        spp: 4000,
+        seed: 7,
+        sun_lobe_steps: 0,
+        ..Settings::default()
+    };
+    let r = render(s, &settings, &|_| {}).expect("render");
     let n = 64;
     let v: Vec<f64> = (0..n).map(|px| r.groups[px * 3] as f64).collect();
     let mean = v.iter().sum::<f64>() / n as f64;

@@ -11,7 +11,7 @@ use nephele::compress::run::Options;
 use nephele::render::compare::compare;
 use nephele::render::fast::{render_fast, FastOptions};
 use nephele::render::output::write_outputs;
-use nephele::render::path::render;
+use nephele::render::path::{render, Settings};
 use nephele::render::scene::Scene;
 use std::path::Path;
 use std::time::Instant;
@@ -77,9 +77,12 @@ pub fn run(full: bool) -> Result<()> {
         "step 3: render of fit-configs/scenes/cloud.json → {}",
         render_out.display()
     );
-    let scene = Scene::parse(include_str!("../../fit-configs/scenes/cloud.json"))?;
+    let file = include_str!("../../fit-configs/scenes/cloud.json");
+    let (scene, settings) = (Scene::parse(file)?, Settings::parse(file)?);
     let bar = super::progress::work_bar("render", 1000);
-    let r = render(&scene, &|done| bar.set_position((done * 1000.0) as u64))?;
+    let r = render(&scene, &settings, &|done| {
+        bar.set_position((done * 1000.0) as u64)
+    })?;
     bar.finish_and_clear();
     write_outputs(render_out, &scene, &r)?;
     let headline = collector_beside(&scene, render_out)?;

@@ -8,7 +8,7 @@ use nephele::render::fast::{
 };
 use nephele::render::image::Rendered;
 use nephele::render::output::{exposure as output_exposure, write_outputs_with};
-use nephele::render::path::{render_until, Progress};
+use nephele::render::path::{render_until, Progress, Settings};
 use nephele::render::scene::Scene;
 use nephele_runtime::transport::SearchOptions;
 use std::path::{Path, PathBuf};
@@ -43,6 +43,9 @@ pub struct RenderArgs {
     /// 16): 0 is plain next-event estimation, up to 32.
     #[arg(long, value_name = "K", value_parser = clap::value_parser!(u64).range(0..=32))]
     pub sun_lobe_steps: Option<u64>,
+    /// Path tracer: seed of every random stream, overriding the scene file's (default 0).
+    #[arg(long, value_name = "N")]
+    pub seed: Option<u64>,
     /// Image width and height in pixels, overriding the scene's camera.
     #[arg(long, value_names = ["W", "H"], num_args = 2,
           value_parser = clap::value_parser!(u32).range(1..=16384))]
@@ -262,8 +265,13 @@ impl FastArgs {
     }
 }
 
-/// Renders `scene` with `method`, a progress bar on stderr.
-pub fn render_with(scene: &Scene, method: Method, fast: &FastArgs) -> Result<Rendered> {
+/// Renders `scene` with `method` (the path tracer with `settings`), a progress bar on stderr.
+pub fn render_with(
+    scene: &Scene,
+    settings: &Settings,
+    method: Method,
+    fast: &FastArgs,
+) -> Result<Rendered> {
     for w in scene.warnings() {
         eprintln!("warning: {w}");
     }
@@ -279,7 +287,7 @@ pub fn render_with(scene: &Scene, method: Method, fast: &FastArgs) -> Result<Ren
     };
     let r = if method == Method::PathTracer {
         // A time budget runs passes: show them, the spp and the noise reached so far.
-        let budget = scene.time_budget_s.is_some();
+        let budget = settings.time_budget_s.is_some();
         super::interrupt::catch();
         let report = |p: &Progress| {
             progress(p.fraction);
@@ -287,7 +295,7 @@ pub fn render_with(scene: &Scene, method: Method, fast: &FastArgs) -> Result<Ren
                 bar.set_message(p.summary());
             }
         };
-        render_until(scene, &report, &super::interrupt::STOP)?
+        render_until(scene, settings, &report, &super::interrupt::STOP)?
     } else {
         let opts = fast.options(method)?;
         nephele::io::tables::with_tables(fast.tables.as_deref(), |tables| {
@@ -299,7 +307,7 @@ pub fn render_with(scene: &Scene, method: Method, fast: &FastArgs) -> Result<Ren
 }
 
 /// The flags of one method only, by clap id.
-const PATH_TRACER_ONLY: [&str; 3] = ["spp", "time_budget", "sun_lobe_steps"];
+const PATH_TRACER_ONLY: [&str; 4] = ["spp", "time_budget", "sun_lobe_steps", "seed"];
 const FAST_ONLY: [&str; 9] = [
     "orbit",
     "tables",
@@ -427,21 +435,32 @@ impl From<RayPatternArg> for RayPattern {
     }
 }
 
+/// The path tracer's settings: the scene file's, overridden by the flags.
+fn path_settings(args: &RenderArgs) -> Result<Settings> {
+    let mut s = Settings::load(&args.scene)?;
+    if let Some(spp) = args.spp {
+        s.spp = spp;
+    }
+    if let Some(budget) = args.time_budget {
+        s.time_budget_s = Some(budget);
+    }
+    if let Some(k) = args.sun_lobe_steps {
+        s.sun_lobe_steps = k as usize;
+    }
+    if let Some(seed) = args.seed {
+        s.seed = seed;
+    }
+    s.validate()?;
+    Ok(s)
+}
+
 /// Runs `nephele render`; `m` tells which flags were given.
 pub fn run(args: RenderArgs, m: &ArgMatches) -> Result<()> {
     let method = Method::from(args.method);
     refuse_flags_of_other_methods(m, method, &args.fast)?;
     no_transparent_huge_pages();
     let mut scene = Scene::load(&args.scene)?;
-    if let Some(spp) = args.spp {
-        scene.spp = spp;
-    }
-    if let Some(budget) = args.time_budget {
-        scene.time_budget_s = Some(budget);
-    }
-    if let Some(k) = args.sun_lobe_steps {
-        scene.sun_lobe_steps = k as usize;
-    }
+    let settings = path_settings(&args)?;
     if let Some(s) = &args.size {
         scene.camera.width = s[0];
         scene.camera.height = s[1];
@@ -456,7 +475,7 @@ pub fn run(args: RenderArgs, m: &ArgMatches) -> Result<()> {
     if let Some(n) = args.orbit {
         return render_orbit(&scene, &args, n as usize, &out);
     }
-    let r = render_with(&scene, method, &args.fast)?;
+    let r = render_with(&scene, &settings, method, &args.fast)?;
     write_outputs_with(&out, &scene, &r, args.exposure)?;
     if method == Method::PathTracer {
         let n = &r.details["samples_per_pixel"];

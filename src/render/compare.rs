@@ -383,16 +383,6 @@ pub fn compare_with(
     Ok(report)
 }
 
-/// Keys of render.json's scene that say how it was rendered, not what: renders that differ
-/// only in these are of one scene.
-const RENDER_SETTINGS: [&str; 5] = [
-    "description",
-    "spp",
-    "time_budget_s",
-    "sun_lobe_steps",
-    "seed",
-];
-
 /// Refuses what cannot be compared: a reference without the path tracer's halves.npy (its
 /// noise estimate), and candidates of another scene, camera or image size than the
 /// reference's (from render.json, before any array is read).
@@ -439,9 +429,8 @@ fn scene_and_camera(meta: &Value, dir: &Path) -> Result<(Value, Value)> {
         );
     };
     let mut scene = scene.clone();
-    for key in RENDER_SETTINGS {
-        scene.remove(key);
-    }
+    // Free text: renders of one scene may describe it differently.
+    scene.remove("description");
     let mut camera = scene.remove("camera").unwrap_or_default();
     if let Some(c) = camera.as_object_mut() {
         c.remove("width");

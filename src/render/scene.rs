@@ -1,8 +1,8 @@
 //! Scenes of the path tracer (JSON; examples in fit-configs/scenes/): a medium (homogeneous slab,
 //! implicit cloud, voxel grid, or fog in a box or a closed mesh), its extinction scale, albedo
 //! and phase function, a directional sun, an optional constant sky, lights and surfaces (the
-//! path tracer only), a pinhole camera, samples per pixel and a seed. World units are metres,
-//! z is up.
+//! path tracer only) and a pinhole camera. World units are metres, z is up. The file may also
+//! carry its renderer's settings ([`RENDERER_KEYS`]), which the scene leaves unread.
 
 use super::geometry::{cross, dot, Affine, Vec3};
 use super::grid_file::{grid_warnings, read_grid, Grid};
@@ -24,6 +24,10 @@ pub const MAX_OPTICAL_SIZE: f64 = 2000.0;
 /// The largest optical size among fit-configs/scenes (strato.json: 0.05 /m × 4250 m; held to
 /// it by tests/first_hour_units.rs).
 pub const SHIPPED_MAX_OPTICAL_SIZE: f64 = 212.5;
+
+/// Top-level keys of a scene file that say how to render it, not what: the path tracer's
+/// settings (`render::path::Settings`), which a scene file may carry beside the scene.
+pub const RENDERER_KEYS: [&str; 4] = ["spp", "time_budget_s", "sun_lobe_steps", "seed"];
 
 /// A scene file.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -56,37 +60,23 @@ pub struct Scene {
     pub surfaces: Vec<Surface>,
     /// The camera.
     pub camera: Camera,
-    /// Samples (camera paths) per pixel (default 64); with a time budget, the most a pass
-    /// takes.
-    #[serde(default = "default_spp")]
-    pub spp: u32,
-    /// Wall-clock cap (s): a first pass of 2 samples per pixel, then passes of a tenth of the
-    /// budget (at most `spp`) until it is spent, the last one cut by rows (render.json gives
-    /// the samples per pixel reached).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub time_budget_s: Option<f64>,
-    /// Steps of the sun-lobe walk launched at every collision (docs/render.md): an unbiased
-    /// variance reduction for forward-peaked phase functions; 0 is plain next-event estimation.
-    #[serde(default = "default_sun_lobe_steps")]
-    pub sun_lobe_steps: usize,
-    /// Seed of every random stream.
-    #[serde(default)]
-    pub seed: u64,
+    /// The renderer's keys ([`RENDERER_KEYS`]): read by the path tracer's settings, left
+    /// here so that any other key is refused.
+    #[serde(default, rename = "spp", skip_serializing)]
+    _spp: Option<serde::de::IgnoredAny>,
+    #[serde(default, rename = "time_budget_s", skip_serializing)]
+    _time_budget_s: Option<serde::de::IgnoredAny>,
+    #[serde(default, rename = "sun_lobe_steps", skip_serializing)]
+    _sun_lobe_steps: Option<serde::de::IgnoredAny>,
+    #[serde(default, rename = "seed", skip_serializing)]
+    _seed: Option<serde::de::IgnoredAny>,
     /// A voxel grid's densities, read once (by the warnings or the first medium built).
     #[serde(skip)]
     grid: std::sync::OnceLock<Grid>,
 }
 
-fn default_spp() -> u32 {
-    64
-}
-
 fn one() -> f64 {
     1.0
-}
-
-fn default_sun_lobe_steps() -> usize {
-    16
 }
 
 /// The medium's shape.
@@ -296,13 +286,6 @@ impl Scene {
             (1..=16384).contains(&c.width) && (1..=16384).contains(&c.height),
             "camera.width and camera.height must be 1…16384 pixels"
         );
-        ensure!((1..=1 << 20).contains(&self.spp), "spp must be 1…1048576");
-        if let Some(b) = self.time_budget_s {
-            ensure!(
-                b > 0.0 && b.is_finite(),
-                "time_budget_s must be a positive number of seconds"
-            );
-        }
         self.phase.validate()?;
         match &self.medium {
             MediumSpec::Slab { thickness } => ensure!(

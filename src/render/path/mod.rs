@@ -1,11 +1,15 @@
 //! The ground-truth volumetric path tracer (docs/render.md): rows of pixels in parallel through
 //! the shared pinhole camera, each pixel's samples drawn from its own random stream
-//! (xoshiro256++ seeded by a hash of the scene's seed and the pixel), so the image is the same
-//! bits for any thread count; passes while a time budget lasts. The estimator is
-//! [`integrator`], its sun-lobe next-event estimation [`sun_lobe`].
+//! (xoshiro256++ seeded by a hash of the settings' seed and the pixel), so the image is the
+//! same bits for any thread count; passes while a time budget lasts. The estimator is
+//! [`integrator`], its sun-lobe next-event estimation [`sun_lobe`], its [`settings`] apart from
+//! the scene.
 
 pub mod integrator;
+pub mod settings;
 pub mod sun_lobe;
+
+pub use settings::Settings;
 
 use super::camera::Pinhole;
 use super::image::{Rendered, GROUP_FIRST};
@@ -49,7 +53,7 @@ fn light_of(part: &[f64], ng: usize, g: usize, c: usize, sun: &[f64; 3], sky: &[
 pub struct Progress {
     /// Fraction done: of the rows (a fixed spp) or of the time budget.
     pub fraction: f64,
-    /// Passes finished (with a time budget, passes of the scene's spp follow one another).
+    /// Passes finished (with a time budget, passes of the settings' spp follow one another).
     pub passes: u32,
     /// Samples per pixel finished.
     pub spp: u32,
@@ -70,22 +74,32 @@ impl Progress {
     }
 }
 
-/// Renders `scene`; `progress(fraction done)` as rows finish. See [`render_reporting`].
-pub fn render(scene: &Scene, progress: &(dyn Fn(f64) + Sync)) -> Result<Rendered> {
-    render_reporting(scene, &|p| progress(p.fraction))
+/// Renders `scene` with `settings`; `progress(fraction done)` as rows finish. See
+/// [`render_reporting`].
+pub fn render(
+    scene: &Scene,
+    settings: &Settings,
+    progress: &(dyn Fn(f64) + Sync),
+) -> Result<Rendered> {
+    render_reporting(scene, settings, &|p| progress(p.fraction))
 }
 
-/// Renders `scene`; `progress` as rows finish, with the passes, spp and noise so far. See
-/// [`render_until`].
-pub fn render_reporting(scene: &Scene, progress: &(dyn Fn(&Progress) + Sync)) -> Result<Rendered> {
-    render_until(scene, progress, &AtomicBool::new(false))
+/// Renders `scene` with `settings`; `progress` as rows finish, with the passes, spp and noise
+/// so far. See [`render_until`].
+pub fn render_reporting(
+    scene: &Scene,
+    settings: &Settings,
+    progress: &(dyn Fn(&Progress) + Sync),
+) -> Result<Rendered> {
+    render_until(scene, settings, progress, &AtomicBool::new(false))
 }
 
-/// Renders `scene` until it is done, its time budget is spent or `stop` is set (Ctrl-C).
+/// Renders `scene` until it is done, the settings' time budget is spent or `stop` is set
+/// (Ctrl-C).
 ///
-/// Without a budget: one pass of the scene's spp. With one, a first pass of 2 samples per pixel
-/// (every pixel gets light and a noise estimate), then passes of a tenth of the budget (at most
-/// the scene's spp) while it lasts; rows not started when it runs out are left out of the last
+/// Without a budget: one pass of the settings' spp. With one, a first pass of 2 samples per
+/// pixel (every pixel gets light and a noise estimate), then passes of a tenth of the budget (at
+/// most the settings' spp) while it lasts; rows not started when it runs out are left out of the last
 /// pass, so the budget caps the render to within one row's work. Each pixel's stream continues
 /// across passes and its even and odd samples are its halves, so a render's bits depend only
 /// on how many samples each row got: k whole passes give the bits of one render at k · spp.
@@ -93,16 +107,11 @@ pub fn render_reporting(scene: &Scene, progress: &(dyn Fn(&Progress) + Sync)) ->
 /// budget, before its one pass has finished, it is an error, as nothing could be written.
 pub fn render_until(
     scene: &Scene,
+    settings: &Settings,
     progress: &(dyn Fn(&Progress) + Sync),
     stop: &AtomicBool,
 ) -> Result<Rendered> {
-    // The path tracer's own limit: the scene knows no renderer.
-    ensure!(
-        scene.sun_lobe_steps <= sun_lobe::MAX_STEPS,
-        "sun_lobe_steps must be 0…{} (the scene has {})",
-        sun_lobe::MAX_STEPS,
-        scene.sun_lobe_steps
-    );
+    settings.validate()?;
     let medium = scene.build_medium()?;
     let surfaces = Surfaces::build(&scene.surfaces)?;
     let models = Phase::build_channels(&scene.phase)?;
@@ -111,14 +120,14 @@ pub fn render_until(
     let (ng, stride) = (GROUP_FIRST.len(), stride());
     let mut sums = vec![0.0f64; w * h * 2 * stride];
     let mut rngs: Vec<Xoshiro256PlusPlus> = (0..w * h)
-        .map(|px| Xoshiro256PlusPlus::seed_from_u64(pixel_seed(scene.seed, px as u64)))
+        .map(|px| Xoshiro256PlusPlus::seed_from_u64(pixel_seed(settings.seed, px as u64)))
         .collect();
     // Samples each row's pixels have.
     let mut row_spp = vec![0u32; h];
     let rows_done = AtomicUsize::new(0);
     let t0 = Instant::now();
     let over = || {
-        let spent = scene
+        let spent = settings
             .time_budget_s
             .is_some_and(|b| t0.elapsed().as_secs_f64() >= b);
         spent || stop.load(Ordering::Relaxed)
@@ -127,22 +136,22 @@ pub fn render_until(
     let report = || {
         let rows = rows_done.fetch_add(1, Ordering::Relaxed) + 1;
         let mut p = state.lock().unwrap_or_else(|e| e.into_inner());
-        p.fraction = match scene.time_budget_s {
+        p.fraction = match settings.time_budget_s {
             Some(budget) => (t0.elapsed().as_secs_f64() / budget).min(1.0),
             None => rows as f64 / h as f64,
         };
         progress(&p);
     };
     let mut passes = 0u32;
-    let mut spp = match scene.time_budget_s {
-        Some(_) => scene.spp.min(2),
-        None => scene.spp,
+    let mut spp = match settings.time_budget_s {
+        Some(_) => settings.spp.min(2),
+        None => settings.spp,
     };
     Phase::with_all(&models, |phases| {
-        let volume = volume(scene, medium.as_ref(), &surfaces, phases);
+        let volume = volume(scene, settings, medium.as_ref(), &surfaces, phases);
         loop {
             let first_pass = passes == 0;
-            let budgeted = scene.time_budget_s.is_some();
+            let budgeted = settings.time_budget_s.is_some();
             sums.par_chunks_mut(w * 2 * stride)
                 .zip(rngs.par_chunks_mut(w))
                 .zip(row_spp.par_iter_mut())
@@ -174,7 +183,7 @@ pub fn render_until(
                     report();
                 });
             passes += 1;
-            let Some(budget) = scene.time_budget_s else {
+            let Some(budget) = settings.time_budget_s else {
                 break;
             };
             // Cheap beside a pass (a few adds per pixel against spp paths): shown between passes.
@@ -193,7 +202,7 @@ pub fn render_until(
                 break;
             }
             if first_pass {
-                spp = budgeted_pass(scene.spp, budget, now / spp as f64);
+                spp = budgeted_pass(settings.spp, budget, now / spp as f64);
             }
         }
     });
@@ -207,6 +216,7 @@ pub fn render_until(
         "passes": passes,
         "samples_per_pixel": samples_summary(&row_spp),
         "interrupted": interrupted,
+        "settings": settings,
     });
     Ok(r)
 }
@@ -250,10 +260,12 @@ fn noise_so_far(scene: &Scene, sums: &[f64], row_spp: &[u32], w: usize) -> Optio
     (mean > 0.0).then(|| (var / n).sqrt() / (mean / n))
 }
 
-/// The estimator's view of `scene` (medium, surfaces and phase functions built): the sun's irradiance
-/// and the sky's radiance are 1 here and applied per channel when the images are gathered.
+/// The estimator's view of `scene` (medium, surfaces and phase functions built) under
+/// `settings`: the sun's irradiance and the sky's radiance are 1 here and applied per channel
+/// when the images are gathered.
 pub fn volume<'a>(
     scene: &'a Scene,
+    settings: &Settings,
     medium: &'a dyn Medium,
     surfaces: &'a Surfaces,
     phases: &'a [&'a (dyn PhaseFunction<f64> + Sync)],
@@ -268,7 +280,7 @@ pub fn volume<'a>(
         sun_irradiance: 1.0,
         sky: if has_sky { 1.0 } else { 0.0 },
         group_first: &GROUP_FIRST,
-        sun_lobe: SunLobe::new(scene.sun_lobe_steps, phases),
+        sun_lobe: SunLobe::new(settings.sun_lobe_steps, phases),
         lights: &scene.lights,
         surfaces,
     }
@@ -276,10 +288,10 @@ pub fn volume<'a>(
 
 /// The samples per pixel of a budgeted render's passes after the first: a tenth of the
 /// `budget` (s) at `per_sample` seconds a sample per pixel, so that the pass the budget cuts
-/// leaves rows at most a tenth of the budget's samples apart; between 2 and the scene's spp.
-fn budgeted_pass(scene_spp: u32, budget: f64, per_sample: f64) -> u32 {
+/// leaves rows at most a tenth of the budget's samples apart; between 2 and the settings' spp.
+fn budgeted_pass(spp: u32, budget: f64, per_sample: f64) -> u32 {
     let fit = (0.1 * budget / per_sample.max(1e-9)).floor();
-    (fit.min(scene_spp as f64) as u32).max(2.min(scene_spp))
+    (fit.min(spp as f64) as u32).max(2.min(spp))
 }
 
 /// Most passes of a time-budgeted render: 4096, and spp · passes below 2³².
