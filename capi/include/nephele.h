@@ -543,7 +543,7 @@ enum NepheleStatus nephele_view_weight(const struct NepheleSlabPoint *at, float 
 enum NepheleStatus nephele_phase_hg(float g, struct NephelePhase **out);
 
 /**
- * Draine, g ∈ (−1, 1), α ≥ 0.
+ * Draine, g ∈ (−1, 1), α ∈ [0, 10⁶].
  *
  * # Safety
  * `out` is valid for a write (or null).
@@ -596,7 +596,7 @@ enum NepheleStatus nephele_phase_rayleigh(struct NephelePhase **out);
 enum NepheleStatus nephele_phase_schlick(float k, struct NephelePhase **out);
 
 /**
- * von Mises–Fisher, κ ≥ 0.
+ * von Mises–Fisher, κ ∈ [0, 10⁷].
  *
  * # Safety
  * `out` is valid for a write (or null).

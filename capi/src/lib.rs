@@ -20,11 +20,8 @@
 //!   for bit.
 
 use nephele_runtime::embedded::MIE_10UM;
-use nephele_runtime::phase::{
-    Draine, HenyeyGreenstein, HgDraine, Rayleigh, Schlick, TabulatedTable, TwoTermHg,
-    VonMisesFisher,
-};
-use nephele_runtime::presets::FIT_MAX_DIAMETER_UM;
+use nephele_runtime::phase::named::{self, Model, Params};
+use nephele_runtime::phase::TabulatedTable;
 use nephele_runtime::transport::{
     Outside, OwnedTables, PointError, SlabPoint, Transport, TransportTables,
 };
@@ -840,27 +837,12 @@ unsafe fn new_phase(
     })
 }
 
-fn asymmetry(name: &str, g: f32) -> Result<f32, String> {
-    if g > -1.0 && g < 1.0 {
-        Ok(g)
-    } else {
-        Err(format!("{name} = {g} must be in (-1, 1)"))
-    }
-}
-
-fn weight(name: &str, w: f32) -> Result<f32, String> {
-    if (0.0..=1.0).contains(&w) {
-        Ok(w)
-    } else {
-        Err(format!("{name} = {w} must be in [0, 1]"))
-    }
-}
-
-fn non_negative(name: &str, a: f32) -> Result<f32, String> {
-    if a >= 0.0 && a.is_finite() {
-        Ok(a)
-    } else {
-        Err(format!("{name} = {a} must be finite and >= 0"))
+/// The runtime's model `m` with `p`, its parameters checked there (`phase::named`, the one
+/// table every interface reads), boxed for C.
+fn named(m: Model, p: Params) -> Result<Box<dyn PhaseFunction<f32> + Send + Sync>, String> {
+    match named::build::<f32>(m, &p) {
+        Ok((model, _)) => Ok(Box::new(model)),
+        Err(e) => Err(e.to_string()),
     }
 }
 
@@ -872,12 +854,19 @@ fn non_negative(name: &str, a: f32) -> Result<f32, String> {
 pub unsafe extern "C" fn nephele_phase_hg(g: f32, out: *mut *mut NephelePhase) -> NepheleStatus {
     unsafe {
         new_phase(out, || {
-            Ok(Box::new(HenyeyGreenstein::new(asymmetry("g", g)?)))
+            let g = Some(g.into());
+            named(
+                Model::Hg,
+                Params {
+                    g,
+                    ..Params::default()
+                },
+            )
         })
     }
 }
 
-/// Draine, g ∈ (−1, 1), α ≥ 0.
+/// Draine, g ∈ (−1, 1), α ∈ [0, 10⁶].
 ///
 /// # Safety
 /// `out` is valid for a write (or null).
@@ -889,10 +878,15 @@ pub unsafe extern "C" fn nephele_phase_draine(
 ) -> NepheleStatus {
     unsafe {
         new_phase(out, || {
-            Ok(Box::new(Draine::new(
-                asymmetry("g", g)?,
-                non_negative("alpha", alpha)?,
-            )))
+            let (g, alpha) = (Some(g.into()), Some(alpha.into()));
+            named(
+                Model::Draine,
+                Params {
+                    g,
+                    alpha,
+                    ..Params::default()
+                },
+            )
         })
     }
 }
@@ -911,12 +905,14 @@ pub unsafe extern "C" fn nephele_phase_hg_draine(
 ) -> NepheleStatus {
     unsafe {
         new_phase(out, || {
-            Ok(Box::new(HgDraine::hg_draine(
-                asymmetry("g_hg", g_hg)?,
-                asymmetry("g_d", g_d)?,
-                non_negative("alpha", alpha)?,
-                weight("w_d", w_d)?,
-            )))
+            let p = Params {
+                g_hg: Some(g_hg.into()),
+                g_d: Some(g_d.into()),
+                alpha: Some(alpha.into()),
+                w_d: Some(w_d.into()),
+                ..Params::default()
+            };
+            named(Model::HgDraine, p)
         })
     }
 }
@@ -933,13 +929,14 @@ pub unsafe extern "C" fn nephele_phase_hg_draine_diameter(
 ) -> NepheleStatus {
     unsafe {
         new_phase(out, || {
-            if d_um > 0.0 && d_um <= FIT_MAX_DIAMETER_UM {
-                Ok(Box::new(HgDraine::<f32>::from_diameter(d_um)))
-            } else {
-                Err(format!(
-                    "diameter = {d_um} um: the fits cover 0 < d <= {FIT_MAX_DIAMETER_UM} um"
-                ))
-            }
+            let diameter = Some(d_um);
+            named(
+                Model::HgDraine,
+                Params {
+                    diameter,
+                    ..Params::default()
+                },
+            )
         })
     }
 }
@@ -957,11 +954,16 @@ pub unsafe extern "C" fn nephele_phase_two_term_hg(
 ) -> NepheleStatus {
     unsafe {
         new_phase(out, || {
-            Ok(Box::new(TwoTermHg::two_term(
-                asymmetry("g", g)?,
-                asymmetry("g2", g2)?,
-                weight("w", w)?,
-            )))
+            let (g, g2, w) = (Some(g.into()), Some(g2.into()), Some(w.into()));
+            named(
+                Model::TwoTermHg,
+                Params {
+                    g,
+                    g2,
+                    w,
+                    ..Params::default()
+                },
+            )
         })
     }
 }
@@ -972,7 +974,7 @@ pub unsafe extern "C" fn nephele_phase_two_term_hg(
 /// `out` is valid for a write (or null).
 #[no_mangle]
 pub unsafe extern "C" fn nephele_phase_rayleigh(out: *mut *mut NephelePhase) -> NepheleStatus {
-    unsafe { new_phase(out, || Ok(Box::new(Rayleigh))) }
+    unsafe { new_phase(out, || named(Model::Rayleigh, Params::default())) }
 }
 
 /// Schlick, k ∈ (−1, 1).
@@ -984,10 +986,21 @@ pub unsafe extern "C" fn nephele_phase_schlick(
     k: f32,
     out: *mut *mut NephelePhase,
 ) -> NepheleStatus {
-    unsafe { new_phase(out, || Ok(Box::new(Schlick::new(asymmetry("k", k)?)))) }
+    unsafe {
+        new_phase(out, || {
+            let k = Some(k.into());
+            named(
+                Model::Schlick,
+                Params {
+                    k,
+                    ..Params::default()
+                },
+            )
+        })
+    }
 }
 
-/// von Mises–Fisher, κ ≥ 0.
+/// von Mises–Fisher, κ ∈ [0, 10⁷].
 ///
 /// # Safety
 /// `out` is valid for a write (or null).
@@ -998,7 +1011,14 @@ pub unsafe extern "C" fn nephele_phase_vmf(
 ) -> NepheleStatus {
     unsafe {
         new_phase(out, || {
-            Ok(Box::new(VonMisesFisher::new(non_negative("kappa", kappa)?)))
+            let kappa = Some(kappa.into());
+            named(
+                Model::Vmf,
+                Params {
+                    kappa,
+                    ..Params::default()
+                },
+            )
         })
     }
 }

@@ -9,11 +9,8 @@
 //! a message that names them.
 
 use nephele_runtime::embedded::MIE_10UM;
-use nephele_runtime::phase::{
-    Draine, HenyeyGreenstein, HgDraine, Rayleigh, Schlick, TabulatedTable, TwoTermHg,
-    VonMisesFisher,
-};
-use nephele_runtime::presets::FIT_MAX_DIAMETER_UM;
+use nephele_runtime::phase::named::{build, Model, Params, Preset};
+use nephele_runtime::phase::TabulatedTable;
 use nephele_runtime::transport::{
     column_names, evaluate_points, OwnedTables, Quantities, SlabPoint, TransportTables,
     POINT_COLUMNS,
@@ -272,144 +269,70 @@ impl Tables {
     }
 }
 
-/// A phase model from its name and keyword parameters.
+/// A phase model from its name and keyword parameters: the runtime's table of models
+/// (`phase::named`) with its checks, or a table p(θ) for `tabulated`.
 fn phase_model(
     model: &str,
     kw: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Box<dyn PhaseFunction<f64> + Send + Sync>> {
-    let get = |name: &str| -> PyResult<Option<f64>> {
-        if model == "tabulated" {
-            return Ok(None);
+    let m =
+        Model::from_name(model).map_err(|e| PyValueError::new_err(e.naming(model).to_string()))?;
+    if m == Model::Tabulated {
+        return tabulated(kw);
+    }
+    let mut p = Params::default();
+    for (k, v) in kw.map(|d| d.iter()).into_iter().flatten() {
+        let k: String = k.extract()?;
+        if k == "preset" {
+            let name: String = v.extract()?;
+            p.preset = Some(
+                Preset::from_name(&name)
+                    .map_err(|e| PyValueError::new_err(e.naming(&name).to_string()))?,
+            );
+            continue;
         }
-        match kw.map(|d| d.get_item(name)).transpose()?.flatten() {
-            Some(v) => Ok(Some(v.extract::<f64>().map_err(|_| {
-                PyTypeError::new_err(format!("{model}: {name} must be a number"))
-            })?)),
-            None => Ok(None),
-        }
-    };
-    let need = |name: &str| -> PyResult<f64> {
-        get(name)?.ok_or_else(|| PyValueError::new_err(format!("{model} needs {name}=")))
-    };
-    let g_of = |name: &str| -> PyResult<f64> {
-        let g = need(name)?;
-        if g > -1.0 && g < 1.0 {
-            Ok(g)
-        } else {
-            Err(PyValueError::new_err(format!(
-                "{model}: {name} = {g} must be in (-1, 1)"
-            )))
-        }
-    };
-    let unit = |name: &str| -> PyResult<f64> {
-        let w = need(name)?;
-        if (0.0..=1.0).contains(&w) {
-            Ok(w)
-        } else {
-            Err(PyValueError::new_err(format!(
-                "{model}: {name} = {w} must be in [0, 1]"
-            )))
-        }
-    };
-    let alpha = || -> PyResult<f64> {
-        let a = need("alpha")?;
-        if a >= 0.0 && a.is_finite() {
-            Ok(a)
-        } else {
-            Err(PyValueError::new_err(format!(
-                "{model}: alpha = {a} must be >= 0"
-            )))
-        }
-    };
-    let known = |names: &[&str]| -> PyResult<()> {
-        if let Some(d) = kw {
-            for k in d.keys() {
-                let k: String = k.extract()?;
-                if !names.contains(&k.as_str()) {
-                    return Err(PyValueError::new_err(format!(
-                        "{model} does not take {k} (it takes: {})",
-                        names.join(", ")
-                    )));
-                }
-            }
-        }
-        Ok(())
-    };
-    Ok(match model.replace('-', "_").as_str() {
-        "hg" => {
-            known(&["g"])?;
-            Box::new(HenyeyGreenstein::new(g_of("g")?))
-        }
-        "draine" => {
-            known(&["g", "alpha"])?;
-            Box::new(Draine::new(g_of("g")?, alpha()?))
-        }
-        "two_term_hg" => {
-            known(&["g", "g2", "w"])?;
-            Box::new(TwoTermHg::two_term(g_of("g")?, g_of("g2")?, unit("w")?))
-        }
-        "hg_draine" if get("diameter")?.is_some() => {
-            known(&["diameter"])?;
-            let d = need("diameter")?;
-            if !(d > 0.0 && d <= FIT_MAX_DIAMETER_UM) {
-                return Err(PyValueError::new_err(format!(
-                    "hg_draine: diameter = {d} um must be > 0 and at most \
-                     {FIT_MAX_DIAMETER_UM} um (the fits' range)"
-                )));
-            }
-            Box::new(HgDraine::from_diameter(d))
-        }
-        "hg_draine" => {
-            known(&["g_hg", "g_d", "alpha", "w_d"])?;
-            Box::new(HgDraine::hg_draine(
-                g_of("g_hg")?,
-                g_of("g_d")?,
-                alpha()?,
-                unit("w_d")?,
+        let v = v
+            .extract::<f64>()
+            .map_err(|_| PyTypeError::new_err(format!("{model}: {k} must be a number")))?;
+        p.set(m, &k, v).map_err(|_| {
+            PyValueError::new_err(format!(
+                "model {} does not take {k} (it takes: {})",
+                m.name(),
+                m.takes().join(", ")
             ))
-        }
-        "rayleigh" => {
-            known(&[])?;
-            Box::new(Rayleigh)
-        }
-        "schlick" => {
-            known(&["k"])?;
-            Box::new(Schlick::new(g_of("k")?))
-        }
-        "vmf" => {
-            known(&["kappa"])?;
-            let k = need("kappa")?;
-            if !(k >= 0.0 && k.is_finite()) {
-                return Err(PyValueError::new_err(format!(
-                    "vmf: kappa = {k} must be finite and >= 0"
-                )));
-            }
-            Box::new(VonMisesFisher::new(k))
-        }
-        "tabulated" => {
-            known(&["theta", "p"])?;
-            let array = |name: &str| -> PyResult<Vec<f64>> {
-                let item = kw
-                    .and_then(|d| d.get_item(name).ok().flatten())
-                    .ok_or_else(|| {
-                        PyValueError::new_err(format!(
-                            "tabulated needs {name}= (theta: angles in degrees from 0 to 180, \
-                         p: the phase function there, 1/sr, any normalisation)"
-                        ))
-                    })?;
-                values_1d(&format!("tabulated: {name}"), &item)
-            };
-            let table = TabulatedTable::<f64>::from_phase(&array("theta")?, &array("p")?)
-                .map_err(|e| PyValueError::new_err(e.to_string()))?;
-            Box::new(table)
-        }
-        other => {
-            return Err(PyValueError::new_err(format!(
-                "unknown phase model '{other}' (hg, draine, two_term_hg, hg_draine, rayleigh, \
-                 schlick, vmf, tabulated)"
-            )))
-        }
-    })
+        })?;
+    }
+    let (named, _) = build::<f64>(m, &p).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    Ok(Box::new(named))
+}
+
+/// `tabulated` from its keyword arrays theta (degrees, 0 to 180) and p (1/sr, any
+/// normalisation).
+fn tabulated(
+    kw: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Box<dyn PhaseFunction<f64> + Send + Sync>> {
+    if let Some(k) = kw.into_iter().flat_map(|d| d.keys()).find(|k| {
+        k.extract::<String>()
+            .is_ok_and(|k| k != "theta" && k != "p")
+    }) {
+        return Err(PyValueError::new_err(format!(
+            "model tabulated does not take {k} (it takes: theta, p)"
+        )));
+    }
+    let array = |name: &str| -> PyResult<Vec<f64>> {
+        let item = kw
+            .and_then(|d| d.get_item(name).ok().flatten())
+            .ok_or_else(|| {
+                PyValueError::new_err(format!(
+                "tabulated needs {name}= (theta: angles in degrees from 0 to 180, p: the phase \
+                 function there, 1/sr, any normalisation)"
+            ))
+            })?;
+        values_1d(&format!("tabulated: {name}"), &item)
+    };
+    let table = TabulatedTable::<f64>::from_phase(&array("theta")?, &array("p")?)
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    Ok(Box::new(table))
 }
 
 /// A 1-D float64 array's values, or an error naming `what`.
@@ -432,10 +355,12 @@ fn values_1d(what: &str, x: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
 }
 
 /// phase_eval(model, mu, **params) → p(mu) (1/sr), float64; mu = cos of the scattering angle
-/// (1 forward). Models and their parameters: hg (g), draine (g, alpha), two_term_hg (g, g2, w:
-/// w HG(g) + (1 - w) HG(g2)), hg_draine (diameter in um — Jendersie & d'Eon's curves — or g_hg,
-/// g_d, alpha, w_d), rayleigh, schlick (k), vmf (kappa), tabulated (theta: angles in degrees
-/// from 0 to 180, p: the phase function there, 1/sr, any normalisation; normalised here).
+/// (1 forward). Models (kebab- or snake_case) and their parameters: hg (g), two_term_hg (g, g2,
+/// w: w HG(g) + (1 - w) HG(g2)), cornette_shanks (g), draine (g, alpha), hg_draine (diameter in
+/// um, 0 < d <= 50, with preset = "jendersie_deon" or "nephele"; or g_hg, g_d, alpha, w_d),
+/// rayleigh, reynolds_mccormick (g, alpha), schlick (k), vmf (kappa), xlf (g), tabulated (theta:
+/// angles in degrees from 0 to 180, p: the phase function there, 1/sr, any normalisation;
+/// normalised here). The ranges are those of nephele's configs and of C.
 #[pyfunction]
 #[pyo3(signature = (model, mu, **params))]
 fn phase_eval<'py>(

@@ -70,13 +70,13 @@ def test_errors_are_exceptions_with_the_runtimes_message() -> None:
         (lambda: tab.evaluate([[1, 2, 3, 4, 5]]), TypeError, "got list"),
         (lambda: nephele.Tables("/nonexistent.ntt"), ValueError, "cannot read tables"),
         (lambda: nephele.Tables.from_bytes(b"NTT garbage"), ValueError, "transport tables (bytes)"),
-        (lambda: nephele.phase_eval("hg", np.zeros(3), g=1.5), ValueError, "must be in (-1, 1)"),
-        (lambda: nephele.phase_eval("hg", np.zeros(3)), ValueError, "hg needs g="),
+        (lambda: nephele.phase_eval("hg", np.zeros(3), g=1.5), ValueError, "g must lie in (-1, 1), got 1.5"),
+        (lambda: nephele.phase_eval("hg", np.zeros(3)), ValueError, "model hg needs g"),
         (lambda: nephele.phase_eval("hg", np.zeros(3), g=0.5, k=1), ValueError, "does not take k"),
-        (lambda: nephele.phase_eval("mie", np.zeros(3)), ValueError, "unknown phase model"),
+        (lambda: nephele.phase_eval("mie", np.zeros(3)), ValueError, "unknown model `mie` (valid: hg, two-term-hg"),
         (lambda: nephele.phase_eval("hg", np.array([2.0]), g=0.5), ValueError, "outside [-1, 1]"),
         (lambda: nephele.phase_sample("hg", np.zeros((2, 2)), g=0.5), TypeError, "1-D"),
-        (lambda: nephele.phase_eval("vmf", np.zeros(3), kappa=-1.0), ValueError, "kappa = -1"),
+        (lambda: nephele.phase_eval("vmf", np.zeros(3), kappa=-1.0), ValueError, "kappa must lie in [0, 10000000], got -1"),
         (lambda: nephele.phase_eval("tabulated", np.zeros(3), theta=np.array([0.0, 90.0]),
                                     p=np.ones(2)), ValueError, "not increasing from 0 to 180"),
         (lambda: nephele.phase_eval("tabulated", np.zeros(3)), ValueError, "tabulated needs theta="),
@@ -130,6 +130,9 @@ def test_phase_models_against_closed_forms_and_chi_square() -> None:
     k = 8.0
     vmf = k * np.exp(k * (mu - 1)) / (2 * np.pi * (1 - np.exp(-2 * k)))
     assert np.allclose(nephele.phase_eval("vmf", mu, kappa=k), vmf, rtol=1e-12, atol=0)
+    # Cornette-Shanks is Draine at alpha = 1, whichever spelling names it.
+    cs = nephele.phase_eval("cornette_shanks", mu, g=g)
+    assert np.array_equal(cs, nephele.phase_eval("draine", mu, g=g, alpha=1.0))
     # A tabulated HG (g = 0.7, every 0.25 degrees) is HG within its linear interpolation.
     theta_hg = np.linspace(0.0, 180.0, 721)
     p_hg = (1 - g * g) / (4 * np.pi * (1 + g * g - 2 * g * np.cos(np.radians(theta_hg))) ** 1.5)
@@ -139,7 +142,10 @@ def test_phase_models_against_closed_forms_and_chi_square() -> None:
     for model, params in [("hg", {"g": 0.7}), ("hg_draine", {"diameter": 10.0}),
                           ("two_term_hg", {"g": 0.9, "g2": -0.3, "w": 0.8}),
                           ("draine", {"g": 0.5, "alpha": 1.0}), ("rayleigh", {}), ("schlick", {"k": 0.6}),
-                          ("vmf", {"kappa": 8.0}), ("tabulated", {"theta": theta_hg, "p": p_hg})]:
+                          ("vmf", {"kappa": 8.0}), ("tabulated", {"theta": theta_hg, "p": p_hg}),
+                          ("cornette-shanks", {"g": 0.6}), ("reynolds_mccormick", {"g": 0.6, "alpha": 1.2}),
+                          ("xlf", {"g": 0.4}),
+                          ("hg_draine", {"diameter": 20.0, "preset": "nephele"})]:
         # Normalised over the sphere.
         x, w = np.polynomial.legendre.leggauss(400)
         cuts = [-1.0, 0.99, 0.9999, 1.0]  # finer toward the forward peak

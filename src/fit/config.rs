@@ -3,6 +3,7 @@
 
 use super::curves::Form;
 use super::loss::Loss;
+use super::model::Fitting;
 use super::model::{Model, FITTED};
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};

@@ -22,6 +22,7 @@
 //! is flat along some parameter combinations and steep along others).
 
 use super::loss::Target;
+use super::model::Fitting;
 use super::model::{Bound, Model};
 use super::optimize::{minimise, polish_iters, Objective, Optimum};
 use anyhow::{bail, Result};

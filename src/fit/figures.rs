@@ -1,6 +1,7 @@
 //! The figures of a fit run: Mie vs the fitted models (the paper's Figure 2), the loss against
 //! diameter (Figure 3), and each HG+Draine parameter against diameter with its curves.
 
+use super::model::Fitting;
 use super::model::{Model, FITTED};
 use super::run::{paper_theta, FitReport, HG_DRAINE_PARAMS};
 use crate::io::plot::{panels_plot, Panel, Series, Style};

@@ -10,6 +10,7 @@
 //!
 //! ∂E/∂θ_k = Σᵢ 2 Wᵢ rᵢ ∂ ln p(μᵢ)/∂θ_k, rᵢ = ln p(μᵢ) − ln p_Mie,ᵢ, from the model's gradient.
 
+use super::model::Fitting;
 use super::model::Model;
 use anyhow::{bail, Result};
 use serde::{Deserialize, Serialize};

@@ -89,10 +89,30 @@ impl Bound {
 
 /// What fitting needs of a model: θ's names and bounds, starts, ln p and its gradient. Only the
 /// [`FITTED`] models have them (configs refuse the others): another model has no parameters
-/// here, and ln p = NaN.
-impl Model {
+/// here, and ln p = NaN. Implemented for [`Model`].
+pub trait Fitting: Sized {
     /// Parses a config name (either spelling) of a fitted model; the error lists the valid ones.
-    pub fn fitted_from_name(name: &str) -> anyhow::Result<Model> {
+    fn fitted_from_name(name: &str) -> anyhow::Result<Model>;
+    /// The names of θ's components.
+    fn param_names(self) -> &'static [&'static str];
+    /// The bounds of θ; α ∈ (0, `alpha_max`).
+    fn bounds(self, alpha_max: f64) -> Vec<Bound>;
+    /// Starts for this model built from the optimum θ of a simpler model it contains (or
+    /// nearly contains): HG+Draine holds HG (w_D → 0), Draine (w_D → 1) and two-term HG
+    /// (α → 0); Draine holds Cornette–Shanks (α = 1) and HG (α → 0). A small second lobe is
+    /// added in a few directions, since that is where the extra freedom usually pays.
+    fn nested_starts(self, inner: Model, t: &[f64]) -> Vec<Vec<f64>>;
+    /// A coarse grid of θ covering droplet-like shapes, the global start of the fits.
+    fn coarse_grid(self, alpha_max: f64) -> Vec<Vec<f64>>;
+    /// ln p(μ; θ), writing ∂ ln p/∂θ into `grad` (θ.len() entries).
+    fn ln_phase_grad(self, theta: &[f64], mu: f64, grad: &mut [f64]) -> f64;
+    /// The runtime's evaluator for θ (for figures and the sampler), built by
+    /// [`crate::phase::build`].
+    fn phase(self, theta: &[f64]) -> anyhow::Result<Boxed>;
+}
+
+impl Fitting for Model {
+    fn fitted_from_name(name: &str) -> anyhow::Result<Model> {
         let valid = || FITTED.map(|m| m.json_name()).join(", ");
         let m: Model = name
             .parse()
@@ -105,8 +125,7 @@ impl Model {
         Ok(m)
     }
 
-    /// The names of θ's components.
-    pub fn param_names(self) -> &'static [&'static str] {
+    fn param_names(self) -> &'static [&'static str] {
         match self {
             Model::Hg | Model::CornetteShanks => &["g"],
             Model::TwoTermHg => &["g1", "g2", "w"],
@@ -116,8 +135,7 @@ impl Model {
         }
     }
 
-    /// The bounds of θ; α ∈ (0, `alpha_max`).
-    pub fn bounds(self, alpha_max: f64) -> Vec<Bound> {
+    fn bounds(self, alpha_max: f64) -> Vec<Bound> {
         let alpha = Bound::Interval(0.0, alpha_max);
         let w = Bound::Interval(0.0, 1.0);
         match self {
@@ -129,11 +147,7 @@ impl Model {
         }
     }
 
-    /// Starts for this model built from the optimum θ of a simpler model it contains (or
-    /// nearly contains): HG+Draine holds HG (w_D → 0), Draine (w_D → 1) and two-term HG
-    /// (α → 0); Draine holds Cornette–Shanks (α = 1) and HG (α → 0). A small second lobe is
-    /// added in a few directions, since that is where the extra freedom usually pays.
-    pub fn nested_starts(self, inner: Model, t: &[f64]) -> Vec<Vec<f64>> {
+    fn nested_starts(self, inner: Model, t: &[f64]) -> Vec<Vec<f64>> {
         let a0 = 1e-3; // α → 0: Draine → HG
         match (self, inner) {
             (Model::Draine, Model::Hg) => vec![vec![t[0], a0]],
@@ -154,8 +168,7 @@ impl Model {
         }
     }
 
-    /// A coarse grid of θ covering droplet-like shapes, the global start of the fits.
-    pub fn coarse_grid(self, alpha_max: f64) -> Vec<Vec<f64>> {
+    fn coarse_grid(self, alpha_max: f64) -> Vec<Vec<f64>> {
         let gs = |lo: f64, hi: f64, n: usize| -> Vec<f64> {
             (0..n)
                 .map(|i| lo + (hi - lo) * i as f64 / (n - 1) as f64)
@@ -208,9 +221,8 @@ impl Model {
         grid
     }
 
-    /// ln p(μ; θ), writing ∂ ln p/∂θ into `grad` (θ.len() entries).
     #[inline]
-    pub fn ln_phase_grad(self, theta: &[f64], mu: f64, grad: &mut [f64]) -> f64 {
+    fn ln_phase_grad(self, theta: &[f64], mu: f64, grad: &mut [f64]) -> f64 {
         match self {
             Model::Hg => {
                 let (p, dg) = hg_lobe(theta[0], mu);
@@ -254,9 +266,7 @@ impl Model {
         }
     }
 
-    /// The runtime's evaluator for θ (for figures and the sampler), built by
-    /// [`crate::phase::build`].
-    pub fn phase(self, theta: &[f64]) -> anyhow::Result<Boxed> {
+    fn phase(self, theta: &[f64]) -> anyhow::Result<Boxed> {
         let p = |i: usize| theta.get(i).copied();
         let params = match self {
             Model::Hg | Model::CornetteShanks => ModelParams {

@@ -4,6 +4,7 @@
 //! scripts/refit_preset.py read them.
 
 use super::figures;
+use super::model::Fitting;
 use super::model::FITTED;
 use super::run::FitReport;
 use super::{FitConfig, Loss};

@@ -5,6 +5,7 @@
 use super::config::FitConfig;
 use super::curves::{fit_points, polish_on_loss, Curve, CurveReport, Site};
 use super::loss::Target;
+use super::model::Fitting;
 use super::model::Model;
 use super::optimize::{minimise, Objective, Optimum};
 use crate::mie::PhaseTable;

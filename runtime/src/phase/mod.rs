@@ -47,6 +47,7 @@ macro_rules! sample_cosines_on_cpu {
 mod draine;
 mod hg;
 mod mixture;
+pub mod named;
 mod rayleigh;
 mod reynolds_mccormick;
 mod schlick;
