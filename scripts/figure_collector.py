@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """The README's headline picture from a `nephele compare` directory: the reference and its
 candidates side by side (tone-mapped with the reference's exposure), each titled with its
-method, seconds a frame, mean FLIP and the relative RMSE of the beauty image (corrected for
-the reference's noise).
+method as report.json names it (the collector's correction, the octaves' a, b, c), seconds a
+frame, mean FLIP and the relative RMSE of the beauty image (corrected for the reference's
+noise).
 
 Usage: scripts/figure_collector.py COMPARE_DIR OUT.png
 """
@@ -35,7 +36,7 @@ def main():
     for k, c in enumerate(rep["candidates"]):
         beauty = next(q for q in c["quantities"] if q["quantity"] == "beauty")["regions"]["opaque"]
         flip = c.get("flip_mean")
-        name = os.path.basename(os.path.normpath(c["dir"])).replace("_", " ")
+        name = c.get("method") or os.path.basename(os.path.normpath(c["dir"]))
         images.append((mpimg.imread(os.path.join(d, f"candidate{k}.png")),
                        f"{name}\n{seconds(c['seconds'])}, FLIP {flip:.3f}, "
                        f"RMSE {100 * beauty['rel_rmse_corrected']:.0f} %"))
