@@ -253,11 +253,38 @@ fn another_droplet_size_is_refused_naming_both_phase_functions_and_the_tolerance
         None,
     );
     assert!(err.contains("hg_draine, d = 30 µm"), "{err}");
+    assert!(err.contains("the tables' (mie, d = 10 µm"), "{err}");
+    assert!(!out.exists(), "a folder left by a refused render");
+}
+
+/// Mie droplets 30 µm across against the 10 µm tables: refused at once, naming both diameters,
+/// before the scene's own Mie table is computed (the Mie cache stays empty).
+#[test]
+fn mie_droplets_of_another_size_are_refused_before_mie_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("fit-configs/scenes/cloud.json");
+    let mut v: serde_json::Value = serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap();
+    v["phase"] = serde_json::json!({"kind": "mie", "diameter_um": 30});
+    let scene = dir.path().join("mie30.json");
+    std::fs::write(&scene, v.to_string()).unwrap();
+    let cache = dir.path().join("cache");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_nephele"))
+        .args(["render", "--method", "collector", "--scene"])
+        .arg(&scene)
+        .arg("--out")
+        .arg(dir.path().join("out"))
+        .env("NEPHELE_CACHE_DIR", &cache)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
     assert!(
-        err.contains("the shipped tables are for 10 µm droplets"),
+        err.contains("droplets are 30 µm across, the tables' 10 µm")
+            && err.contains("nephele tables --diameter 30"),
         "{err}"
     );
-    assert!(!out.exists(), "a folder left by a refused render");
+    let cached = std::fs::read_dir(&cache).map_or(0, |d| d.count());
+    assert_eq!(cached, 0, "Mie ran before the refusal");
 }
 
 #[test]

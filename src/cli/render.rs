@@ -246,6 +246,7 @@ impl FastArgs {
             },
             octaves,
             allow_mismatch: self.allow_table_mismatch,
+            tables_diameter_um: nephele::io::tables::mie_diameter(self.tables.as_deref()),
             finite: Finite {
                 leakage: matches!(self.correction, Correction::Leakage | Correction::Both),
                 coverage: matches!(self.correction, Correction::Coverage | Correction::Both),

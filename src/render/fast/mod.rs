@@ -63,7 +63,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 use sun_side::sun_side;
 pub use sun_side::SunSide;
-use table_check::{check_tables, mean_cosine};
+use table_check::{check_droplets, check_tables, mean_cosine};
 use view_ray::ViewRay;
 
 /// How a frame is rendered.
@@ -122,6 +122,10 @@ pub struct FastOptions {
     pub octaves: Octaves,
     /// Use the tables even where the scene's phase function or albedo differs (a warning).
     pub allow_mismatch: bool,
+    /// The Mie droplet diameter (µm) the tables were made for, when known
+    /// ([`crate::io::tables::mie_diameter`]): a scene of droplets more than 10 % apart is
+    /// refused before its own Mie table is computed.
+    pub tables_diameter_um: Option<f64>,
     /// An ablation: the local slabs' thickness times this factor (1: the method as is).
     pub thickness_scale: f64,
     /// The collector's finite-cloud correction.
@@ -146,6 +150,7 @@ impl Default for FastOptions {
             search: SearchOptions::default(),
             octaves: Octaves::default(),
             allow_mismatch: false,
+            tables_diameter_um: None,
             thickness_scale: 1.0,
             finite: Finite::default(),
         }
@@ -293,6 +298,7 @@ pub fn prepare<'a>(
          --method path-tracer)",
         scene.surfaces.len()
     );
+    check_droplets(scene, opts)?;
     let t_start = Instant::now();
     let medium = scene.build_medium()?;
     let phases = Phase::build_channels(&scene.phase)?;
