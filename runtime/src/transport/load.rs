@@ -1,11 +1,12 @@
 //! Loading a `.ntt`: its arrays found, shaped and checked ([`super::format`] has the names,
 //! shapes and limits), the tables built from them ([`super::tables`] evaluates them).
 
+use super::domain::Domain;
 use super::format::{
     collector_part, halo_part, increasing, names, need, parse_form, whole_numbers, Strides,
     MAX_GROUPS, MAX_NODES, U_STEPS,
 };
-use super::tables::{integrate_mean_cosine, Domain, TransportTables};
+use super::tables::{integrate_mean_cosine, TransportTables};
 use crate::container::{Container, FormatError};
 
 impl<'a> TransportTables<'a> {

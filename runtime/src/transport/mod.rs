@@ -21,9 +21,11 @@ macro_rules! form_module {
 
 form_module!(collector, format, log_additive, single, tables);
 pub mod batch;
+mod domain;
 mod finite;
 mod geometry;
 mod halo;
+mod lanes;
 pub mod leakage;
 mod load;
 #[cfg(feature = "std")]
@@ -36,6 +38,7 @@ mod thick;
 #[cfg(feature = "std")]
 pub use batch::column_names;
 pub use batch::{evaluate_points, BatchError, Quantities, POINT_COLUMNS};
+pub use domain::{Domain, Outside, OutsideTally, OutsideText};
 pub use finite::{absorbed, finite_cloud, section_radius, FiniteCloud, Kept};
 pub use format::MAX_GROUPS;
 pub use geometry::{PointError, SlabPoint, COSINE_SLACK};
@@ -47,4 +50,4 @@ pub use surface::{
     Clamps, Collector, FilteredSurface, Lateral, LitSurface, LocalSlab, SearchOptions, Unheld,
     Viewpoint,
 };
-pub use tables::{Domain, Outside, OutsideTally, OutsideText, Transport, TransportTables};
+pub use tables::{Transport, TransportTables};
