@@ -13,8 +13,8 @@
 //! in the view ray's chord, its orders moved by what the sides take from a walk from the eye
 //! (under a uniform sky the sides gain what they leak, so the sum stays), absorption after.
 
+use super::frame::{Frame, Pixel};
 use super::view_ray::ViewRay;
-use super::{Frame, Pixel};
 use crate::render::image::GROUP_FIRST;
 use nephele_runtime::transport::leakage::lateral_rate;
 use nephele_runtime::transport::{
