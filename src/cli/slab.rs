@@ -113,10 +113,12 @@ pub fn run_config(
         save_every_s: save_every,
     };
     let total = cfg.thicknesses.len() * cfg.mu_l.len();
-    let bar = super::progress::work_bar("slab", total as u64);
+    // Thousandths of a slice: the bar moves within a slice (by the stopping test's estimate).
+    let bar = super::progress::work_bar("slab", 1000 * total as u64);
     let t1 = Instant::now();
     let run = run_all(cfg, &phase, &control, &|slice, _, photons, worst| {
-        bar.set_position(slice as u64);
+        let within = cfg.stop.fraction_done(photons, worst);
+        bar.set_position(1000 * slice as u64 + (1000.0 * within) as u64);
         let rate = photons as f64 / t1.elapsed().as_secs_f64().max(1e-9);
         bar.set_message(format!(
             "slice {}/{total}: {photons} photons, worst rel. error {:.2} %, {:.2} M photons/s",

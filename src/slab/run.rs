@@ -30,6 +30,20 @@ pub struct StopRule {
 }
 
 impl StopRule {
+    /// An estimate of the share of a slice done after `photons` with the worst tested relative
+    /// error `worst`: the larger of the budget's share and (target/worst)², the share of the
+    /// photons the test needs as errors fall like 1/√N. Below 1 until the slice stops (for a
+    /// progress display).
+    pub fn fraction_done(&self, photons: u64, worst: f64) -> f64 {
+        let budget = photons as f64 / self.max_photons.max(1) as f64;
+        let by_error = if worst.is_finite() && worst > 0.0 {
+            (self.target_rel_se / worst).powi(2)
+        } else {
+            0.0
+        };
+        budget.max(by_error).clamp(0.0, 0.99)
+    }
+
     /// The tables of `acc`, the worst relative errors (tested cells, horizon cells when not
     /// tested) and whether the slice has converged.
     pub fn judge(
@@ -150,4 +164,24 @@ pub struct SliceReport {
     pub absorbed: f64,
     /// Wall-clock seconds.
     pub seconds: f64,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::StopRule;
+
+    /// A slice's progress: the budget's share or (target/worst)², whichever is further, never
+    /// 1 before the slice stops, 0 before any error is known.
+    #[test]
+    fn a_slice_progresses_by_its_budget_or_its_error() {
+        let stop = StopRule {
+            max_photons: 1_000_000,
+            target_rel_se: 0.01,
+            ..StopRule::default()
+        };
+        assert_eq!(stop.fraction_done(0, f64::INFINITY), 0.0);
+        assert!((stop.fraction_done(250_000, f64::NAN) - 0.25).abs() < 1e-12);
+        assert!((stop.fraction_done(10_000, 0.02) - 0.25).abs() < 1e-12);
+        assert_eq!(stop.fraction_done(10_000, 0.005), 0.99);
+    }
 }
