@@ -616,15 +616,13 @@ mod tests {
             };
             #[cfg(target_arch = "x86_64")]
             {
-                if std::arch::is_x86_feature_detected!("avx2") {
+                let simd = Simd::detected();
+                if simd.has_avx2() {
                     // SAFETY: the CPU has AVX2.
                     let t = unsafe { slice.run_batch_avx2(3000, &mut batch_rng(9, 1, 2)) };
                     assert!(same(&t), "AVX2 differs at mu_L = {mu_l}");
                 }
-                if std::arch::is_x86_feature_detected!("avx512f")
-                    && std::arch::is_x86_feature_detected!("avx512dq")
-                    && std::arch::is_x86_feature_detected!("avx512vl")
-                {
+                if simd == Simd::Avx512 {
                     // SAFETY: the CPU has AVX-512 F, DQ and VL.
                     let t = unsafe { slice.run_batch_avx512(3000, &mut batch_rng(9, 1, 2)) };
                     assert!(same(&t), "AVX-512 differs at mu_L = {mu_l}");

@@ -222,7 +222,7 @@ impl<const N: usize> Sums<N> {
         let lanes = (self.first + self.groups).saturating_sub(g0).min(L);
         let (base, q) = ((g0 - self.first) * self.q, self.q);
         #[cfg(all(feature = "std", target_arch = "x86_64"))]
-        let gather = L == 8 && std::is_x86_feature_detected!("avx2");
+        let gather = L == 8 && crate::simd::avx2();
         for (j, d) in d.iter_mut().enumerate().take(self.depth) {
             let at = j * width + base;
             match self.acc.get(at..at + L * q) {
