@@ -1,5 +1,6 @@
 //! `nephele compress`: fits the compressed form to a slab run's tables and reports its error.
 
+use super::progress::Show;
 use anyhow::Result;
 use clap::Args;
 use nephele::compress::near_beam::NearBeamCheck;
@@ -58,12 +59,23 @@ pub struct CompressArgs {
 
 /// Compresses with a spinner naming the stage (a minute and a half on the default tables).
 pub(super) fn compress_with_spinner(tables: &Path, out: &Path, opt: &Options) -> Result<Outcome> {
-    let bar = super::progress::spinner("compress", "");
-    let o = compress_reporting(tables, out, opt, &|stage| {
-        bar.set_message(stage.to_string())
-    });
-    bar.finish_and_clear();
-    o
+    compress_showing(tables, out, opt, &Show::Own("compress"))
+}
+
+/// [`compress_with_spinner`] with its stages shown by `show` (the stages are not timed, so a
+/// shared bar stays at the step's start).
+pub(super) fn compress_showing(
+    tables: &Path,
+    out: &Path,
+    opt: &Options,
+    show: &Show,
+) -> Result<Outcome> {
+    let shown = show.start();
+    let fraction = match show {
+        Show::Own(_) => None,
+        Show::Share { .. } => Some(0.0),
+    };
+    compress_reporting(tables, out, opt, &|stage| shown.set(fraction, stage))
 }
 
 /// Runs `nephele compress`; `m` tells which flags were given.

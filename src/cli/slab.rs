@@ -1,5 +1,6 @@
 //! `nephele slab`: the canonical transport tables of a slab config.
 
+use super::progress::Show;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use nephele::phase::Phase;
@@ -98,13 +99,24 @@ pub fn run_config(
     save_every: f64,
     plot: bool,
 ) -> Result<()> {
+    run_config_showing(cfg, out, (shard, save_every, plot), &Show::Own("slab"))
+}
+
+/// [`run_config`] with its progress shown by `show` (`nephele tables` shares one bar among its
+/// steps).
+pub(super) fn run_config_showing(
+    cfg: &SlabConfig,
+    out: &Path,
+    (shard, save_every, plot): (Option<(usize, usize)>, f64, bool),
+    show: &Show,
+) -> Result<()> {
     if let Some(bytes) = nephele::io::available_memory() {
         cfg.check_memory(bytes)?;
     }
     let t0 = Instant::now();
-    let spin = super::progress::spinner("slab", "the phase function");
+    let shown = show.start();
+    shown.set(None, "the phase function");
     let phase = Phase::build(&cfg.phase)?;
-    spin.finish_and_clear();
     let phase_s = t0.elapsed().as_secs_f64();
     let checkpoint = Checkpoint::open(&out.join("checkpoint"), cfg)?;
     let control = Control {
@@ -113,23 +125,23 @@ pub fn run_config(
         save_every_s: save_every,
     };
     let total = cfg.thicknesses.len() * cfg.mu_l.len();
-    // Thousandths of a slice: the bar moves within a slice (by the stopping test's estimate).
-    let bar = super::progress::work_bar("slab", 1000 * total as u64);
     let t1 = Instant::now();
+    shown.set(Some(0.0), "");
     let run = run_all(cfg, &phase, &control, &|slice, _, photons, worst| {
+        // The bar moves within a slice, by the stopping test's estimate.
         let within = cfg.stop.fraction_done(photons, worst);
-        bar.set_position(1000 * slice as u64 + (1000.0 * within) as u64);
         let rate = photons as f64 / t1.elapsed().as_secs_f64().max(1e-9);
-        bar.set_message(format!(
+        let msg = format!(
             "slice {}/{total}: {photons} photons, worst rel. error {:.2} %, {:.2} M photons/s",
             slice + 1,
             100.0 * worst,
             rate / 1e6
-        ));
+        );
+        shown.set(Some((slice as f64 + within) / total as f64), &msg);
     })?;
-    bar.finish_and_clear();
     let mc_s = t1.elapsed().as_secs_f64();
     if let Some((k, n)) = shard {
+        drop(shown);
         summary(&run, mc_s);
         outln!(
             "shard {}/{n}: sums in {}; merge all shards with `nephele merge --config … SHARD_DIR…`",
@@ -140,9 +152,9 @@ pub fn run_config(
     }
     let timings =
         json!({"phase_s": phase_s, "monte_carlo_s": mc_s, "threads": rayon::current_num_threads()});
-    let spin = super::progress::spinner("slab", "writing the tables");
+    shown.set(Some(1.0), "writing the tables");
     write_tables(cfg, &run, Some(&phase), out, plot, timings)?;
-    spin.finish_and_clear();
+    drop(shown);
     checkpoint.remove()?;
     summary(&run, mc_s);
     outln!("wrote {}/tables.npz, tables.json", out.display());
