@@ -15,8 +15,8 @@ use crate::phase::{build, Boxed, ModelParams};
 use nephele_runtime::phase::{phase_draine, HenyeyGreenstein};
 use nephele_runtime::PhaseFunction;
 
-/// The models `nephele fit` fits (those of [`crate::phase::Model`] that it has gradients for), in the
-/// order of reports.
+/// The models `nephele fit` fits (those of [`crate::phase::Model`] that it has gradients for),
+/// in the order of reports.
 pub const FITTED: [Model; 5] = [
     Model::Hg,
     Model::TwoTermHg,

@@ -4,9 +4,9 @@
 //!
 //! What a renderer uses: [`TransportTables`] (load a `.ntt`, evaluate T, c and σ per order
 //! group: [`Transport`]), order 1 in closed form ([`single_scattering`]) and the collector
-//! search on a cloud's lit surface ([`find_collector`], over the renderer's [`LitSurface`]). The forms' insides
-//! — features, parameter grids, packing — are for the toolchain that fits and writes the
-//! tables: the module `nephele_runtime::fitting`, behind the `fitting` feature.
+//! search on a cloud's lit surface ([`find_collector`], over the renderer's [`LitSurface`]).
+//! The forms' insides — features, parameter grids, packing — are for the toolchain that fits
+//! and writes the tables: the module `nephele_runtime::fitting`, behind the `fitting` feature.
 
 /// A form's module: public (through `nephele_runtime::fitting`) only for the toolchain.
 macro_rules! form_module {

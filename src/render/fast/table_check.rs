@@ -1,8 +1,8 @@
 //! The fast renderers' checks of the transport tables against the scene: the tables are for one
-//! phase function and ϖ = 1, so a scene with another phase function is refused (or rendered
-//! with a warning), and so is another albedo but for the collector, whose finite-cloud
-//! correction weighs each group by what absorption leaves (docs/collector.md); and the mean cosine g of the scene's phase function, which the
-//! octave baseline scales.
+//! phase function and ϖ = 1, so a scene with another phase function (or other droplets) is
+//! refused (or rendered with a warning), and so is another albedo but for the collector, whose
+//! finite-cloud correction weighs each group by what absorption leaves (docs/collector.md); and
+//! the mean cosine g of the scene's phase function, which the octave baseline scales.
 
 use super::{FastOptions, Method};
 use crate::phase::Phase;

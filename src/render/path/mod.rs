@@ -99,8 +99,8 @@ pub fn render_reporting(
 ///
 /// Without a budget: one pass of the settings' spp. With one, a first pass of 2 samples per
 /// pixel (every pixel gets light and a noise estimate), then passes of a tenth of the budget (at
-/// most the settings' spp) while it lasts; rows not started when it runs out are left out of the last
-/// pass, so the budget caps the render to within one row's work. Each pixel's stream continues
+/// most the settings' spp) while it lasts; rows not started when it runs out are left out of the
+/// last pass, so the budget caps the render to within one row's work. Each pixel's stream continues
 /// across passes and its even and odd samples are its halves, so a render's bits depend only
 /// on how many samples each row got: k whole passes give the bits of one render at k · spp.
 /// `stop` ends the render the same way, after a budgeted render's first pass; without a
