@@ -839,7 +839,7 @@ unsafe fn new_phase(
 
 /// The runtime's model `m` with `p`, its parameters checked there (`phase::named`, the one
 /// table every interface reads), boxed for C.
-fn named(m: Model, p: Params) -> Result<Box<dyn PhaseFunction<f32> + Send + Sync>, String> {
+fn boxed_model(m: Model, p: Params) -> Result<Box<dyn PhaseFunction<f32> + Send + Sync>, String> {
     match named::build::<f32>(m, &p) {
         Ok((model, _)) => Ok(Box::new(model)),
         Err(e) => Err(e.to_string()),
@@ -855,7 +855,7 @@ pub unsafe extern "C" fn nephele_phase_hg(g: f32, out: *mut *mut NephelePhase) -
     unsafe {
         new_phase(out, || {
             let g = Some(g.into());
-            named(
+            boxed_model(
                 Model::Hg,
                 Params {
                     g,
@@ -879,7 +879,7 @@ pub unsafe extern "C" fn nephele_phase_draine(
     unsafe {
         new_phase(out, || {
             let (g, alpha) = (Some(g.into()), Some(alpha.into()));
-            named(
+            boxed_model(
                 Model::Draine,
                 Params {
                     g,
@@ -912,7 +912,7 @@ pub unsafe extern "C" fn nephele_phase_hg_draine(
                 w_d: Some(w_d.into()),
                 ..Params::default()
             };
-            named(Model::HgDraine, p)
+            boxed_model(Model::HgDraine, p)
         })
     }
 }
@@ -930,7 +930,7 @@ pub unsafe extern "C" fn nephele_phase_hg_draine_diameter(
     unsafe {
         new_phase(out, || {
             let diameter = Some(d_um);
-            named(
+            boxed_model(
                 Model::HgDraine,
                 Params {
                     diameter,
@@ -955,7 +955,7 @@ pub unsafe extern "C" fn nephele_phase_two_term_hg(
     unsafe {
         new_phase(out, || {
             let (g, g2, w) = (Some(g.into()), Some(g2.into()), Some(w.into()));
-            named(
+            boxed_model(
                 Model::TwoTermHg,
                 Params {
                     g,
@@ -974,7 +974,7 @@ pub unsafe extern "C" fn nephele_phase_two_term_hg(
 /// `out` is valid for a write (or null).
 #[no_mangle]
 pub unsafe extern "C" fn nephele_phase_rayleigh(out: *mut *mut NephelePhase) -> NepheleStatus {
-    unsafe { new_phase(out, || named(Model::Rayleigh, Params::default())) }
+    unsafe { new_phase(out, || boxed_model(Model::Rayleigh, Params::default())) }
 }
 
 /// Schlick, k ∈ (−1, 1).
@@ -989,7 +989,7 @@ pub unsafe extern "C" fn nephele_phase_schlick(
     unsafe {
         new_phase(out, || {
             let k = Some(k.into());
-            named(
+            boxed_model(
                 Model::Schlick,
                 Params {
                     k,
@@ -1012,7 +1012,7 @@ pub unsafe extern "C" fn nephele_phase_vmf(
     unsafe {
         new_phase(out, || {
             let kappa = Some(kappa.into());
-            named(
+            boxed_model(
                 Model::Vmf,
                 Params {
                     kappa,
