@@ -305,3 +305,57 @@ fn tables_refuses_a_diameter_out_of_range_before_any_work() {
     assert!(err.contains("must be in (0, 10000]"), "{err}");
     assert!(!out.exists());
 }
+
+/// A folder the user may not write into is refused before any work, naming it and the fix, and
+/// nothing is left there. Root writes anywhere, so as root nephele runs as `nobody` (setpriv).
+#[test]
+fn a_read_only_output_folder_is_refused_before_any_work() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    let mode = |p: &Path, m| std::fs::set_permissions(p, std::fs::Permissions::from_mode(m));
+    mode(dir.path(), 0o755).unwrap();
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("fit-configs/scenes/cloud.json");
+    let mut v: serde_json::Value = serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap();
+    v["phase"] = serde_json::json!({"kind": "hg", "g": 0.85});
+    let scene = dir.path().join("hg.json");
+    std::fs::write(&scene, v.to_string()).unwrap();
+    mode(&scene, 0o644).unwrap();
+    let ro = dir.path().join("ro");
+    std::fs::create_dir(&ro).unwrap();
+    mode(&ro, 0o555).unwrap();
+    let root = Command::new("id").arg("-u").output().unwrap().stdout == b"0\n";
+    let nephele = || {
+        let mut c = Command::new(if root {
+            "setpriv"
+        } else {
+            env!("CARGO_BIN_EXE_nephele")
+        });
+        if root {
+            c.args(["--reuid=65534", "--regid=65534", "--clear-groups"]);
+            c.arg(env!("CARGO_BIN_EXE_nephele"));
+        }
+        c
+    };
+    for out in [ro.clone(), ro.join("out")] {
+        let o = nephele()
+            .args([
+                "render",
+                "--spp",
+                "1",
+                "--scene",
+                &s(&scene),
+                "--out",
+                &s(&out),
+            ])
+            .env("NEPHELE_CACHE_DIR", "off")
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{err}");
+        assert!(
+            err.contains(&format!("'{}'", out.display())) && err.contains("choose another --out"),
+            "{err}"
+        );
+    }
+    assert!(files_in(&ro).is_empty(), "{:?}", files_in(&ro));
+}
