@@ -587,13 +587,14 @@ pub fn build<F: Real>(model: Model, params: &Params) -> Result<(Named<F>, Params
     let of = F::of;
     let mut used = Params::default();
     let named = match m {
-        Model::Hg => {
-            used.g = Some(g()?);
-            Named::Hg(HenyeyGreenstein::new(of(g()?)))
-        }
-        Model::CornetteShanks => {
-            used.g = Some(g()?);
-            Named::Draine(Draine::cornette_shanks(of(g()?)))
+        Model::Hg | Model::CornetteShanks => {
+            let g = g()?;
+            used.g = Some(g);
+            if m == Model::Hg {
+                Named::Hg(HenyeyGreenstein::new(of(g)))
+            } else {
+                Named::Draine(Draine::cornette_shanks(of(g)))
+            }
         }
         Model::Draine | Model::ReynoldsMccormick => {
             let range = if m == Model::Draine {
@@ -601,12 +602,12 @@ pub fn build<F: Real>(model: Model, params: &Params) -> Result<(Named<F>, Params
             } else {
                 RMC_ALPHA
             };
-            let a = in_range(m, p.alpha, "alpha", range)?;
-            (used.g, used.alpha) = (Some(g()?), Some(a));
+            let (g, a) = (g()?, in_range(m, p.alpha, "alpha", range)?);
+            (used.g, used.alpha) = (Some(g), Some(a));
             if m == Model::Draine {
-                Named::Draine(Draine::new(of(g()?), of(a)))
+                Named::Draine(Draine::new(of(g), of(a)))
             } else {
-                Named::ReynoldsMccormick(ReynoldsMcCormick::new(of(g()?), of(a)))
+                Named::ReynoldsMccormick(ReynoldsMcCormick::new(of(g), of(a)))
             }
         }
         Model::Rayleigh => Named::Rayleigh(Rayleigh),
@@ -626,10 +627,11 @@ pub fn build<F: Real>(model: Model, params: &Params) -> Result<(Named<F>, Params
             Named::Xlf(Xlf::new(of(gv)).ok_or(ParamError::XlfG(gv))?)
         }
         Model::TwoTermHg => {
+            let g = g()?;
             let g2 = in_range(m, p.g2, "g2", ASYMMETRY)?;
             let w = in_range(m, p.w, "w", WEIGHT)?;
-            (used.g, used.g2, used.w) = (Some(g()?), Some(g2), Some(w));
-            Named::TwoTermHg(TwoTermHg::two_term(of(g()?), of(g2), of(w)))
+            (used.g, used.g2, used.w) = (Some(g), Some(g2), Some(w));
+            Named::TwoTermHg(TwoTermHg::two_term(of(g), of(g2), of(w)))
         }
         Model::HgDraine => {
             let hd = hg_draine(p)?;
