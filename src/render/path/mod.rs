@@ -152,6 +152,7 @@ pub fn render_until(
         loop {
             let first_pass = passes == 0;
             let budgeted = settings.time_budget_s.is_some();
+            let ran = AtomicBool::new(false);
             sums.par_chunks_mut(w * 2 * stride)
                 .zip(rngs.par_chunks_mut(w))
                 .zip(row_spp.par_iter_mut())
@@ -180,8 +181,13 @@ pub fn render_until(
                         }
                     }
                     *done += spp;
+                    ran.store(true, Ordering::Relaxed);
                     report();
                 });
+            // A pass the budget cut before any row started is no pass.
+            if !ran.into_inner() {
+                break;
+            }
             passes += 1;
             let Some(budget) = settings.time_budget_s else {
                 break;
