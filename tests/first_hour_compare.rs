@@ -152,6 +152,26 @@ fn compare_refuses_renders_of_different_scenes_and_cameras() {
         "{stdout}"
     );
     assert!(files_in(&out).contains(&"panel.png".to_string()));
+    // What the single-scattering render is worth: the path tracer's time to reach its beauty
+    // error, from the reference's noise and time, over its frame; printed per candidate.
+    let cand = &report["candidates"][1];
+    let beauty = cand["quantities"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|q| q["quantity"] == "beauty")
+        .unwrap();
+    let opaque = &beauty["regions"]["opaque"];
+    let f = |v: &serde_json::Value, k: &str| v[k].as_f64().unwrap();
+    let ratio = f(opaque, "reference_noise") / f(opaque, "rel_rmse_corrected");
+    let path = f(&report, "reference_seconds") * ratio * ratio;
+    let eq = &cand["equal_quality"];
+    assert!((f(eq, "path_seconds") / path - 1.0).abs() < 1e-9, "{eq}");
+    assert!((f(eq, "speedup") * f(cand, "seconds") / path - 1.0).abs() < 1e-9);
+    assert!(
+        stdout.contains("x its frame: the reference's method needs"),
+        "{stdout}"
+    );
 }
 
 #[test]

@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 use clap::Args;
-use nephele::render::compare::{compare_with, Report, Stats, LEGEND};
+use nephele::render::compare::{compare_with, EqualQuality, Report, Stats, LEGEND};
 use std::path::PathBuf;
 
 /// Options of `nephele compare`.
@@ -58,6 +58,7 @@ pub fn print_table(report: &Report) {
             super::seconds(c.seconds),
             c.psnr_db
         );
+        outln!("  {}", worth(c.equal_quality.as_ref()));
         outln!(
             "  {:<22} {:>8} {:>8} {:>9} {:>8} {:>15}",
             "opaque pixels",
@@ -91,5 +92,20 @@ pub fn print_table(report: &Report) {
                 }
             }
         }
+    }
+}
+
+/// The figure of merit in one line: the path tracer's time to match the beauty error, against
+/// the frame.
+pub fn worth(e: Option<&EqualQuality>) -> String {
+    match e {
+        Some(e) => format!(
+            "worth {:.0}x its frame: the reference's method needs {} to reach its beauty error",
+            e.speedup,
+            super::seconds(e.path_seconds)
+        ),
+        None => "worth: not measurable (no reference noise or time, or the beauty error is \
+            within the reference's noise)"
+            .into(),
     }
 }

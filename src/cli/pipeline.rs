@@ -148,7 +148,7 @@ fn collector_beside(scene: &Scene, reference: &Path) -> Result<String> {
     Ok(format!(
         "collector renderer: {:.2} s a frame vs the path tracer's {:.0} s; over opaque pixels, \
          orders ≥ 2 bias {:+.1} %, relative RMSE {:.1} % (the reference's own noise {:.1} %, \
-         corrected {:.1} %), order 1 bias {:+.1} %, beauty bias {:+.1} %, PSNR {:.1} dB → \
+         corrected {:.1} %), order 1 bias {:+.1} %, beauty bias {:+.1} %, PSNR {:.1} dB; {} → \
          {}/panel.png, report.json (docs/collector.md)",
         c.seconds,
         report.reference_seconds,
@@ -159,6 +159,7 @@ fn collector_beside(scene: &Scene, reference: &Path) -> Result<String> {
         100.0 * o1.bias,
         100.0 * b.bias,
         cand.psnr_db,
+        super::compare::worth(cand.equal_quality.as_ref()),
         cmp.display()
     ))
 }

@@ -59,6 +59,39 @@ pub struct CandidateReport {
     pub psnr_db: f64,
     /// Mean FLIP, filled in by scripts/compare_flip.py.
     pub flip_mean: Option<f64>,
+    /// What the candidate is worth against the reference's method, if measurable.
+    pub equal_quality: Option<EqualQuality>,
+}
+
+/// The figure of merit of a fast method: how long the reference's method (the path tracer)
+/// would need to reach the candidate's beauty error, against the candidate's frame.
+///
+/// The reference's noise N (relative, over the opaque pixels) falls as 1/√time, so it reaches
+/// the candidate's noise-corrected relative RMSE E after `path_seconds` = T_ref (N/E)², T_ref
+/// its own render time; `speedup` = that over the candidate's seconds a frame.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct EqualQuality {
+    /// s the reference's method needs to match the candidate's beauty error.
+    pub path_seconds: f64,
+    /// `path_seconds` over the candidate's seconds a frame.
+    pub speedup: f64,
+}
+
+impl EqualQuality {
+    /// From the beauty image's statistics over the opaque pixels, the reference's seconds and
+    /// the candidate's; None without a reference noise, a time, or an error above the noise.
+    pub fn new(beauty: &Stats, reference_seconds: f64, seconds: f64) -> Option<Self> {
+        let (noise, error) = (beauty.reference_noise, beauty.rel_rmse_corrected);
+        let usable = |x: f64| x.is_finite() && x > 0.0;
+        if !(usable(noise) && usable(error) && usable(reference_seconds) && usable(seconds)) {
+            return None;
+        }
+        let path_seconds = reference_seconds * (noise / error).powi(2);
+        Some(Self {
+            path_seconds,
+            speedup: path_seconds / seconds,
+        })
+    }
 }
 
 /// The whole comparison.
@@ -117,6 +150,14 @@ pub(super) fn units() -> std::collections::BTreeMap<&'static str, &'static str> 
         ("seconds", "s of wall-clock time a frame"),
         ("reference_seconds", "s of wall-clock time"),
         ("exposure", "1 / radiance: the tone curve is 1 - exp(-k x)"),
+        (
+            "path_seconds",
+            "s the reference's method needs to reach the candidate's beauty error",
+        ),
+        (
+            "speedup",
+            "path_seconds over the candidate's seconds a frame",
+        ),
     ]
     .into_iter()
     .collect()
@@ -131,7 +172,9 @@ pub(super) const DEFINITIONS: &str =
     for the beauty image that of the scattered light, the unscattered sky's own noise left out), \
     rel_rmse_corrected = sqrt(max(0, <(c - r)^2 - v>))/<r> and its standard error; psnr_db on the \
     beauty images tone-mapped with the reference's exposure (8-bit sRGB); flip_mean from \
-    scripts/compare_flip.py on the same images";
+    scripts/compare_flip.py on the same images; equal_quality: path_seconds = reference_seconds \
+    * (reference_noise / rel_rmse_corrected)^2 of the beauty image over the opaque pixels (the \
+    reference's noise falls as 1/sqrt(time)), speedup = path_seconds / seconds";
 
 /// Compares `candidates` with `reference`; writes report.json, the tone-mapped images and the
 /// figures into `out` (at the reference's exposure).
@@ -174,6 +217,13 @@ pub fn compare_with(
         let (quantities, errors) = judge(&r, c, &masks);
         error_rows.extend(errors.into_iter().map(|(q, img)| (ci, q, img)));
         let ldr = tone_map_with(&c.beauty, k);
+        let seconds = c.meta["seconds"].as_f64().unwrap_or(f64::NAN);
+        let beauty = quantities
+            .iter()
+            .find(|q| q.quantity == Quantity::Beauty.name())
+            .and_then(|q| q.regions.get("opaque"));
+        let reference_seconds = r.meta["seconds"].as_f64().unwrap_or(f64::NAN);
+        let equal_quality = beauty.and_then(|b| EqualQuality::new(b, reference_seconds, seconds));
         files.write_bytes(
             &out.join(format!("candidate{ci}.png")),
             &png_bytes(&ldr, r.size)?,
@@ -181,10 +231,11 @@ pub fn compare_with(
         reports.push(CandidateReport {
             dir: c.dir.display().to_string(),
             method: c.method.clone(),
-            seconds: c.meta["seconds"].as_f64().unwrap_or(f64::NAN),
+            seconds,
             quantities,
             psnr_db: psnr_db(&ldr, &ref_ldr),
             flip_mean: None,
+            equal_quality,
         });
     }
     let report = Report {
