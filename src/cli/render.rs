@@ -126,6 +126,11 @@ pub struct FastArgs {
     /// depth, spread across the light").
     #[arg(long)]
     pub no_sun_spread: bool,
+    /// Texels per side of the 16 maps toward the sky for the sky's order 1 (a power of two;
+    /// 0: order 1 from the view ray's face-on slab, an ablation; docs/collector.md, "Sky").
+    #[arg(long, value_name = "N",
+          default_value_t = nephele::render::fast::sky_order1::MAP_RESOLUTION)]
+    pub sky_map_resolution: usize,
     /// Collector search: most table reads per group.
     #[arg(long, default_value_t = 8, value_name = "N")]
     pub iterations: u32,
@@ -237,6 +242,7 @@ impl FastArgs {
             search_every_ray: self.search_every_ray,
             no_sun_depth: self.no_sun_depth,
             no_sun_spread: self.no_sun_spread,
+            sky_map_resolution: self.sky_map_resolution,
             search: SearchOptions {
                 max_reads: self.iterations,
                 tolerance: self.tolerance,
@@ -309,7 +315,7 @@ pub fn render_with(
 
 /// The flags of one method only, by clap id.
 const PATH_TRACER_ONLY: [&str; 4] = ["spp", "time_budget", "sun_lobe_steps", "seed"];
-const FAST_ONLY: [&str; 9] = [
+const FAST_ONLY: [&str; 10] = [
     "orbit",
     "tables",
     "allow_table_mismatch",
@@ -319,6 +325,7 @@ const FAST_ONLY: [&str; 9] = [
     "surface_density",
     "rays",
     "ray_pattern",
+    "sky_map_resolution",
 ];
 const COLLECTOR_ONLY: [&str; 16] = [
     "search_block",
@@ -518,7 +525,8 @@ pub fn run(args: RenderArgs, m: &ArgMatches) -> Result<()> {
             r.method,
             r.seconds,
             stages["light_maps"].as_f64().unwrap_or(0.0),
-            stages["sky_table"].as_f64().unwrap_or(0.0),
+            stages["sky_table"].as_f64().unwrap_or(0.0)
+                + stages["sky_maps"].as_f64().unwrap_or(0.0),
             stages["pixels"].as_f64().unwrap_or(0.0),
             out.display()
         );

@@ -140,8 +140,12 @@ pub(super) fn scene_and_camera(meta: &Value, dir: &Path) -> Result<(Value, Value
         );
     };
     let mut scene = scene.clone();
-    // Free text: renders of one scene may describe it differently.
+    // Free text: renders of one scene may describe it differently; and a render.json may keep
+    // the path tracer's settings in its scene (the scene file's keys beside the scene).
     scene.remove("description");
+    for key in crate::render::scene::RENDERER_KEYS {
+        scene.remove(key);
+    }
     let mut camera = scene.remove("camera").unwrap_or_default();
     if let Some(c) = camera.as_object_mut() {
         c.remove("width");

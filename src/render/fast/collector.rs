@@ -351,6 +351,7 @@ impl Frame<'_> {
         let at = sky.view_slab(v.chord);
         sky.view_radiances(v.chord, &at, &mut px.sky);
         px.sky[0] *= self.scene.albedo;
+        px.sky_order1 = self.scene.albedo * v.sky_order1;
         for g in 0..self.groups() {
             px.sky[g + 1] *= self.absorbed(g, &at);
         }
@@ -379,6 +380,27 @@ impl Frame<'_> {
         let radius = section_radius(l.edge_distance) * self.scene.sigma_t as f32;
         let kappa = f64::from(lateral_rate(radius, self.finite.mean_cosine));
         sky.sides_escape(&mut px.sky, kappa, f64::from(self.finite.mean_cosine));
+    }
+
+    /// The sky's order 1 marched ([`super::sky_order1`]) in place of the slab's, once per
+    /// pixel after the sides: the orders ≥ 2 keep their split and take what is left of the
+    /// scattered sky the slab gave (a conservative body under a uniform sky glows at its
+    /// radiance, whatever its orders). Nothing without the maps (a slab, or the ablation).
+    pub(super) fn sky_marched_order1(&self, px: &mut Pixel) {
+        if self.sky.is_none() || self.sky_order1.is_none() {
+            return;
+        }
+        let n = self.groups() + 1;
+        let total: f64 = px.sky[..n].iter().sum();
+        let rest = total - px.sky[0];
+        let order1 = px.sky_order1;
+        let scale = if rest > 0.0 {
+            (total - order1).max(0.0) / rest
+        } else {
+            0.0
+        };
+        px.sky[0] = order1;
+        px.sky[1..n].iter_mut().for_each(|s| *s *= scale);
     }
 
     /// Empty statistics, one entry per order group of the tables the image holds.

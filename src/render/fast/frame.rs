@@ -11,6 +11,7 @@ use super::super::scene::Scene;
 use super::collector::{GroupStats, Searched};
 use super::octaves::MAX_OCTAVES;
 use super::sky::SkyTable;
+use super::sky_order1::SkyOrder1;
 use super::sun_side::SunSide;
 use super::view_ray::ViewRay;
 use super::{FastOptions, Method};
@@ -30,6 +31,8 @@ pub(super) struct Frame<'a> {
     pub(super) side: SunSide,
     pub(super) tables: &'a TransportTables<'a>,
     pub(super) sky: Option<SkyTable>,
+    /// The sky's order 1 marched through maps toward the sky (none: from the sky table).
+    pub(super) sky_order1: Option<SkyOrder1>,
     pub(super) opts: FastOptions,
     pub(super) step: f64,
     pub(super) threshold: f64,
@@ -300,6 +303,7 @@ impl Frame<'_> {
         if let Some(d) = &densest {
             self.sky_sides(&mut px, d.viewpoint.position);
         }
+        self.sky_marched_order1(&mut px);
         (px, densest.filter(|_| once))
     }
 
@@ -396,6 +400,8 @@ pub(super) struct Pixel {
     pub(super) sun: [[f64; 3]; GROUP_FIRST.len()],
     /// Per group, per unit L_sky.
     pub(super) sky: [f64; GROUP_FIRST.len()],
+    /// The sky's order 1 marched (ϖ included), per unit L_sky.
+    pub(super) sky_order1: f64,
     /// τ_sun at the surface point.
     pub(super) sun_tau: f64,
     pub(super) region: u8,
@@ -411,6 +417,7 @@ impl Pixel {
             }
             self.sky[g] += w * o.sky[g];
         }
+        self.sky_order1 += w * o.sky_order1;
         self.sun_tau += w * o.sun_tau;
     }
 }

@@ -19,8 +19,8 @@
 //!   p), octaves i ≥ 1 use Henyey–Greenstein at cⁱ g, g the phase function's mean cosine; their
 //!   sum is written as the group of order 2 (the octaves do not split orders);
 //! - sky: the sky seen through 1 − α (`unscattered`), and the sky term of [`sky`] for
-//!   the scattered orders (α S_g L_sky per group; order 1 from the same table), reported apart
-//!   in render.json;
+//!   the scattered orders (α S_g L_sky per group), order 1 marched through maps toward the sky
+//!   ([`sky_order1`]; from the table for a slab), reported apart in render.json;
 //! - the march stops where T_v < 10⁻⁴ (what lies behind adds < 10⁻⁴ of the pixel).
 //!
 //! Files: this one holds the options and prepares a scene for any number of views; `frame.rs`
@@ -28,7 +28,7 @@
 //! ray, [`collector`] is the collector's branch with its search
 //! statistics, [`table_check`] checks the tables against the scene; the sun's side of the
 //! scene ([`sun_side`](mod@sun_side)) comes from light-space maps ([`light_map`]), the sky term
-//! from [`sky`], the octave baseline from [`octaves`]. The camera, the image and its regions
+//! from [`sky`] and [`sky_order1`], the octave baseline from [`octaves`]. The camera, the image and its regions
 //! are the floor's (`render::{camera, image, regions}`), shared with the path tracer.
 
 pub mod collector;
@@ -38,6 +38,7 @@ pub mod octaves;
 pub mod orbit;
 pub mod rays;
 pub mod sky;
+pub mod sky_order1;
 pub mod substeps;
 pub mod sun_side;
 pub mod table_check;
@@ -45,6 +46,7 @@ pub mod view_ray;
 
 use super::camera::Pinhole;
 use super::image::Rendered;
+use super::medium::Medium;
 use super::scene::{Camera, Scene};
 use crate::phase::Phase;
 use anyhow::{ensure, Result};
@@ -56,6 +58,7 @@ pub use octaves::{Octaves, MAX_OCTAVES};
 pub use rays::RayPattern;
 use serde::Serialize;
 use sky::SkyTable;
+use sky_order1::SkyOrder1;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 use sun_side::sun_side;
@@ -126,6 +129,10 @@ pub struct FastOptions {
     pub thickness_scale: f64,
     /// The collector's finite-cloud correction.
     pub finite: Finite,
+    /// Texels per side (and depth planes) of each map toward the sky, for the sky's order 1
+    /// marched (a power of two, 16…1024); 0: order 1 from the view ray's face-on slab (an
+    /// ablation; docs/collector.md, "Sky").
+    pub sky_map_resolution: usize,
 }
 
 impl Default for FastOptions {
@@ -149,6 +156,7 @@ impl Default for FastOptions {
             tables_diameter_um: None,
             thickness_scale: 1.0,
             finite: Finite::default(),
+            sky_map_resolution: sky_order1::MAP_RESOLUTION,
         }
     }
 }
@@ -181,6 +189,12 @@ impl FastOptions {
         ensure!(
             self.map_resolution.is_power_of_two() && (16..=4096).contains(&self.map_resolution),
             "map resolution must be a power of two, 16…4096"
+        );
+        let sky = self.sky_map_resolution;
+        ensure!(
+            sky == 0 || (sky.is_power_of_two() && (16..=1024).contains(&sky)),
+            "sky map resolution {sky}: it must be 0 (order 1 from the slab) or a power of two, \
+             16…1024"
         );
         ensure!(
             (8..=4096).contains(&self.planes),
@@ -247,10 +261,12 @@ impl FastOptions {
 pub struct Prepared<'a> {
     frame: Frame<'a>,
     warnings: Vec<String>,
-    /// Seconds: the medium, the phase functions and the table check; the maps; the sky table.
+    /// Seconds: the medium, the phase functions and the table check; the maps; the sky table;
+    /// the maps toward the sky.
     setup: f64,
     maps: f64,
     sky: f64,
+    sky_maps: f64,
     /// Views rendered so far (the first one is charged the maps and the sky table).
     views: AtomicUsize,
 }
@@ -296,6 +312,11 @@ pub fn prepare<'a>(
     let has_sky = scene.sky.iter().any(|&s| s > 0.0);
     let sky = has_sky.then(|| SkyTable::build(tables));
     let sky_seconds = t0.elapsed().as_secs_f64();
+    let t0 = Instant::now();
+    let sky_order1 = (has_sky && opts.sky_map_resolution > 0)
+        .then(|| sky_order1(medium.as_ref(), &phases, opts, step, threshold))
+        .flatten();
+    let sky_maps = t0.elapsed().as_secs_f64();
     let finite = opts.finite.runtime(tables, scene.albedo);
     let mut opts = *opts;
     opts.search.sun_spread =
@@ -306,6 +327,7 @@ pub fn prepare<'a>(
         side,
         tables,
         sky,
+        sky_order1,
         opts,
         step,
         threshold,
@@ -320,15 +342,16 @@ pub fn prepare<'a>(
         setup,
         maps,
         sky: sky_seconds,
+        sky_maps,
         views: AtomicUsize::new(0),
     })
 }
 
 impl Prepared<'_> {
     /// Seconds it took: the medium (its majorant grid), the phase functions and the table
-    /// check; the light maps; the sky table.
+    /// check; the light maps; the sky table and the maps toward the sky.
     pub fn seconds(&self) -> (f64, f64, f64) {
-        (self.setup, self.maps, self.sky)
+        (self.setup, self.maps, self.sky + self.sky_maps)
     }
 
     /// Renders the view of `camera`; `progress(fraction)` as rows finish. The first view's
@@ -345,7 +368,11 @@ impl Prepared<'_> {
             &self.frame.tables.domain(),
         ));
         let t_pixels = t0.elapsed().as_secs_f64();
-        let shared = if first { self.maps + self.sky } else { 0.0 };
+        let shared = if first {
+            self.maps + self.sky + self.sky_maps
+        } else {
+            0.0
+        };
         let seconds = shared + t_pixels;
         let mut r = image;
         r.seconds = seconds;
@@ -374,6 +401,7 @@ impl Prepared<'_> {
                 "setup_medium_phase_tables": self.setup,
                 "light_maps": self.maps,
                 "sky_table": self.sky,
+                "sky_maps": self.sky_maps,
                 "pixels": t_pixels,
                 "frame": seconds,
             },
@@ -394,6 +422,22 @@ pub fn render_fast(
     progress: &(dyn Fn(f64) + Sync),
 ) -> Result<Rendered> {
     Ok(prepare(scene, tables, opts)?.render(&scene.camera, progress))
+}
+
+/// The maps toward the sky for its marched order 1, with the phase function of the middle
+/// channel; none for a slab.
+fn sky_order1(
+    medium: &dyn Medium,
+    phases: &[Phase],
+    opts: &FastOptions,
+    step: f64,
+    threshold: f64,
+) -> Option<SkyOrder1> {
+    let bounds = medium.bounds()?;
+    let mut maps = opts.maps(step, threshold, 1.0);
+    maps.resolution = opts.sky_map_resolution;
+    let phase = &phases[1.min(phases.len() - 1)];
+    Some(phase.with(|p| SkyOrder1::build(medium, bounds, &maps, p)))
 }
 
 /// ℓ* = 1/((1 − g) σ_t) (m): the transport mean free path of `scene` for mean cosine `g`.
@@ -424,6 +468,7 @@ pub fn surface_points(scene: &Scene, stride: usize) -> Result<(SunSide, Vec<View
         side,
         tables: &tables,
         sky: None,
+        sky_order1: None,
         opts,
         step,
         threshold,

@@ -26,7 +26,7 @@ use rayon::prelude::*;
 /// against 16.8 %): the face-on slab's own error dominates, so the table stays as it was.
 const N_T: usize = 8;
 /// Gauss–Legendre nodes and weights on [−1, 1], 6 points.
-const GAUSS6: [(f64, f64); 6] = [
+pub(super) const GAUSS6: [(f64, f64); 6] = [
     (-0.932_469_514_203_152, 0.171_324_492_379_170),
     (-0.661_209_386_466_265, 0.360_761_573_048_139),
     (-0.238_619_186_083_197, 0.467_913_934_572_691),
