@@ -25,11 +25,12 @@
 //!
 //! Files: this one holds the options and prepares a scene for any number of views; `frame.rs`
 //! renders a view's pixels (one ray's order 1 and the baselines); [`view_ray`] marches a view
-//! ray, [`collector`] is the collector's branch with its search
-//! statistics, [`table_check`] checks the tables against the scene; the sun's side of the
-//! scene ([`sun_side`](mod@sun_side)) comes from light-space maps ([`light_map`]), the sky term
-//! from [`sky`] and [`sky_order1`], the octave baseline from [`octaves`]. The camera, the image and its regions
-//! are the floor's (`render::{camera, image, regions}`), shared with the path tracer.
+//! ray, [`collector`] is the collector's branch with its search statistics, [`table_check`]
+//! checks the tables against the scene; the sun's side of the scene
+//! ([`sun_side`](mod@sun_side)) comes from light-space maps ([`light_map`]), the sky term from
+//! [`sky`] and [`sky_order1`], the octave baseline from [`octaves`]. The camera, the image and
+//! its regions are the floor's (`render::{camera, image, regions}`), shared with the path
+//! tracer.
 
 pub mod collector;
 mod frame;
