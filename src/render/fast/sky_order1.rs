@@ -5,7 +5,7 @@
 //!
 //! with τ(x, s) the optical depth from x toward the sky in direction s and w the view ray's
 //! direction (the light that scatters forward toward the eye came from s = w, behind x). The
-//! forward peak, Θ < [`PEAK_DEG`], holds a share P of p (half of all scattering for 10 µm
+//! forward peak, Θ < [`PEAK_DEG`], holds a share P of p (the diffraction peak of cloud
 //! droplets) and reads the ray's own chord behind x: σ T_v e^{−τ_behind} = σ e^{−τ_chord}
 //! integrates to P τ e^{−τ} in closed form. The rest reads K = [`DIRECTIONS`] optical-depth
 //! maps toward a Fibonacci set of sky directions s_k, each the sun's light map seen from s_k,
@@ -128,6 +128,78 @@ impl SkyOrder1 {
     /// P: the forward peak's share, read along the chord.
     pub fn peak(&self) -> f64 {
         self.peak
+    }
+}
+
+/// One view ray's sky order 1 as its march goes: the weight ∫ σ T_v ds gathered since V was
+/// last read (with its centre and optical depth), read every [`GATHER`] mfp until T_v <
+/// [`CUTOFF`], after which the rest of the ray scatters with the last V.
+pub struct Gather<'a> {
+    sky: &'a SkyOrder1,
+    weights: [f64; DIRECTIONS],
+    weight: f64,
+    centre: Vec3,
+    tau: f64,
+    last_v: f64,
+    /// T_v where the readings stopped.
+    cut: Option<f64>,
+    /// ∫ σ T_v V ds so far.
+    sum: f64,
+}
+
+impl<'a> Gather<'a> {
+    /// A ray of direction `w` (unit, from the eye).
+    pub fn new(sky: &'a SkyOrder1, w: Vec3) -> Self {
+        Self {
+            sky,
+            weights: sky.weights(w),
+            weight: 0.0,
+            centre: [0.0; 3],
+            tau: 0.0,
+            last_v: 0.0,
+            cut: None,
+            sum: 0.0,
+        }
+    }
+
+    /// A sub-step of extinction `sigma` (1/m) and length `h` (m) entered with transmittance
+    /// `t_v`, its middle at `mid`.
+    pub fn add(&mut self, t_v: f64, sigma: f64, h: f64, mid: Vec3) {
+        if self.cut.is_none() && t_v < CUTOFF {
+            self.cut = Some(t_v);
+        }
+        if self.cut.is_some() {
+            return;
+        }
+        let scattered = t_v * -(-sigma * h).exp_m1();
+        self.weight += scattered;
+        for (c, m) in self.centre.iter_mut().zip(mid) {
+            *c += scattered * m;
+        }
+        self.tau += sigma * h;
+        if self.tau >= GATHER {
+            self.read();
+        }
+    }
+
+    /// Reads V at the gathered weight's centre.
+    fn read(&mut self) {
+        if self.weight > 0.0 {
+            let c = self.centre.map(|x| x / self.weight);
+            self.last_v = self.sky.wide_visibility(c, &self.weights);
+            self.sum += self.weight * self.last_v;
+        }
+        (self.weight, self.centre, self.tau) = (0.0, [0.0; 3], 0.0);
+    }
+
+    /// ∫ σ T_v V ds of the ray that ended with transmittance `t_end` and optical depth `chord`
+    /// along its whole chord: the rest gathered, the rest after the cut, the forward peak
+    /// (∫ σ T_v e^{−τ_behind} ds = τ e^{−τ}).
+    pub fn finish(mut self, t_end: f64, chord: f64) -> f64 {
+        // The rest after the cut takes the V of the last reading during the march.
+        let after_cut = self.cut.map(|t| (t - t_end) * self.last_v);
+        self.read();
+        self.sum + after_cut.unwrap_or(0.0) + self.sky.peak() * chord * (-chord).exp()
     }
 }
 

@@ -8,7 +8,7 @@
 
 use super::octaves::MAX_OCTAVES;
 use super::sky::CHORD_ENOUGH;
-use super::sky_order1::{CUTOFF, GATHER};
+use super::sky_order1::Gather;
 use super::substeps::substeps;
 use super::{Frame, Method};
 use crate::render::geometry::Vec3;
@@ -81,13 +81,7 @@ impl Frame<'_> {
         let (mut tau_v, mut tau_at_p, mut stopped) = (0.0f64, None::<f64>, false);
         let mut tau_at_densest = 0.0;
         let mut end = range.1;
-        let sky = self.sky_order1.as_ref().map(|s| (s, s.weights(w)));
-        // The sky's order-1 weight gathered since V was last read: ∫ σ T_v ds, its centre and
-        // its optical depth.
-        let (mut acc_w, mut acc_x, mut acc_tau) = (0.0f64, [0.0f64; 3], 0.0f64);
-        // V at its last reading, and T_v where the readings stopped (the rest of the ray then
-        // scatters with that V: less than 1 % of the ray's order 1).
-        let (mut last_v, mut cut) = (0.0f64, None::<f64>);
+        let mut sky = self.sky_order1.as_ref().map(|s| Gather::new(s, w));
         let _: Option<()> = substeps(
             self.medium.as_ref(),
             o,
@@ -122,24 +116,8 @@ impl Frame<'_> {
                     *integral += sigma * v.transmittance * (-ai * ta).exp() * e;
                 }
                 let mid = 0.5 * (a + b);
-                if cut.is_none() && v.transmittance < CUTOFF {
-                    cut = Some(v.transmittance);
-                }
-                if let (Some((sky, weights)), None) = (&sky, cut) {
-                    // ∫ σ T_v ds over the sub-step, the wide part of V at its middle.
-                    let scattered = v.transmittance * -(-sigma * h).exp_m1();
-                    acc_w += scattered;
-                    let m = at(mid);
-                    for k in 0..3 {
-                        acc_x[k] += scattered * m[k];
-                    }
-                    acc_tau += sigma * h;
-                    if acc_tau >= GATHER && acc_w > 0.0 {
-                        let c = acc_x.map(|x| x / acc_w);
-                        last_v = sky.wide_visibility(c, weights);
-                        v.sky_order1 += acc_w * last_v;
-                        (acc_w, acc_x, acc_tau) = (0.0, [0.0; 3], 0.0);
-                    }
+                if let Some(sky) = &mut sky {
+                    sky.add(v.transmittance, sigma, h, at(mid));
                 }
                 if v.surface.is_none() {
                     if sigma >= self.threshold {
@@ -175,16 +153,8 @@ impl Frame<'_> {
         if stopped {
             v.chord += self.chord_beyond(o, w, (end, range.1), CHORD_ENOUGH - tau_v);
         }
-        if let Some((sky, weights)) = &sky {
-            if acc_w > 0.0 {
-                let c = acc_x.map(|x| x / acc_w);
-                v.sky_order1 += acc_w * sky.wide_visibility(c, weights);
-            }
-            if let Some(t) = cut {
-                v.sky_order1 += (t - v.transmittance) * last_v;
-            }
-            // The forward peak along the chord: ∫ σ T_v e^{−τ_behind} ds = τ e^{−τ}.
-            v.sky_order1 += sky.peak() * v.chord * (-v.chord).exp();
+        if let Some(sky) = sky {
+            v.sky_order1 = sky.finish(v.transmittance, v.chord);
         }
         v.behind = (tau_v - tau_at_p.unwrap_or(tau_v)).max(0.0);
         v.behind_exact = !stopped;
